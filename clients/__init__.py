@@ -1,0 +1,1 @@
+"""thrustshape clients: the ``thrustshape`` command line (``clients.cli``) and the HTTP client."""

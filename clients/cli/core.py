@@ -1,0 +1,108 @@
+"""Core commands: ``table``, ``analytic``, ``simulate``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+
+import numpy as np
+
+from clients.cli.io import print_json, read_csv_columns, write_csv
+from ocp.analytic import SinProfile, reference, time_grid
+from ocp.errors import MissionError
+from ocp.params import load_params
+from ocp.plant import DCMotorPlant
+from ocp.simulate import simulate, simulate_zoh
+from ocp.theory import table_one
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("table", help="Table I of the paper, regenerated from Lemma 1")
+    p.add_argument("--orders", default="1,2,3,4,5,7", help="thrust orders p, comma-separated")
+    p.add_argument("--json", action="store_true", help="machine-readable output")
+    p.set_defaults(func=cmd_table)
+
+    p = sub.add_parser("analytic", help="exact A sin^(2q+1) reference with its current and voltage")
+    p.add_argument("--params", required=True, help="parameter file (JSON/YAML) or preset name, e.g. paper-rig")
+    p.add_argument("--amplitude", type=float, required=True, help="thrust amplitude A [N]")
+    p.add_argument("--period", type=float, required=True, help="period T [s]")
+    p.add_argument("--q", type=int, required=True, help="exponent index q: thrust ~ sin^(2q+1)")
+    p.add_argument("--phase", type=float, default=0.0, help="phase phi [rad]")
+    p.add_argument("--duration", type=float, default=None, help="length [s] (default: one period)")
+    p.add_argument("--rate", type=float, default=1000.0, help="sampling rate [Hz]")
+    p.add_argument("--format", choices=("csv", "json"), default="csv")
+    p.add_argument("--json", action="store_true", help="same as --format json")
+    p.add_argument("--out", default=None, help="output file (default: stdout)")
+    p.set_defaults(func=cmd_analytic)
+
+    p = sub.add_parser("simulate", help="drive the DC-motor plant with a voltage CSV (t,voltage)")
+    p.add_argument("voltage_csv", help="CSV with columns t [s], voltage [V]")
+    p.add_argument("--params", required=True, help="parameter file or preset name")
+    p.add_argument("--omega0", type=float, default=0.0, help="initial speed [rad/s]")
+    p.add_argument("--current0", type=float, default=0.0, help="initial current [A]")
+    p.add_argument("--hold", choices=("zoh", "linear"), default="zoh",
+                   help="zoh: sampled command held per sample (default); linear: interpolated")
+    p.add_argument("--out", default=None, help="output CSV (default: stdout)")
+    p.add_argument("--json", action="store_true", help="JSON output instead of CSV")
+    p.set_defaults(func=cmd_simulate)
+
+
+def cmd_table(args: argparse.Namespace) -> int:
+    try:
+        orders = tuple(int(x) for x in args.orders.split(","))
+    except ValueError:
+        raise MissionError("--orders", "must be comma-separated integers") from None
+    if any(p < 1 or p > 99 for p in orders):
+        raise MissionError("--orders", "orders must be in 1..99")
+    rows = [r.labels() for r in table_one(orders)]
+    if args.json:
+        print_json({"rows": rows, "columns": ["p", "r", "torque", "current", "voltage"]})
+        return 0
+    print(f"{'p':>3} {'r':>3}  {'torque':<22} {'current':<22} {'voltage':<22}")
+    for r in rows:
+        print(f"{r['p']:>3} {r['r']:>3}  {r['torque']!s:<22} {r['current']!s:<22} {r['voltage']!s:<22}")
+    return 0
+
+
+def cmd_analytic(args: argparse.Namespace) -> int:
+    params = load_params(args.params)
+    prof = SinProfile(args.amplitude, args.period, args.q, args.phase)
+    duration = args.period if args.duration is None else args.duration
+    ref = reference(prof, params, time_grid(duration, args.rate))
+    if args.json or args.format == "json":
+        text = json.dumps(ref.to_dict(), allow_nan=False)
+        if args.out:
+            with open(args.out, "w", encoding="utf-8") as fh:
+                fh.write(text + "\n")
+        else:
+            print(text)
+        return 0
+    if args.out:
+        with open(args.out, "w", encoding="utf-8") as fh:
+            fh.write(ref.to_csv())
+    else:
+        sys.stdout.write(ref.to_csv())
+    if any(ref.unbounded[c] for c in ("current", "voltage")):
+        bad = [c for c in ("current", "voltage") if ref.unbounded[c]]
+        print(f"thrustshape analytic: warning: {', '.join(bad)} unbounded at the crossings (q = {args.q}); "
+              "samples there are +-inf", file=sys.stderr)
+    return 0
+
+
+def cmd_simulate(args: argparse.Namespace) -> int:
+    params = load_params(args.params)
+    cols = read_csv_columns(args.voltage_csv, ("t", "voltage"))
+    plant = DCMotorPlant(params)
+    x0 = (args.omega0, args.current0)
+    if not (math.isfinite(args.omega0) and math.isfinite(args.current0)):
+        raise MissionError("--omega0", "initial state must be finite")
+    sim = (simulate_zoh if args.hold == "zoh" else simulate)(plant, cols["t"], cols["voltage"], x0)
+    out = {"t": sim.t, "voltage": sim.u, "omega": sim.state("omega"), "current": sim.state("current"),
+           "theta": sim.theta, "thrust": sim.thrust}
+    if args.json:
+        print_json({k: np.asarray(v, float).tolist() for k, v in out.items()})
+    else:
+        write_csv(out, args.out)
+    return 0

@@ -1,0 +1,58 @@
+"""Small I/O helpers shared by CLI commands: CSV columns in, CSV/JSON out."""
+
+from __future__ import annotations
+
+import csv
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ocp.errors import MissionError
+
+
+def read_csv_columns(path: str | Path, required: Sequence[str]) -> dict[str, np.ndarray]:
+    """Numeric columns of a CSV file with a header row; errors name the file and the column."""
+    p = Path(path)
+    if not p.is_file():
+        raise MissionError(str(path), "no such file")
+    with p.open(newline="", encoding="utf-8") as fh:
+        rows = list(csv.reader(fh))
+    if not rows:
+        raise MissionError(str(path), "empty file")
+    header = [h.strip() for h in rows[0]]
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise MissionError(f"{p.name}:{missing[0]}", f"missing column; the header has {header}")
+    out: dict[str, np.ndarray] = {}
+    for c in required:
+        j = header.index(c)
+        try:
+            out[c] = np.array([float(r[j]) for r in rows[1:] if r], dtype=float)
+        except (ValueError, IndexError):
+            raise MissionError(f"{p.name}:{c}", "has a non-numeric or missing value") from None
+        if not np.all(np.isfinite(out[c])):
+            raise MissionError(f"{p.name}:{c}", "contains NaN or inf")
+    return out
+
+
+def write_csv(columns: dict[str, np.ndarray], out: str | None) -> None:
+    """Write equal-length columns as CSV to ``out`` (a path) or stdout."""
+    names = list(columns)
+    fh = open(out, "w", newline="", encoding="utf-8") if out else sys.stdout
+    try:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(names)
+        for row in zip(*(columns[n] for n in names), strict=True):
+            w.writerow([repr(float(v)) for v in row])
+    finally:
+        if out:
+            fh.close()
+
+
+def print_json(obj: Any) -> None:
+    json.dump(obj, sys.stdout, indent=None, allow_nan=False)
+    sys.stdout.write("\n")

@@ -1,0 +1,105 @@
+"""Analytic fallback: the ``A sin^(2q+1)`` reference that meets given current/voltage limits.
+
+For a requested regularity the smallest admissible ``q`` comes from the theory
+(:func:`ocp.theory.min_sin_q`); then, with the amplitude fixed, the shortest period -- or, with the
+period fixed, the largest amplitude -- whose closed-form peak current and voltage stay within the
+limits is found by bisection (peaks fall monotonically with the period and rise with the amplitude).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ocp.analytic import SinProfile, reference
+from ocp.errors import MissionError
+from ocp.params import MotorParams
+from ocp.theory import ReversalRegularity, min_sin_q
+
+_GRID = 4001
+
+
+@dataclass(frozen=True)
+class SinDesign:
+    """Result of :func:`design_sin`: the profile and its peaks |i| [A], |V| [V] over one period."""
+
+    profile: SinProfile
+    peak_current: float
+    peak_voltage: float
+
+
+def sin_peaks(params: MotorParams, profile: SinProfile) -> tuple[float, float]:
+    """Peak |current| [A] and |voltage| [V] of the exact feedforward over one period (inf if unbounded)."""
+    t = np.linspace(0.0, profile.period, _GRID)
+    ref = reference(profile, params, t)
+    return ref.peak("current"), ref.peak("voltage")
+
+
+def _fits(params: MotorParams, profile: SinProfile, i_max: float, v_max: float) -> tuple[bool, float, float]:
+    i, v = sin_peaks(params, profile)
+    return (i <= i_max and v <= v_max), i, v
+
+
+def design_sin(
+    params: MotorParams,
+    current_limit: float,
+    voltage_limit: float,
+    regularity: ReversalRegularity = ReversalRegularity.CONTINUOUS_VOLTAGE,
+    amplitude: float | None = None,
+    period: float | None = None,
+    voltage_driven: bool = True,
+) -> SinDesign:
+    """Smallest-q sine-power reference within the limits; give ``amplitude`` [N] or ``period`` [s].
+
+    Raises :class:`MissionError` naming ``amplitude``/``limits`` when no period can meet the limits
+    (the steady-state current or voltage at the amplitude already exceeds them).
+    """
+    if not (current_limit > 0 and voltage_limit > 0):
+        raise MissionError("limits", "current and voltage limits must be positive")
+    q = min_sin_q(regularity, voltage_driven)
+    if amplitude is not None and period is None:
+        return _shortest_period(params, current_limit, voltage_limit, q, amplitude)
+    if period is not None and amplitude is None:
+        return _largest_amplitude(params, current_limit, voltage_limit, q, period)
+    raise MissionError("amplitude", "give exactly one of amplitude and period")
+
+
+def _shortest_period(params: MotorParams, i_max: float, v_max: float, q: int, amplitude: float) -> SinDesign:
+    hi = 0.01
+    while True:
+        ok, i, v = _fits(params, SinProfile(amplitude, hi, q), i_max, v_max)
+        if ok:
+            break
+        if hi > 1e4:
+            raise MissionError("amplitude", f"{amplitude} N cannot be held within the limits at any period "
+                                            f"(peaks {i:.3g} A, {v:.3g} V at T = 1e4 s)")
+        hi *= 2.0
+    lo = hi / 2.0 if hi > 0.01 else 1e-4
+    while hi / lo > 1.0 + 1e-4:
+        mid = math.sqrt(lo * hi)
+        if _fits(params, SinProfile(amplitude, mid, q), i_max, v_max)[0]:
+            hi = mid
+        else:
+            lo = mid
+    prof = SinProfile(amplitude, hi, q)
+    i, v = sin_peaks(params, prof)
+    return SinDesign(prof, i, v)
+
+
+def _largest_amplitude(params: MotorParams, i_max: float, v_max: float, q: int, period: float) -> SinDesign:
+    w_max = params.max_steady_speed(v_max)
+    hi = params.c_f * w_max**2
+    lo = 0.0
+    while hi - lo > 1e-6 * hi:
+        mid = 0.5 * (lo + hi)
+        if _fits(params, SinProfile(mid, period, q), i_max, v_max)[0]:
+            lo = mid
+        else:
+            hi = mid
+    if lo <= 0.0:
+        raise MissionError("period", f"no positive amplitude fits the limits at period {period} s")
+    prof = SinProfile(lo, period, q)
+    i, v = sin_peaks(params, prof)
+    return SinDesign(prof, i, v)

@@ -1,0 +1,229 @@
+"""Mission: what a user asks the optimiser for (validated, unknown keys rejected).
+
+JSON/YAML form::
+
+    {"name": "reversal-1",
+     "params": "paper-rig" | {J, B, c_tau, c_f, k_t, k_e, R, L, ...},
+     "plant": "dc-motor" | "torque",
+     "limits": {"voltage": 12.0, "current": 2.0, "voltage_rate": null, "speed": null, "torque": null},
+     "regularity": "bounded" | "continuous-current" | "continuous-voltage" | "c1-voltage",
+     "min_crossing_order": null | 2 | 4 | 6 | 8,
+     "objective": "track" | "min-time",
+     "retiming": {"min_stretch": 1.0, "max_stretch": 1.5},
+     "collocation": {"intervals": 120},
+     "time_limit_s": 10.0,
+     "profile": {"t": [...], "thrust": [...]}       # sampled desired thrust [s], [N]
+       or "segments": [{"kind": "hold", "duration": 0.5, "thrust": 0.4}, ...]}
+
+Units: voltage [V], current [A], voltage_rate [V/s], speed [rad/s], torque [N m], thrust [N], time [s].
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import numpy as np
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from ocp.errors import MissionError
+from ocp.params import MotorParams, load_params
+from ocp.theory import ReversalRegularity
+
+MAX_PROFILE_SAMPLES = 100_000
+MAX_INTERVALS = 2_000
+SEGMENT_RATE = 1000.0  # Hz at which segments are sampled into a profile
+
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+PositiveFinite = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class Limits(_Strict):
+    """Actuator limits (symmetric, magnitudes). ``None`` = unconstrained."""
+
+    voltage: PositiveFinite = 12.0
+    current: PositiveFinite = 2.0
+    voltage_rate: PositiveFinite | None = None
+    speed: PositiveFinite | None = None
+    torque: PositiveFinite | None = None
+
+
+class Retiming(_Strict):
+    """Each phase may last between ``min_stretch`` and ``max_stretch`` times its desired duration."""
+
+    min_stretch: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)] = 1.0
+    max_stretch: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)] = 1.5
+
+    @model_validator(mode="after")
+    def _ordered(self) -> Retiming:
+        if self.max_stretch < self.min_stretch:
+            raise ValueError("max_stretch must be >= min_stretch")
+        return self
+
+
+class Collocation(_Strict):
+    """Discretisation: total collocation intervals, split over phases by duration."""
+
+    intervals: Annotated[int, Field(ge=8, le=MAX_INTERVALS)] = 120
+
+
+class Profile(_Strict):
+    """Sampled desired thrust: ``t`` [s] strictly increasing, ``thrust`` [N], equal lengths."""
+
+    t: list[Finite] = Field(min_length=2, max_length=MAX_PROFILE_SAMPLES)
+    thrust: list[Finite] = Field(min_length=2, max_length=MAX_PROFILE_SAMPLES)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> Profile:
+        if len(self.t) != len(self.thrust):
+            raise ValueError(f"t has {len(self.t)} samples but thrust has {len(self.thrust)}")
+        if any(b <= a for a, b in zip(self.t, self.t[1:], strict=False)):
+            raise ValueError("t must be strictly increasing")
+        return self
+
+
+class Hold(_Strict):
+    kind: Literal["hold"]
+    duration: PositiveFinite
+    thrust: Finite
+
+
+class Ramp(_Strict):
+    """Linear change from the previous level to ``to``."""
+
+    kind: Literal["ramp"]
+    duration: PositiveFinite
+    to: Finite
+
+
+class Reversal(_Strict):
+    """Change from the previous level to ``to`` (opposite sign); ``shape`` of the naive request."""
+
+    kind: Literal["reversal"]
+    duration: PositiveFinite
+    to: Finite
+    shape: Literal["cosine", "ramp", "step"] = "cosine"
+
+
+class Sine(_Strict):
+    """``offset + amplitude sin(2 pi t/period + phase)`` for ``duration``."""
+
+    kind: Literal["sine"]
+    duration: PositiveFinite
+    amplitude: Finite
+    period: PositiveFinite
+    offset: Finite = 0.0
+    phase: Finite = 0.0
+
+
+Segment = Annotated[Hold | Ramp | Reversal | Sine, Field(discriminator="kind")]
+
+
+class Mission(_Strict):
+    """A reference request; see the module doc."""
+
+    name: Annotated[str, Field(min_length=1, max_length=200)] = "mission"
+    params: str | dict[str, Any] = "paper-rig"
+    plant: Literal["dc-motor", "torque"] = "dc-motor"
+    limits: Limits = Limits()
+    regularity: ReversalRegularity = ReversalRegularity.BOUNDED
+    min_crossing_order: Literal[2, 4, 6, 8] | None = None
+    objective: Literal["track", "min-time"] = "track"
+    retiming: Retiming = Retiming()
+    collocation: Collocation = Collocation()
+    time_limit_s: Annotated[float, Field(gt=0, le=600, allow_inf_nan=False)] = 10.0
+    profile: Profile | None = None
+    segments: list[Segment] | None = Field(default=None, min_length=1, max_length=1000)
+
+    @field_validator("params")
+    @classmethod
+    def _params_ok(cls, v: str | dict[str, Any]) -> str | dict[str, Any]:
+        load_params(v)  # raises ParameterError naming the key
+        return v
+
+    @model_validator(mode="after")
+    def _one_profile(self) -> Mission:
+        if (self.profile is None) == (self.segments is None):
+            raise ValueError("give exactly one of 'profile' and 'segments'")
+        if self.segments is not None and sum(s.duration for s in self.segments) * SEGMENT_RATE > MAX_PROFILE_SAMPLES:
+            raise ValueError(f"segments last longer than {MAX_PROFILE_SAMPLES / SEGMENT_RATE:.0f} s")
+        if self.min_crossing_order == 6 and self.regularity in ("bounded", "continuous-current"):
+            raise ValueError("min_crossing_order 6 needs regularity continuous-voltage or c1-voltage")
+        if self.min_crossing_order == 8 and self.regularity != "c1-voltage":
+            raise ValueError("min_crossing_order 8 needs regularity c1-voltage")
+        return self
+
+    def motor(self) -> MotorParams:
+        return load_params(self.params)
+
+    def desired(self) -> tuple[np.ndarray, np.ndarray]:
+        """Desired thrust samples ``(t [s], thrust [N])``, shapes (N,), t[0] = 0 for segments."""
+        if self.profile is not None:
+            return np.asarray(self.profile.t, float), np.asarray(self.profile.thrust, float)
+        return sample_segments(self.segments or [])
+
+
+def sample_segments(segments: list[Segment], rate: float = SEGMENT_RATE) -> tuple[np.ndarray, np.ndarray]:
+    """Concatenate segments into samples at ``rate`` [Hz]; each starts from the previous level."""
+    ts: list[np.ndarray] = []
+    fs: list[np.ndarray] = []
+    level, t0 = 0.0, 0.0
+    for seg in segments:
+        s = np.linspace(0.0, seg.duration, max(2, math.ceil(seg.duration * rate)) + 1)
+        x = s / seg.duration
+        if isinstance(seg, Hold):
+            f = np.full_like(s, seg.thrust)
+        elif isinstance(seg, Ramp) or (isinstance(seg, Reversal) and seg.shape == "ramp"):
+            f = level + (seg.to - level) * x
+        elif isinstance(seg, Reversal) and seg.shape == "cosine":
+            f = level + (seg.to - level) * 0.5 * (1.0 - np.cos(math.pi * x))
+        elif isinstance(seg, Reversal):
+            f = np.where(x < 0.5, level, seg.to)
+        else:
+            f = seg.offset + seg.amplitude * np.sin(2 * math.pi * s / seg.period + seg.phase)
+        keep = slice(0, None) if not ts else slice(1, None)  # segments share their boundary sample
+        ts.append(t0 + s[keep])
+        fs.append(f[keep])
+        t0 += seg.duration
+        level = float(f[-1])
+    return np.concatenate(ts), np.concatenate(fs)
+
+
+def _location(err: dict[str, Any]) -> str:
+    return ".".join(str(p) for p in err["loc"]) or "mission"
+
+
+def mission_from_mapping(data: Any) -> Mission:
+    """Validate a mapping into a :class:`Mission`; errors name the field path and the reason."""
+    if not isinstance(data, dict):
+        raise MissionError("mission", "must be a mapping (JSON object)")
+    try:
+        return Mission.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        reason = {"extra_forbidden": "unknown field", "missing": "missing field"}.get(err["type"], err["msg"])
+        ctx_err = (err.get("ctx") or {}).get("error")
+        if ctx_err is not None and hasattr(ctx_err, "field"):
+            raise MissionError(f"params.{ctx_err.field}" if ctx_err.field != "params" else "params",
+                               ctx_err.reason) from None
+        raise MissionError(_location(err), reason.removeprefix("Value error, ")) from None
+
+
+def load_mission(path: str | Path) -> Mission:
+    """Read a mission from a JSON or YAML file."""
+    p = Path(path)
+    if not p.is_file():
+        raise MissionError("mission", f"no such file: {p}")
+    text = p.read_text(encoding="utf-8")
+    try:
+        data = json.loads(text) if p.suffix.lower() == ".json" else yaml.safe_load(text)
+    except (json.JSONDecodeError, yaml.YAMLError) as exc:
+        raise MissionError("mission", f"{p.name} is not valid JSON/YAML: {exc}") from None
+    return mission_from_mapping(data)

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Set up everything a fresh machine needs, then run the service on the embedded defaults:
+# SQLite job store under ./thrustshape-data, local worker processes, http://127.0.0.1:8000 (docs at /docs).
+# Extra arguments go to `thrustshape serve` (e.g. `--port 9000 --workers 4`).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+VENV=${THRUSTSHAPE_VENV:-.venv}
+if [ ! -x "$VENV/bin/python" ]; then
+  python3 -m venv "$VENV"
+fi
+"$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip
+"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e .
+exec "$VENV/bin/thrustshape" serve "$@"

@@ -1,0 +1,48 @@
+import numpy as np
+import pytest
+
+from ocp.analytic import LocalReversal, SinProfile, time_grid
+from ocp.crossings import ORDER_TOLERANCE, classify_profile, estimate_crossings
+from ocp.theory import CONTINUOUS, UNBOUNDED
+
+
+@pytest.mark.parametrize("q", range(5))
+@pytest.mark.parametrize("phase", [0.0, 0.37])
+def test_sampled_sin_family_order_within_tolerance(q, phase):
+    t = time_grid(3.0, 1000)
+    f = SinProfile(0.5, 2.0, q, phase).thrust(t)[0]
+    est = estimate_crossings(t, f)
+    exact = SinProfile(0.5, 2.0, q, phase).crossings(t[1], t[-2])
+    assert len(est) == len(exact)
+    for e, x in zip(est, exact, strict=True):
+        assert abs(e.t_s - x.t_s) < 1e-3
+        assert abs(e.exponent - (2 * q + 1)) <= ORDER_TOLERANCE
+        assert e.p == 2 * q + 1 and e.sign_change
+
+
+@pytest.mark.parametrize("p", [1, 2, 3, 4, 6])
+def test_local_reversal_orders_and_touches(p):
+    t = time_grid(2.0, 1000)
+    before = -0.5 if p % 2 else 0.5
+    f = LocalReversal.between(before, 0.5, 1.0, p, 0.8).thrust(t)[0]
+    (e,) = estimate_crossings(t, f)
+    assert e.p == p and e.sign_change == bool(p % 2)
+
+
+def test_speed_space_reversal_has_exponent_two_and_changes_sign():
+    t = time_grid(2.0, 1000)
+    s = t - 1.0003
+    (e,) = estimate_crossings(t, 0.2 * s * np.abs(s))
+    assert abs(e.exponent - 2.0) < 0.05 and e.sign_change
+
+
+def test_classify_profile_theorem1():
+    t = time_grid(2.0, 1000)
+    lin = classify_profile(t, SinProfile(0.5, 2.0, 0, 0.2).thrust(t)[0], c_f=1.4e-4)
+    assert lin.current == UNBOUNDED and not lin.reproducible_bounded
+    quint = classify_profile(t, SinProfile(0.5, 2.0, 2, 0.2).thrust(t)[0], c_f=1.4e-4)
+    assert quint.voltage == CONTINUOUS and quint.reproducible_bounded
+    # a fast reversal leaves S for tight input bounds
+    fast = classify_profile(t, SinProfile(0.5, 0.05, 2, 0.2).thrust(t)[0], c_f=1.4e-4, k=0.08, u_low=50.0,
+                            u_high=50.0)
+    assert fast.feasible_fraction < 1.0 and not fast.reproducible_bounded
