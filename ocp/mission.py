@@ -196,7 +196,7 @@ def sample_segments(segments: list[Segment], rate: float = SEGMENT_RATE) -> tupl
     return np.concatenate(ts), np.concatenate(fs)
 
 
-def _location(err: dict[str, Any]) -> str:
+def _location(err: Any) -> str:
     return ".".join(str(p) for p in err["loc"]) or "mission"
 
 
