@@ -80,6 +80,34 @@ class Effect(Protocol):
         ...
 
 
+class StatefulEffect(Effect, Protocol):
+    """An effect with internal states ``z`` (e.g. an input delay, inflow lag, the rotor angle).
+
+    Its states are appended to the plant state after ``(omega, current)``, in effect order, named
+    ``"<effect name>.<state>"``. Inside :meth:`DCMotorPlant.rhs` the effect is first bound to its
+    states (:meth:`bind` returns a plain :class:`Effect` whose hooks see ``z``), and its state
+    derivative is computed from the signals that reach it in the chain: ``voltage`` is the command
+    after the preceding effects' ``drive_voltage``, ``thrust`` the thrust after the preceding
+    effects' ``thrust``.
+    """
+
+    states: tuple[str, ...]
+
+    def bind(self, z: Sequence[Expr]) -> Effect:
+        """The effect's hooks with its states fixed to ``z``."""
+        ...
+
+    def state_rhs(self, z: Sequence[Expr], omega: Expr, voltage: Expr, thrust: Expr, ops: Ops) -> list[Expr]:
+        """Time derivative of ``z`` (same layout)."""
+        ...
+
+
+def effect_states(effect: Effect) -> tuple[str, ...]:
+    """Names of an effect's internal states (``()`` for a plain, memoryless effect)."""
+    states = getattr(effect, "states", ())
+    return tuple(states)
+
+
 class Plant(Protocol):
     """What the simulator, the optimiser and the fitter need from a plant."""
 
@@ -100,33 +128,71 @@ class Plant(Protocol):
 
 @dataclass(frozen=True)
 class DCMotorPlant:
-    """Brushed DC motor driving a bidirectional propeller; state ``(omega, current)``, input V."""
+    """Brushed DC motor driving a bidirectional propeller; input V.
+
+    State ``(omega [rad/s], current [A])``, followed by the internal states of stateful effects
+    (:class:`StatefulEffect`), in effect order; :attr:`state_names` lists them all.
+    """
 
     params: MotorParams
     effects: tuple[Effect, ...] = field(default=())
-    state_names: tuple[str, ...] = ("omega", "current")
     input_name: str = "voltage"
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        names = ["omega", "current"]
+        for eff in self.effects:
+            names += [f"{eff.name}.{s}" for s in effect_states(eff)]
+        return tuple(names)
+
+    def _bound(self, x: Sequence[Expr]) -> list[tuple[Effect, StatefulEffect | None, list[Expr]]]:
+        """(effect with states bound, the stateful effect or None, its states) per effect."""
+        out: list[tuple[Effect, StatefulEffect | None, list[Expr]]] = []
+        k = 2
+        for eff in self.effects:
+            n = len(effect_states(eff))
+            if n == 0:
+                out.append((eff, None, []))
+                continue
+            z = [x[m] for m in range(k, k + n)]
+            stateful: StatefulEffect = eff  # type: ignore[assignment]
+            out.append((stateful.bind(z), stateful, z))
+            k += n
+        return out
+
+    def _thrust_chain(self, w: Expr, bound: Sequence[tuple[Effect, Any, Any]], ops: Ops,
+                      sign: float | None) -> tuple[Expr, list[Expr]]:
+        """Thrust after all effects and the thrust reaching each effect."""
+        f = thrust_from_speed(w, self.params.c_f, ops, sign)
+        inputs = []
+        for b, _, _ in bound:
+            inputs.append(f)
+            f = b.thrust(f, w, ops, sign)
+        return f, inputs
 
     def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: float | None = None) -> list[Expr]:
         p = self.params
         w, i = x[0], x[1]
         load = p.B * w + p.c_tau * signed_square(w, ops, sign)
         v = u
-        for eff in self.effects:
+        bound = self._bound(x)
+        extra: list[Expr] = []
+        f_in: list[Expr] = []
+        if any(s is not None for _, s, _ in bound):
+            f_in = self._thrust_chain(w, bound, ops, sign)[1]
+        for j, (eff, stateful, z) in enumerate(bound):
+            if stateful is not None:
+                extra += stateful.state_rhs(z, w, v, f_in[j], ops)
             load = load + eff.load_torque(w, ops, sign)
             v = eff.drive_voltage(v, i, ops)
         # eq:dc_mechanical  J w' = k_t i - B w - c_tau w|w|
         dw = (p.k_t * i - load) / p.J
         # eq:dc_electrical  L i' = V - R i - k_e w
         di = (v - p.R * i - p.k_e * w) / p.L
-        return [dw, di]
+        return [dw, di, *extra]
 
     def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: float | None = None) -> Expr:
-        w = x[0]
-        f = thrust_from_speed(w, self.params.c_f, ops, sign)
-        for eff in self.effects:
-            f = eff.thrust(f, w, ops, sign)
-        return f
+        return self._thrust_chain(x[0], self._bound(x), ops, sign)[0]
 
     def steady_state(self, omega: float) -> tuple[float, float]:
         """(current [A], voltage [V]) that hold ``omega`` [rad/s] constant (no effects)."""
