@@ -7,6 +7,8 @@ or YAML with the keys ``J, B, c_tau, c_f, k_t, k_e, R, L`` and optionally
   per-speed-squared unit in which ``c_f`` / ``c_tau`` are given; converted once, at load, to
   per (rad/s)^2. "Hz" means revolutions per second (1 Hz = 2*pi rad/s).
 * ``name`` and ``notes``: free-text metadata, kept but never used in computation.
+* ``effects``: the effect block of a calibrated file (``ocp.effects.load_plant`` reads it); ignored
+  here, so a calibrated file still loads as plain :class:`MotorParams`.
 
 Anything else is an error that names the key.
 """
@@ -109,7 +111,7 @@ def params_from_mapping(data: Mapping[str, Any]) -> MotorParams:
     """Validate a mapping of parameters (see module doc); raises :class:`ParameterError`."""
     if not isinstance(data, Mapping):
         raise ParameterError("params", "must be a mapping of parameter names to values")
-    raw = {k: v for k, v in data.items() if k not in ("units", "name", "notes")}
+    raw = {k: v for k, v in data.items() if k not in ("units", "name", "notes", "effects")}
     if "units" in data:
         _convert_units(raw, data["units"])
     try:
