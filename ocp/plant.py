@@ -35,10 +35,12 @@ class Ops:
     tanh: Callable[[Expr], Expr]
     exp: Callable[[Expr], Expr]
     sign: Callable[[Expr], Expr]
+    sin: Callable[[Expr], Expr] = np.sin
+    cos: Callable[[Expr], Expr] = np.cos
 
 
-NUMPY = Ops(abs=np.abs, sqrt=np.sqrt, tanh=np.tanh, exp=np.exp, sign=np.sign)
-CASADI = Ops(abs=ca.fabs, sqrt=ca.sqrt, tanh=ca.tanh, exp=ca.exp, sign=ca.sign)
+NUMPY = Ops(abs=np.abs, sqrt=np.sqrt, tanh=np.tanh, exp=np.exp, sign=np.sign, sin=np.sin, cos=np.cos)
+CASADI = Ops(abs=ca.fabs, sqrt=ca.sqrt, tanh=ca.tanh, exp=ca.exp, sign=ca.sign, sin=ca.sin, cos=ca.cos)
 
 
 def signed_square(w: Expr, ops: Ops = NUMPY, sign: float | None = None) -> Expr:
@@ -65,7 +67,10 @@ class Effect(Protocol):
     returns its input unchanged (or 0 for ``load_torque``).
     """
 
-    name: str
+    @property
+    def name(self) -> str:
+        """Catalogue name of the effect."""
+        ...
 
     def load_torque(self, omega: Expr, ops: Ops, sign: float | None) -> Expr:
         """Extra torque opposing motion [N m], added to the drag and viscous terms."""
