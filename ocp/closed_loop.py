@@ -213,7 +213,7 @@ def tracking_metrics(t: np.ndarray, thrust_ref: np.ndarray, omega_ref: np.ndarra
 
 def _on_grid(t: np.ndarray, dt: float, signals: dict[str, np.ndarray]) -> tuple[np.ndarray, dict[str, np.ndarray]]:
     """Resample ``signals`` (N,) given on ``t`` onto ``t[0] + k dt`` (linear) unless already there."""
-    n = int(math.floor((t[-1] - t[0]) / dt + 1e-9)) + 1
+    n = math.floor((t[-1] - t[0]) / dt + 1e-9) + 1
     grid = t[0] + dt * np.arange(n)
     if grid.size == t.size and np.allclose(grid, t, rtol=0.0, atol=1e-9 * max(1.0, abs(t[-1]))):
         return t, signals
@@ -243,7 +243,8 @@ def track(plant: DCMotorPlant, t: np.ndarray, thrust_ref: np.ndarray, omega_ref:
         controller: gains/filters/limits (default :class:`PaperController`)
         feedforward: optional additive voltage [V], shape (N,); +-inf samples (an ideal unbounded
             command) are allowed and end up saturated at +-v_max
-        x0: initial (omega [rad/s], current [A]); default: omega_ref[0] at its steady-state current
+        x0: initial (omega [rad/s], current [A]); default: omega_ref[0] at its steady-state current;
+            internal states of stateful plant effects, if any, start at 0
     """
     ctrl = PaperController() if controller is None else controller
     t = np.asarray(t, dtype=float)
@@ -260,8 +261,8 @@ def track(plant: DCMotorPlant, t: np.ndarray, thrust_ref: np.ndarray, omega_ref:
         x0 = (w0, plant.steady_state(w0)[0])
     if not all(math.isfinite(v) for v in x0):
         raise MissionError("x0", "initial state must be finite")
-    w, i, th, u, sat = _loop(plant, ctrl, t, refs["thrust_ref"], refs["omega_ref"], refs["theta_ref"], ff, x0)
-    thrust = np.asarray(plant.thrust([w, i]), dtype=float)
+    w, i, th, u, sat, f_meas = _loop(plant, ctrl, t, refs["thrust_ref"], refs["omega_ref"], refs["theta_ref"], ff, x0)
+    thrust = f_meas
     metrics = tracking_metrics(t, refs["thrust_ref"], refs["omega_ref"], thrust, w, u, i)
     return ClosedLoopResult(t=t, thrust_ref=refs["thrust_ref"], omega_ref=refs["omega_ref"],
                             theta_ref=refs["theta_ref"], feedforward=ff, thrust=thrust, omega=w, theta=th,
@@ -270,7 +271,7 @@ def track(plant: DCMotorPlant, t: np.ndarray, thrust_ref: np.ndarray, omega_ref:
 
 def _loop(plant: DCMotorPlant, c: PaperController, t: np.ndarray, f_ref: np.ndarray, w_ref: np.ndarray,
           th_ref: np.ndarray, ff: np.ndarray, x0: tuple[float, float]) -> tuple[np.ndarray, ...]:
-    """The sampled loop; returns (omega, current, theta, voltage, saturated), each (N,)."""
+    """The sampled loop; returns (omega, current, theta, voltage, saturated, thrust), each (N,)."""
     n, dt = t.size, c.sample_time
     a_w = lowpass_coefficient(c.tau_speed, dt)
     a_f = lowpass_coefficient(c.tau_thrust, dt)
@@ -279,8 +280,9 @@ def _loop(plant: DCMotorPlant, c: PaperController, t: np.ndarray, f_ref: np.ndar
     vmax_counts = c.v_max / scale  # the limit in the gains' output unit
     cf = plant.params.c_f if plant.effects == () else None
     w_out, i_out, th_out = np.empty(n), np.empty(n), np.empty(n)
-    u_out, sat_out = np.empty(n), np.zeros(n, dtype=bool)
-    x = np.array(x0, dtype=float)
+    u_out, sat_out, f_out = np.empty(n), np.zeros(n, dtype=bool), np.empty(n)
+    x = np.zeros(len(plant.state_names))  # effect states (if any) start at 0
+    x[:2] = x0
     theta = 0.0 + float(th_ref[0])
     ew_f = ef_f = eth_f = 0.0
     int_th = int_f = 0.0
@@ -288,7 +290,8 @@ def _loop(plant: DCMotorPlant, c: PaperController, t: np.ndarray, f_ref: np.ndar
     for k in range(n):
         w, i = float(x[0]), float(x[1])
         w_out[k], i_out[k], th_out[k] = w, i, theta
-        f_meas = cf * w * abs(w) if cf is not None else float(plant.thrust([w, i]))
+        f_meas = cf * w * abs(w) if cf is not None else float(plant.thrust(list(x)))
+        f_out[k] = f_meas
         e_th, e_f = thr[k] - theta, fr[k] - f_meas
         ew_f += a_w * (wr[k] - w - ew_f)
         ef_f += a_f * (e_f - ef_f)
@@ -310,4 +313,4 @@ def _loop(plant: DCMotorPlant, c: PaperController, t: np.ndarray, f_ref: np.ndar
         if k + 1 < n:
             x = rk4_step(plant, x, volts, dt, c.substeps)
             theta += 0.5 * dt * (w + float(x[0]))
-    return w_out, i_out, th_out, u_out, sat_out
+    return w_out, i_out, th_out, u_out, sat_out, f_out
