@@ -1,0 +1,80 @@
+"""Request dependencies (``Annotated`` aliases): settings, worker pool, job store, tasks, access, limits.
+
+Everything comes from ``request.app.state``, filled by the lifespan in :func:`service.app.create_app`.
+"""
+
+from __future__ import annotations
+
+import hmac
+from typing import Annotated
+
+from fastapi import Depends, Request
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+from starlette.exceptions import HTTPException
+
+from ocp.errors import MissionError
+from ocp.mission import Mission
+from service.batches import BatchRunner
+from service.jobs import JobStore
+from service.settings import Settings
+from service.tasks import TaskSet
+from service.workers import WorkerPool
+
+_bearer = HTTPBearer(auto_error=False, description="API key from THRUSTSHAPE_API_KEY (only when the server sets one)")
+
+
+def get_settings(request: Request) -> Settings:
+    return request.app.state.settings
+
+
+def get_pool(request: Request) -> WorkerPool:
+    return request.app.state.pool
+
+
+def get_store(request: Request) -> JobStore:
+    return request.app.state.store
+
+
+def get_tasks(request: Request) -> TaskSet:
+    return request.app.state.tasks
+
+
+def get_batches(request: Request) -> BatchRunner:
+    return request.app.state.batches
+
+
+SettingsDep = Annotated[Settings, Depends(get_settings)]
+PoolDep = Annotated[WorkerPool, Depends(get_pool)]
+StoreDep = Annotated[JobStore, Depends(get_store)]
+TasksDep = Annotated[TaskSet, Depends(get_tasks)]
+BatchesDep = Annotated[BatchRunner, Depends(get_batches)]
+
+
+async def require_api_key(settings: SettingsDep,
+                          cred: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)]) -> None:
+    """401 unless the server has no key or the request carries ``Authorization: Bearer <key>``."""
+    if settings.api_key is None:
+        return
+    key = settings.api_key.get_secret_value().encode()
+    if cred is None or not hmac.compare_digest(cred.credentials.encode(), key):
+        raise HTTPException(401, "missing or wrong API key (Authorization: Bearer <key>)",
+                            headers={"WWW-Authenticate": "Bearer"})
+
+
+def check_mission_limits(mission: Mission, settings: Settings, prefix: str = "") -> None:
+    """Server caps beyond the core's: profile samples and collocation intervals (422 naming the field)."""
+    n = len(mission.profile.t) if mission.profile is not None else 0
+    if n > settings.max_profile_samples:
+        raise _limit(f"{prefix}profile.t", f"{n} samples; this server accepts at most {settings.max_profile_samples}")
+    if mission.segments is not None:
+        t, _ = mission.desired()
+        if t.size > settings.max_profile_samples:
+            raise _limit(f"{prefix}segments", f"sample to {t.size} points; this server accepts at most "
+                                              f"{settings.max_profile_samples}")
+    if mission.collocation.intervals > settings.max_intervals:
+        raise _limit(f"{prefix}collocation.intervals",
+                     f"{mission.collocation.intervals} intervals; this server accepts at most {settings.max_intervals}")
+
+
+def _limit(field: str, reason: str) -> MissionError:
+    return MissionError(field, reason)

@@ -1,0 +1,141 @@
+"""One place that turns every error into ``application/problem+json`` (RFC 9457) naming field and reason."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from starlette.exceptions import HTTPException
+
+from ocp.errors import SolverError, ThrustshapeError
+from service.jobs import IdempotencyConflict
+from service.workers import QueueFull, TaskFailed, TaskTimeout
+
+PROBLEM = "application/problem+json"
+
+
+def error_responses(*codes: int) -> dict[int | str, dict[str, Any]]:
+    """OpenAPI ``responses`` entries documenting problem+json answers."""
+    from service.schemas import Problem
+
+    return {code: {"model": Problem, "content": {PROBLEM: {}}, "description": _TITLES.get(code, "Error")}
+            for code in codes}
+
+
+def problem(status: int, title: str, detail: str, field: str | None = None, reason: str | None = None,
+            headers: dict[str, str] | None = None, **extra: Any) -> JSONResponse:
+    body: dict[str, Any] = {"type": "about:blank", "title": title, "status": status, "detail": detail}
+    if field is not None:
+        body["field"] = field
+    if reason is not None:
+        body["reason"] = reason
+    body.update(extra)
+    return JSONResponse(body, status_code=status, media_type=PROBLEM, headers=headers)
+
+
+class BodyTooLarge(HTTPException):
+    """Request body over ``max_body_bytes`` (an HTTPException so FastAPI's body parsing passes it through)."""
+
+    def __init__(self, limit: int) -> None:
+        super().__init__(413, f"request body larger than {limit} bytes")
+
+
+class TooLarge(Exception):
+    """A request within the body limit asks for more than a configured cap (413)."""
+
+    def __init__(self, field: str, reason: str) -> None:
+        self.field, self.reason = field, reason
+        super().__init__(f"{field}: {reason}")
+
+
+def _field(err: dict[str, Any]) -> tuple[str, str]:
+    loc = [str(p) for p in err.get("loc", ())]
+    if loc and loc[0] in ("body", "query", "path", "header"):
+        loc = loc[1:] if loc[0] == "body" else loc
+    # tagged unions put the tag in the location: drop it (body.sin.amplitude -> amplitude)
+    loc = [p for p in loc if p not in ("sin", "design", "function-after[_no_paths(), str]")]
+    reason = {"extra_forbidden": "unknown field", "missing": "missing field"}.get(err.get("type", ""),
+                                                                                   str(err.get("msg", "invalid")))
+    reason = reason.removeprefix("Value error, ")
+    ctx_err = (err.get("ctx") or {}).get("error")
+    if isinstance(ctx_err, ThrustshapeError):
+        base = [p for p in loc if not p.startswith(("str", "dict[", "function-"))]
+        head = ".".join(base)
+        if ctx_err.field == "params" or head.endswith(ctx_err.field):
+            return head or ctx_err.field, ctx_err.reason
+        return f"{head}.{ctx_err.field}" if head else ctx_err.field, ctx_err.reason
+    loc = [p for p in loc if not p.startswith(("str", "dict[", "function-", "float", "int", "literal["))]
+    if err.get("type") == "json_invalid":
+        return "body", f"invalid JSON: {reason}"
+    return ".".join(loc) or "body", reason
+
+
+async def _validation(request: Request, exc: Exception) -> JSONResponse:
+    if not isinstance(exc, RequestValidationError):
+        raise exc
+    errs = [_field(e) for e in exc.errors()]
+    field, reason = errs[0] if errs else ("body", "invalid request")
+    return problem(422, "Invalid request", f"{field}: {reason}", field, reason,
+                   errors=[{"field": f, "reason": r} for f, r in errs])
+
+
+async def _core(request: Request, exc: Exception) -> JSONResponse:
+    if not isinstance(exc, ThrustshapeError):
+        raise exc
+    title = "Solver failed" if isinstance(exc, SolverError) else "Invalid input"
+    return problem(422, title, str(exc), exc.field, exc.reason, error_type=type(exc).__name__)
+
+
+async def _http(request: Request, exc: Exception) -> JSONResponse:
+    if not isinstance(exc, HTTPException):
+        raise exc
+    headers = dict(exc.headers or {})
+    field = "body" if exc.status_code == 413 else None
+    return problem(exc.status_code, _TITLES.get(exc.status_code, "Error"), str(exc.detail), field,
+                   str(exc.detail) if field else None, headers=headers or None)
+
+
+async def _too_large(request: Request, exc: Exception) -> JSONResponse:
+    if not isinstance(exc, TooLarge):
+        raise exc
+    return problem(413, "Request too large", str(exc), exc.field, exc.reason)
+
+
+async def _queue_full(request: Request, exc: Exception) -> JSONResponse:
+    if not isinstance(exc, QueueFull):
+        raise exc
+    return problem(503, "Server busy", str(exc), headers={"Retry-After": str(exc.retry_after)})
+
+
+async def _timeout(request: Request, exc: Exception) -> JSONResponse:
+    return problem(504, "Computation timed out", str(exc))
+
+
+async def _failed(request: Request, exc: Exception) -> JSONResponse:
+    return problem(500, "Computation failed", str(exc))
+
+
+async def _conflict(request: Request, exc: Exception) -> JSONResponse:
+    if not isinstance(exc, IdempotencyConflict):
+        raise exc
+    return problem(422, "Idempotency key reused", str(exc), "Idempotency-Key",
+                   "already used for a different request body", batch_id=exc.batch_id)
+
+
+_TITLES = {400: "Bad request", 401: "Unauthorized", 403: "Forbidden", 404: "Not found", 405: "Method not allowed",
+           406: "Not acceptable", 413: "Request too large", 415: "Unsupported media type", 422: "Invalid input",
+           500: "Computation failed", 503: "Server busy", 504: "Computation timed out"}
+
+
+def install(app: FastAPI) -> None:
+    """Register every handler on ``app``."""
+    app.add_exception_handler(RequestValidationError, _validation)
+    app.add_exception_handler(ThrustshapeError, _core)
+    app.add_exception_handler(HTTPException, _http)
+    app.add_exception_handler(TooLarge, _too_large)
+    app.add_exception_handler(QueueFull, _queue_full)
+    app.add_exception_handler(TaskTimeout, _timeout)
+    app.add_exception_handler(TaskFailed, _failed)
+    app.add_exception_handler(IdempotencyConflict, _conflict)

@@ -1,0 +1,49 @@
+"""``GET /v1/info``: version, presets, effects, limits and which optional routes exist."""
+
+from __future__ import annotations
+
+import importlib
+import importlib.metadata
+import importlib.util
+
+from fastapi import APIRouter
+
+from ocp.params import PRESETS
+from ocp.theory import ReversalRegularity
+from service.api.deps import SettingsDep, TasksDep
+from service.schemas import InfoPublic, LimitsPublic
+
+router = APIRouter(prefix="/v1", tags=["info"])
+
+
+def _version() -> str:
+    try:
+        return importlib.metadata.version("thrustshape")
+    except importlib.metadata.PackageNotFoundError:
+        return "0+unknown"
+
+
+def effect_names() -> list[str]:
+    """Names of the plant effects the core offers (``ocp.effects.CATALOGUE``), empty when absent."""
+    if importlib.util.find_spec("ocp.effects") is None:
+        return []
+    registry = getattr(importlib.import_module("ocp.effects"), "CATALOGUE", None)
+    if registry is None:
+        return []
+    return sorted(str(k) for k in registry)
+
+
+@router.get("/info", response_model=InfoPublic, summary="Version, presets, effects, limits")
+async def info(settings: SettingsDep, tasks: TasksDep) -> InfoPublic:
+    s = settings
+    return InfoPublic(
+        version=_version(), presets=list(PRESETS), effects=effect_names(),
+        regularities=[r.value for r in ReversalRegularity],
+        limits=LimitsPublic(max_body_bytes=s.max_body_bytes, max_profile_samples=s.max_profile_samples,
+                            max_intervals=s.max_intervals, max_batch_missions=s.max_batch_missions,
+                            max_reference_samples=s.max_reference_samples,
+                            optimize_deadline_s=s.optimize_deadline_s, task_timeout_s=s.task_timeout_s),
+        features={"optimize": tasks.optimize is not None, "compare": tasks.compare is not None,
+                  "batches": tasks.batch_item is not None, "model_check": False},
+        workers=s.workers, batch_backend="dask" if s.dask_address else "local",
+    )

@@ -1,0 +1,65 @@
+"""References: ``POST /v1/references/analytic`` and ``POST /v1/references/optimize``."""
+
+from __future__ import annotations
+
+import asyncio
+import math
+from typing import Any
+
+from fastapi import APIRouter, Request
+
+from ocp.errors import MissionError
+from service.api.deps import PoolDep, SettingsDep, TasksDep, check_mission_limits
+from service.api.problems import error_responses
+from service.schemas import AnalyticRequest, DesignRequest, MissionRequest, OptimizePublic, ReferencePublic
+from service.workers import TaskFailed, TaskTimeout, execute, unwrap
+
+_ERRORS = error_responses(401, 413, 422, 503, 504)
+
+analytic_router = APIRouter(prefix="/v1/references", tags=["references"])
+optimize_router = APIRouter(prefix="/v1/references", tags=["references"])
+
+
+@analytic_router.post("/analytic", response_model=ReferencePublic, responses=_ERRORS,
+                      summary="Exact feedforward of an A sin^(2q+1) profile, or the analytic design within limits")
+async def analytic(req: AnalyticRequest, settings: SettingsDep, pool: PoolDep, tasks: TasksDep) -> Any:
+    duration = req.duration if req.duration is not None else req.period
+    if duration is not None:
+        n = math.floor(duration * req.rate) + 1
+        if n > settings.max_reference_samples:
+            raise MissionError("rate", f"duration x rate gives {n} samples; this server returns at most "
+                                       f"{settings.max_reference_samples}")
+    elif isinstance(req, DesignRequest) and req.rate > settings.max_reference_samples:
+        raise MissionError("rate", f"at most {settings.max_reference_samples} Hz")
+    payload = {"request": req.model_dump(mode="json"), "max_samples": settings.max_reference_samples}
+    return await pool.run(tasks.analytic, payload, settings.task_timeout_s)
+
+
+@optimize_router.post("/optimize", response_model=OptimizePublic, responses=_ERRORS,
+                      summary="Optimal reference for a mission, or the analytic fallback when the deadline is near")
+async def optimize(mission: MissionRequest, request: Request, settings: SettingsDep, pool: PoolDep,
+                   tasks: TasksDep) -> Any:
+    """The solver gets the deadline ``min(optimize_deadline_s, time_limit_s + optimize_grace_s)`` minus
+    ``fallback_reserve_s``; if it overruns (its process is killed) or its process dies, the answer is
+    the analytic fallback with ``source = "analytic-fallback"`` and the ``reason``."""
+    check_mission_limits(mission, settings)
+    if tasks.optimize is None or tasks.fallback is None:  # routes are only registered with both
+        raise MissionError("route", "optimisation is not available on this server")
+    loop = asyncio.get_running_loop()
+    total = min(settings.optimize_deadline_s, mission.time_limit_s + settings.optimize_grace_s)
+    start = loop.time()
+    solve_budget = max(total - settings.fallback_reserve_s, 0.0)
+    payload = mission.model_dump(mode="json")
+    try:
+        return await pool.run(tasks.optimize, payload, solve_budget, deadline=start + solve_budget)
+    except TaskTimeout:
+        reason = f"deadline: the solver did not finish within {solve_budget:.3g} s"
+    except TaskFailed as exc:
+        reason = f"solver process failed: {exc.detail}"
+    remaining = max(start + total - loop.time(), settings.fallback_reserve_s)
+    fut = loop.run_in_executor(request.app.state.fallback_threads, execute, tasks.fallback,
+                               {"mission": payload, "reason": reason})
+    try:
+        return unwrap(await asyncio.wait_for(asyncio.shield(fut), remaining))
+    except TimeoutError:
+        raise TaskTimeout(total) from None

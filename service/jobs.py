@@ -1,0 +1,225 @@
+"""SQLite job store for batches (WAL, ``synchronous=FULL``).
+
+One row per batch, one row per item. An item moves ``queued -> running -> done | failed``; the move
+to ``done`` is a single ``UPDATE ... WHERE state = 'running'`` that stores the result in the same
+statement, so a result is written once or not at all. After a crash, :meth:`JobStore.recover` puts
+``running`` items back to ``queued``: they run again, finished ones are never touched.
+
+A batch submitted with an idempotency key is stored under that key (unique); resubmitting the same
+body returns the stored batch, a different body under the same key is refused.
+
+Thread-safe (one connection behind a lock); call it from a thread, not the event loop, when the
+latency matters (``asyncio.to_thread``). One server per database file.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import sqlite3
+import threading
+import time
+import uuid
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+ItemState = Literal["queued", "running", "done", "failed"]
+BatchState = Literal["queued", "running", "done", "failed"]
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS batches (
+    id TEXT PRIMARY KEY,
+    idempotency_key TEXT UNIQUE,
+    body_sha256 TEXT NOT NULL,
+    created_at REAL NOT NULL,
+    size INTEGER NOT NULL
+);
+CREATE TABLE IF NOT EXISTS items (
+    batch_id TEXT NOT NULL REFERENCES batches(id),
+    idx INTEGER NOT NULL,
+    name TEXT NOT NULL,
+    mission TEXT NOT NULL,
+    state TEXT NOT NULL CHECK (state IN ('queued', 'running', 'done', 'failed')),
+    attempts INTEGER NOT NULL DEFAULT 0,
+    result TEXT,
+    error TEXT,
+    finished_at REAL,
+    PRIMARY KEY (batch_id, idx)
+);
+CREATE INDEX IF NOT EXISTS items_by_state ON items (state, batch_id, idx);
+"""
+
+
+class IdempotencyConflict(Exception):
+    """The idempotency key is already bound to a batch with a different body."""
+
+    def __init__(self, key: str, batch_id: str) -> None:
+        self.key, self.batch_id = key, batch_id
+        super().__init__(f"idempotency key {key!r} was used for batch {batch_id} with a different body")
+
+
+@dataclass(frozen=True)
+class BatchCounts:
+    """Item counts of one batch and the state derived from them."""
+
+    id: str
+    created_at: float
+    total: int
+    queued: int
+    running: int
+    done: int
+    failed: int
+
+    @property
+    def finished(self) -> int:
+        return self.done + self.failed
+
+    @property
+    def status(self) -> BatchState:
+        """done / failed when every item finished (failed: none succeeded), else running / queued."""
+        if self.finished == self.total:
+            return "done" if self.done > 0 else "failed"
+        if self.running or self.finished:
+            return "running"
+        return "queued"
+
+    @property
+    def progress(self) -> float:
+        return self.finished / self.total if self.total else 1.0
+
+
+@dataclass(frozen=True)
+class Item:
+    batch_id: str
+    index: int
+    name: str
+    state: ItemState
+    attempts: int
+    mission: dict[str, Any]
+    result: dict[str, Any] | None
+    error: dict[str, Any] | None
+
+
+def body_digest(missions: Sequence[dict[str, Any]]) -> str:
+    """SHA-256 of the canonical JSON of the missions (idempotency check)."""
+    canon = json.dumps(list(missions), sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(canon.encode()).hexdigest()
+
+
+class JobStore:
+    """The batch tables in one SQLite file; see the module doc."""
+
+    def __init__(self, path: Path) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self._lock = threading.Lock()
+        self._db = sqlite3.connect(path, check_same_thread=False, isolation_level=None, timeout=10.0)
+        self._db.execute("PRAGMA journal_mode=WAL")
+        self._db.execute("PRAGMA synchronous=FULL")
+        self._db.execute("PRAGMA foreign_keys=ON")
+        with self._tx() as db:
+            for stmt in filter(str.strip, _SCHEMA.split(";")):
+                db.execute(stmt)
+
+    @contextmanager
+    def _tx(self) -> Iterator[sqlite3.Connection]:
+        with self._lock:
+            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                yield self._db
+            except BaseException:
+                self._db.execute("ROLLBACK")
+                raise
+            self._db.execute("COMMIT")
+
+    def close(self) -> None:
+        with self._lock:
+            self._db.close()
+
+    def create_batch(self, missions: Sequence[dict[str, Any]], key: str | None) -> tuple[str, bool]:
+        """Store a batch durably; returns ``(id, created)``; ``created`` False when the key already had it."""
+        digest = body_digest(missions)
+        with self._tx() as db:
+            if key is not None:
+                row = db.execute("SELECT id, body_sha256 FROM batches WHERE idempotency_key = ?", (key,)).fetchone()
+                if row is not None:
+                    if row[1] != digest:
+                        raise IdempotencyConflict(key, row[0])
+                    return str(row[0]), False
+            batch_id = uuid.uuid4().hex
+            db.execute("INSERT INTO batches (id, idempotency_key, body_sha256, created_at, size) VALUES (?,?,?,?,?)",
+                       (batch_id, key, digest, time.time(), len(missions)))
+            db.executemany(
+                "INSERT INTO items (batch_id, idx, name, mission, state) VALUES (?,?,?,?,'queued')",
+                [(batch_id, i, str(m.get("name", "mission")), json.dumps(m, allow_nan=False))
+                 for i, m in enumerate(missions)])
+        return batch_id, True
+
+    def counts(self, batch_id: str) -> BatchCounts | None:
+        with self._lock:
+            head = self._db.execute("SELECT created_at, size FROM batches WHERE id = ?", (batch_id,)).fetchone()
+            if head is None:
+                return None
+            rows = self._db.execute("SELECT state, COUNT(*) FROM items WHERE batch_id = ? GROUP BY state",
+                                    (batch_id,)).fetchall()
+        n = dict(rows)
+        return BatchCounts(batch_id, head[0], head[1], n.get("queued", 0), n.get("running", 0), n.get("done", 0),
+                           n.get("failed", 0))
+
+    def items(self, batch_id: str) -> list[Item]:
+        with self._lock:
+            rows = self._db.execute(
+                "SELECT batch_id, idx, name, state, attempts, mission, result, error FROM items "
+                "WHERE batch_id = ? ORDER BY idx", (batch_id,)).fetchall()
+        return [_item(r) for r in rows]
+
+    def claim(self, limit: int) -> list[Item]:
+        """Mark up to ``limit`` queued items (oldest batch first) running and return them."""
+        if limit <= 0:
+            return []
+        with self._tx() as db:
+            rows = db.execute(
+                "SELECT i.batch_id, i.idx, i.name, i.state, i.attempts, i.mission, i.result, i.error "
+                "FROM items i JOIN batches b ON b.id = i.batch_id WHERE i.state = 'queued' "
+                "ORDER BY b.created_at, i.batch_id, i.idx LIMIT ?", (limit,)).fetchall()
+            db.executemany("UPDATE items SET state = 'running', attempts = attempts + 1 WHERE batch_id = ? AND idx = ?",
+                           [(r[0], r[1]) for r in rows])
+        return [_item((r[0], r[1], r[2], "running", r[4] + 1, r[5], None, None)) for r in rows]
+
+    def finish(self, batch_id: str, index: int, result: dict[str, Any]) -> bool:
+        """Store a running item's result; False (and nothing written) when it is not running."""
+        text = json.dumps(result, allow_nan=False)
+        with self._tx() as db:
+            cur = db.execute("UPDATE items SET state = 'done', result = ?, error = NULL, finished_at = ? "
+                             "WHERE batch_id = ? AND idx = ? AND state = 'running'",
+                             (text, time.time(), batch_id, index))
+        return cur.rowcount == 1
+
+    def fail(self, batch_id: str, index: int, error: dict[str, Any], retry: bool) -> ItemState | None:
+        """A running item failed: back to ``queued`` when ``retry``, else ``failed``; None if it was not running."""
+        state: ItemState = "queued" if retry else "failed"
+        with self._tx() as db:
+            cur = db.execute("UPDATE items SET state = ?, error = ?, finished_at = ? "
+                             "WHERE batch_id = ? AND idx = ? AND state = 'running'",
+                             (state, json.dumps(error, allow_nan=False), None if retry else time.time(),
+                              batch_id, index))
+        return state if cur.rowcount == 1 else None
+
+    def recover(self) -> int:
+        """After a restart: items left ``running`` by a dead server go back to ``queued``; returns how many."""
+        with self._tx() as db:
+            cur = db.execute("UPDATE items SET state = 'queued' WHERE state = 'running'")
+        return cur.rowcount
+
+    def has_queued(self) -> bool:
+        with self._lock:
+            return self._db.execute("SELECT 1 FROM items WHERE state = 'queued' LIMIT 1").fetchone() is not None
+
+
+def _item(r: tuple[Any, ...]) -> Item:
+    return Item(batch_id=r[0], index=r[1], name=r[2], state=r[3], attempts=r[4], mission=json.loads(r[5]),
+                result=json.loads(r[6]) if r[6] is not None else None,
+                error=json.loads(r[7]) if r[7] is not None else None)

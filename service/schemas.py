@@ -1,0 +1,245 @@
+"""Request and response bodies of the HTTP API (pydantic v2).
+
+Missions are :class:`ocp.mission.Mission` itself (subclassed only to refuse parameter *file paths*:
+over HTTP ``params`` is a preset name or a mapping, never a path on the server). Bodies reject
+unknown fields. Responses that mirror a core result's ``to_dict()`` list the documented fields and
+allow extra ones the core may add.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
+
+from ocp.errors import ParameterError
+from ocp.mission import Limits, Mission
+from ocp.params import PRESETS, load_params
+from ocp.theory import ReversalRegularity
+
+Finite = Annotated[float, Field(allow_inf_nan=False)]
+PositiveFinite = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+#: a sample of a reference channel: a number, or "inf"/"-inf" where the ideal command is unbounded
+Sample = float | Literal["inf", "-inf"]
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class _Open(BaseModel):
+    model_config = ConfigDict(extra="allow")
+
+
+def preset_or_mapping(v: Any) -> Any:
+    """Before-validator: a string must name a preset (no file paths over HTTP)."""
+    if isinstance(v, str) and v not in PRESETS:
+        raise ParameterError("params", f"unknown preset {v!r}; presets are {list(PRESETS)} (or give a mapping)")
+    return v
+
+
+class MissionRequest(Mission):
+    """A :class:`ocp.mission.Mission`; ``params`` is a preset name or a parameter mapping."""
+
+    model_config = ConfigDict(title="Mission")
+
+    @field_validator("params", mode="before")
+    @classmethod
+    def _no_paths(cls, v: Any) -> Any:
+        return preset_or_mapping(v)
+
+
+class _ParamsMixin(_Strict):
+    params: str | dict[str, Any] = Field(default="paper-rig", description=f"preset ({', '.join(PRESETS)}) "
+                                         "or mapping {J, B, c_tau, c_f, k_t, k_e, R, L[, units]}")
+    duration: PositiveFinite | None = Field(default=None, description="length [s]; default one period")
+    rate: PositiveFinite = Field(default=1000.0, description="sampling rate [Hz]")
+
+    @field_validator("params", mode="before")
+    @classmethod
+    def _no_paths(cls, v: Any) -> Any:
+        return preset_or_mapping(v)
+
+    @field_validator("params")
+    @classmethod
+    def _params_ok(cls, v: str | dict[str, Any]) -> str | dict[str, Any]:
+        load_params(v)  # ParameterError names the key
+        return v
+
+
+class SinRequest(_ParamsMixin):
+    """Exact feedforward of ``F = A sin^(2q+1)(2 pi t/T + phi)``."""
+
+    kind: Literal["sin"] = "sin"
+    amplitude: Finite = Field(description="thrust amplitude A [N], non-zero")
+    period: PositiveFinite = Field(description="period T [s]")
+    q: Annotated[int, Field(ge=0, le=20, description="thrust ~ sin^(2q+1)")]
+    phase: Finite = Field(default=0.0, description="phase phi [rad]")
+
+    @field_validator("amplitude")
+    @classmethod
+    def _nonzero(cls, v: float) -> float:
+        if v == 0:
+            raise ValueError("must be non-zero")
+        return v
+
+
+class DesignRequest(_ParamsMixin):
+    """Analytic fallback design: smallest admissible q for ``regularity``, then the shortest period
+    (``amplitude`` given) or largest amplitude (``period`` given) within ``limits``."""
+
+    kind: Literal["design"] = "design"
+    limits: Limits = Limits()
+    regularity: ReversalRegularity = ReversalRegularity.CONTINUOUS_VOLTAGE
+    amplitude: Finite | None = Field(default=None, description="thrust amplitude [N] (or give period)")
+    period: PositiveFinite | None = Field(default=None, description="period [s] (or give amplitude)")
+
+    @model_validator(mode="after")
+    def _one_of(self) -> DesignRequest:
+        if (self.amplitude is None) == (self.period is None):
+            raise ValueError("give exactly one of 'amplitude' and 'period'")
+        if self.amplitude == 0:
+            raise ValueError("amplitude must be non-zero")
+        return self
+
+
+def _analytic_kind(v: Any) -> str:
+    if isinstance(v, dict):
+        kind = v.get("kind")
+        if kind in ("sin", "design"):
+            return str(kind)
+        return "design" if "limits" in v or "regularity" in v or "q" not in v else "sin"
+    return str(getattr(v, "kind", "sin"))
+
+
+AnalyticRequest = Annotated[
+    Annotated[SinRequest, Tag("sin")] | Annotated[DesignRequest, Tag("design")],
+    Discriminator(_analytic_kind),
+]
+
+
+class CrossingPublic(_Open):
+    t: float = Field(description="crossing time [s]")
+    p: int | None = Field(default=None, description="thrust order at the crossing")
+
+
+class DesignPublic(_Strict):
+    q: int
+    amplitude: float = Field(description="[N]")
+    period: float = Field(description="[s]")
+    peak_current: float = Field(description="[A]")
+    peak_voltage: float = Field(description="[V]")
+
+
+class ReferencePublic(_Open):
+    """:meth:`ocp.reference.Reference.to_dict`; arrays of shape (N,), SI units, "inf" where unbounded."""
+
+    t: list[Sample]
+    thrust: list[Sample]
+    omega: list[Sample]
+    omega_dot: list[Sample]
+    omega_ddot: list[Sample]
+    theta: list[Sample]
+    current: list[Sample]
+    voltage: list[Sample]
+    unbounded: dict[str, bool]
+    crossings: list[CrossingPublic]
+    design: DesignPublic | None = None
+
+
+class Verification(_Open):
+    thrust_rms_error: float | None = None
+    max_abs_current: float | None = None
+    max_abs_voltage: float | None = None
+
+
+class OptimizePublic(_Open):
+    """:meth:`ocp.optimize.OptimizeResult.to_dict`; ``source`` says whether the solver or the fallback answered."""
+
+    source: Literal["optimized", "analytic-fallback"]
+    status: str
+    reason: str | None = None
+    solve_time_s: float | None = None
+    verification: Verification | None = None
+
+
+class BatchCreate(_Strict):
+    missions: list[MissionRequest] = Field(min_length=1, description="missions to optimise, in order")
+
+
+class BatchAccepted(_Strict):
+    id: str
+    status: Literal["queued", "running", "done", "failed"]
+
+
+class BatchCountsPublic(_Strict):
+    total: int
+    queued: int
+    running: int
+    done: int
+    failed: int
+
+
+class BatchPublic(_Strict):
+    id: str
+    status: Literal["queued", "running", "done", "failed"]
+    created_at: float = Field(description="Unix time [s]")
+    counts: BatchCountsPublic
+    progress: float = Field(ge=0, le=1, description="finished items / total")
+
+
+class ItemError(_Open):
+    type: str = Field(description="error class, e.g. MissionError, TaskTimeout")
+    field: str | None = None
+    reason: str
+
+
+class BatchItemPublic(_Strict):
+    index: int
+    name: str
+    status: Literal["queued", "running", "done", "failed"]
+    attempts: int
+    result: dict[str, Any] | None = None
+    error: ItemError | None = None
+
+
+class BatchResults(_Strict):
+    id: str
+    status: Literal["queued", "running", "done", "failed"]
+    results: list[BatchItemPublic]
+
+
+class LimitsPublic(_Strict):
+    max_body_bytes: int
+    max_profile_samples: int
+    max_intervals: int
+    max_batch_missions: int
+    max_reference_samples: int
+    optimize_deadline_s: float
+    task_timeout_s: float
+
+
+class InfoPublic(_Strict):
+    version: str
+    presets: list[str]
+    effects: list[str]
+    regularities: list[str]
+    limits: LimitsPublic
+    features: dict[str, bool] = Field(description="which optional routes this server offers")
+    workers: int
+    batch_backend: Literal["local", "dask"]
+
+
+class Health(_Strict):
+    status: Literal["ok"] = "ok"
+
+
+class Problem(_Open):
+    """RFC 9457 problem details; ``field`` and ``reason`` name what was wrong."""
+
+    type: str = "about:blank"
+    title: str
+    status: int
+    detail: str
+    field: str | None = None
+    reason: str | None = None

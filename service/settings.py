@@ -1,0 +1,66 @@
+"""Service settings, read from the environment (prefix ``THRUSTSHAPE_``) or passed to ``create_app``.
+
+Nothing here is built at import: :class:`Settings` is instantiated by whoever starts the service
+(``thrustshape serve``, a test, uvicorn's ``--factory``).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Annotated
+
+from pydantic import Field, SecretStr, field_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+DEFAULT_DB = Path("thrustshape-data") / "jobs.sqlite3"
+
+
+class Settings(BaseSettings):
+    """Typed service configuration; every field maps to ``THRUSTSHAPE_<NAME>`` (e.g. ``THRUSTSHAPE_WORKERS``)."""
+
+    model_config = SettingsConfigDict(env_prefix="THRUSTSHAPE_", extra="forbid", frozen=True)
+
+    host: str = "127.0.0.1"
+    port: Annotated[int, Field(ge=0, le=65535)] = 8000
+    #: local solver processes (each keeps its own solver cache)
+    workers: Annotated[int, Field(ge=1, le=256)] = 2
+    #: requests allowed to wait for a busy worker before new ones get 503 + Retry-After
+    queue_size: Annotated[int, Field(ge=0, le=10_000)] = 8
+    #: SQLite job store (WAL); created with its directory on start
+    db_path: Path = DEFAULT_DB
+    #: ``tcp://HOST:PORT`` of a Dask scheduler: batch items run there instead of on local workers
+    dask_address: str | None = None
+    #: bearer token; when set every route except ``/healthz`` requires ``Authorization: Bearer <key>``
+    api_key: SecretStr | None = None
+
+    # limits
+    max_body_bytes: Annotated[int, Field(ge=1024)] = 8 * 1024 * 1024
+    max_profile_samples: Annotated[int, Field(ge=2, le=100_000)] = 20_000
+    max_intervals: Annotated[int, Field(ge=8, le=2_000)] = 1_000
+    max_batch_missions: Annotated[int, Field(ge=1, le=100_000)] = 1_000
+    max_reference_samples: Annotated[int, Field(ge=2, le=2_000_001)] = 200_001
+
+    # time
+    #: hard wall-clock deadline of a synchronous optimisation [s]; the mission's time_limit_s may shorten it
+    optimize_deadline_s: Annotated[float, Field(gt=0, le=600)] = 30.0
+    #: added to a mission's time_limit_s for building and verifying the solution [s]
+    optimize_grace_s: Annotated[float, Field(ge=0, le=600)] = 5.0
+    #: share of the deadline kept for the analytic fallback when the solver overruns [s]
+    fallback_reserve_s: Annotated[float, Field(gt=0, le=60)] = 1.0
+    #: hard timeout of any other worker task (analytic, compare, model check) [s]
+    task_timeout_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
+    #: hard timeout of one batch item [s]; the item is retried up to ``batch_attempts`` times
+    batch_item_timeout_s: Annotated[float, Field(gt=0, le=3600)] = 300.0
+    batch_attempts: Annotated[int, Field(ge=1, le=10)] = 2
+    #: Retry-After [s] sent with 503 when the queue is full
+    retry_after_s: Annotated[int, Field(ge=1, le=3600)] = 1
+
+    @field_validator("dask_address")
+    @classmethod
+    def _dask_url(cls, v: str | None) -> str | None:
+        if v is None or v == "":
+            return None
+        scheme, sep, rest = v.partition("://")
+        if not sep or scheme not in ("tcp", "tls", "inproc", "ws", "wss") or not rest:
+            raise ValueError("must look like tcp://HOST:PORT")
+        return v

@@ -1,0 +1,138 @@
+"""Task functions: what runs inside a worker process (or on a Dask worker).
+
+Each takes and returns a JSON-ready dict, re-validates its input (it may come from the job store),
+imports the core lazily (the server process never builds a solver) and returns JSON-safe output
+(no NaN: non-finite floats become "inf" / "-inf" / null).
+
+:func:`available_tasks` decides at app creation which optional backends exist in this install;
+a route whose backend is missing is not registered.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.util
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+from pydantic import TypeAdapter
+
+from ocp.errors import MissionError
+from service.workers import TaskFn
+
+Payload = dict[str, Any]
+
+
+def json_safe(obj: Any) -> Any:
+    """Recursively: numpy scalars/arrays -> Python, non-finite floats -> "inf"/"-inf"/None."""
+    if isinstance(obj, dict):
+        return {str(k): json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [json_safe(v) for v in obj]
+    if hasattr(obj, "tolist") and not isinstance(obj, str):
+        return json_safe(obj.tolist())
+    if isinstance(obj, bool) or obj is None or isinstance(obj, int | str):
+        return obj
+    if isinstance(obj, float):
+        if math.isfinite(obj):
+            return obj
+        return None if math.isnan(obj) else ("inf" if obj > 0 else "-inf")
+    if hasattr(obj, "value") and isinstance(obj.value, str):  # enums
+        return obj.value
+    return str(obj)
+
+
+def analytic_reference(payload: Payload) -> Payload:
+    """``{"request": SinRequest | DesignRequest, "max_samples": int}`` -> :meth:`Reference.to_dict`
+    (+ ``design`` for a design request)."""
+    from ocp.analytic import reference, time_grid
+    from ocp.fallback import design_sin
+    from ocp.params import load_params
+    from service.schemas import AnalyticRequest, DesignRequest
+
+    req = TypeAdapter(AnalyticRequest).validate_python(payload["request"])
+    params = load_params(req.params)
+    design = None
+    if isinstance(req, DesignRequest):
+        d = design_sin(params, req.limits.current, req.limits.voltage, req.regularity,
+                       amplitude=req.amplitude, period=req.period)
+        prof = d.profile
+        design = {"q": prof.q, "amplitude": prof.amplitude, "period": prof.period,
+                  "peak_current": d.peak_current, "peak_voltage": d.peak_voltage}
+    else:
+        from ocp.analytic import SinProfile
+
+        prof = SinProfile(req.amplitude, req.period, req.q, req.phase)
+    duration = prof.period if req.duration is None else req.duration
+    n = math.floor(duration * req.rate) + 1
+    if n > int(payload["max_samples"]):
+        raise MissionError("duration" if req.duration is not None else "rate",
+                           f"the reference would have {n} samples; at most {payload['max_samples']} allowed")
+    out = reference(prof, params, time_grid(duration, req.rate)).to_dict()
+    if design is not None:
+        out["design"] = design
+    return json_safe(out)
+
+
+def optimize_mission(payload: Payload) -> Payload:
+    """Mission -> :meth:`ocp.optimize.OptimizeResult.to_dict` (the solver bounds its own CPU time)."""
+    from ocp.mission import Mission
+
+    optimize = importlib.import_module("ocp.optimize").optimize
+    return json_safe(optimize(Mission.model_validate(payload)).to_dict())
+
+
+def fallback_mission(payload: Payload) -> Payload:
+    """``{"mission": ..., "reason": ...}`` -> the analytic fallback answer (cheap, no IPOPT)."""
+    from ocp.mission import Mission
+
+    analytic_fallback = importlib.import_module("ocp.optimize").analytic_fallback
+    mission = Mission.model_validate(payload["mission"])
+    return json_safe(analytic_fallback(mission, str(payload["reason"])).to_dict())
+
+
+def compare_mission(payload: Payload) -> Payload:
+    """Mission -> :meth:`ocp.compare.CompareResult.to_dict`."""
+    from ocp.mission import Mission
+
+    compare = importlib.import_module("ocp.compare").compare
+    return json_safe(compare(Mission.model_validate(payload)).to_dict())
+
+
+def _has(module: str, *names: str) -> bool:
+    try:
+        if importlib.util.find_spec(module) is None:
+            return False
+    except ImportError:
+        return False
+    mod = importlib.import_module(module)
+    return all(callable(getattr(mod, n, None)) for n in names)
+
+
+@dataclass(frozen=True)
+class TaskSet:
+    """The task function behind each route; ``None`` = backend absent, route not registered.
+
+    Tests pass their own (e.g. a CPU-bound task that overruns) to exercise timeouts and restarts.
+    """
+
+    analytic: TaskFn = analytic_reference
+    optimize: TaskFn | None = None
+    fallback: TaskFn | None = None
+    compare: TaskFn | None = None
+    batch_item: TaskFn | None = None
+    extra_preload: tuple[str, ...] = field(default=())
+
+
+def available_tasks() -> TaskSet:
+    """Tasks whose core modules exist in this install (checked when the app is created)."""
+    has_opt = _has("ocp.optimize", "optimize", "analytic_fallback")
+    has_cmp = _has("ocp.compare", "compare")
+    return TaskSet(
+        optimize=optimize_mission if has_opt else None,
+        fallback=fallback_mission if has_opt else None,
+        compare=compare_mission if has_cmp else None,
+        batch_item=optimize_mission if has_opt else None,
+        extra_preload=tuple(m for m, ok in (("ocp.optimize", has_opt), ("ocp.compare", has_cmp)) if ok),
+    )
