@@ -7,7 +7,7 @@ JSON/YAML form::
      "plant": "dc-motor" | "torque",
      "limits": {"voltage": 12.0, "current": 2.0, "voltage_rate": null, "speed": null, "torque": null},
      "regularity": "bounded" | "continuous-current" | "continuous-voltage" | "c1-voltage",
-     "min_crossing_order": null | 2 | 4 | 6 | 8,
+     "min_crossing_order": null | 2 | 6,
      "objective": "track" | "min-time",
      "retiming": {"min_stretch": 1.0, "max_stretch": 1.5},
      "collocation": {"intervals": 120},
@@ -16,6 +16,12 @@ JSON/YAML form::
        or "segments": [{"kind": "hold", "duration": 0.5, "thrust": 0.4}, ...]}
 
 Units: voltage [V], current [A], voltage_rate [V/s], speed [rad/s], torque [N m], thrust [N], time [s].
+
+``min_crossing_order`` is the local exponent ``g`` of the thrust at each reversal, ``|F| ~ |t - t_s|^g``.
+The speed must change sign, so ``omega ~ s^(2n+1)`` and ``g = 2(2n+1)``: ``2`` (``omega ~ s``: bounded
+current and voltage, the default) or ``6`` (``omega ~ s^3``: current and voltage both zero at the reversal,
+which needs the voltage to be a continuous state). ``g = 4`` would make the speed touch zero
+without reversing. Neither is in Table I: ``F ~ sign(s)|s|^g`` is not analytic in time.
 """
 
 from __future__ import annotations
@@ -134,7 +140,7 @@ class Mission(_Strict):
     plant: Literal["dc-motor", "torque"] = "dc-motor"
     limits: Limits = Limits()
     regularity: ReversalRegularity = ReversalRegularity.BOUNDED
-    min_crossing_order: Literal[2, 4, 6, 8] | None = None
+    min_crossing_order: Literal[2, 6] | None = None
     objective: Literal["track", "min-time"] = "track"
     retiming: Retiming = Retiming()
     collocation: Collocation = Collocation()
@@ -155,9 +161,8 @@ class Mission(_Strict):
         if self.segments is not None and sum(s.duration for s in self.segments) * SEGMENT_RATE > MAX_PROFILE_SAMPLES:
             raise ValueError(f"segments last longer than {MAX_PROFILE_SAMPLES / SEGMENT_RATE:.0f} s")
         if self.min_crossing_order == 6 and self.regularity in ("bounded", "continuous-current"):
-            raise ValueError("min_crossing_order 6 needs regularity continuous-voltage or c1-voltage")
-        if self.min_crossing_order == 8 and self.regularity != "c1-voltage":
-            raise ValueError("min_crossing_order 8 needs regularity c1-voltage")
+            raise ValueError("min_crossing_order 6 needs regularity continuous-voltage or c1-voltage "
+                             "(omega ~ s^3 at the reversal needs current and voltage both zero there)")
         return self
 
     def motor(self) -> MotorParams:

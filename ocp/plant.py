@@ -43,13 +43,13 @@ NUMPY = Ops(abs=np.abs, sqrt=np.sqrt, tanh=np.tanh, exp=np.exp, sign=np.sign, si
 CASADI = Ops(abs=ca.fabs, sqrt=ca.sqrt, tanh=ca.tanh, exp=ca.exp, sign=ca.sign, sin=ca.sin, cos=ca.cos)
 
 
-def signed_square(w: Expr, ops: Ops = NUMPY, sign: float | None = None) -> Expr:
+def signed_square(w: Expr, ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
     """``w|w|``; with a known ``sign`` of ``w`` the smooth ``sign * w**2``."""
     return sign * w * w if sign is not None else w * ops.abs(w)
 
 
 # eq:thrust_model  F = c_f w|w|
-def thrust_from_speed(omega: Expr, c_f: float, ops: Ops = NUMPY, sign: float | None = None) -> Expr:
+def thrust_from_speed(omega: Expr, c_f: float, ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
     """Static thrust map: speed [rad/s] -> thrust [N]."""
     return c_f * signed_square(omega, ops, sign)
 
@@ -72,7 +72,7 @@ class Effect(Protocol):
         """Catalogue name of the effect."""
         ...
 
-    def load_torque(self, omega: Expr, ops: Ops, sign: float | None) -> Expr:
+    def load_torque(self, omega: Expr, ops: Ops, sign: Expr | None) -> Expr:
         """Extra torque opposing motion [N m], added to the drag and viscous terms."""
         ...
 
@@ -80,7 +80,7 @@ class Effect(Protocol):
         """Voltage [V] that reaches the armature when ``voltage`` is commanded."""
         ...
 
-    def thrust(self, thrust: Expr, omega: Expr, ops: Ops, sign: float | None) -> Expr:
+    def thrust(self, thrust: Expr, omega: Expr, ops: Ops, sign: Expr | None) -> Expr:
         """Measured thrust [N] given the ideal ``thrust`` of eq. thrust_model."""
         ...
 
@@ -122,11 +122,11 @@ class Plant(Protocol):
     @property
     def input_name(self) -> str: ...
 
-    def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: float | None = None) -> list[Expr]:
+    def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: Expr | None = None) -> list[Expr]:
         """Time derivative of the state (same layout as ``x``)."""
         ...
 
-    def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: float | None = None) -> Expr:
+    def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
         """Thrust [N] produced in state ``x``."""
         ...
 
@@ -166,7 +166,7 @@ class DCMotorPlant:
         return out
 
     def _thrust_chain(self, w: Expr, bound: Sequence[tuple[Effect, Any, Any]], ops: Ops,
-                      sign: float | None) -> tuple[Expr, list[Expr]]:
+                      sign: Expr | None) -> tuple[Expr, list[Expr]]:
         """Thrust after all effects and the thrust reaching each effect."""
         f = thrust_from_speed(w, self.params.c_f, ops, sign)
         inputs = []
@@ -175,7 +175,7 @@ class DCMotorPlant:
             f = b.thrust(f, w, ops, sign)
         return f, inputs
 
-    def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: float | None = None) -> list[Expr]:
+    def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: Expr | None = None) -> list[Expr]:
         p = self.params
         w, i = x[0], x[1]
         load = p.B * w + p.c_tau * signed_square(w, ops, sign)
@@ -196,7 +196,7 @@ class DCMotorPlant:
         di = (v - p.R * i - p.k_e * w) / p.L
         return [dw, di, *extra]
 
-    def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: float | None = None) -> Expr:
+    def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
         return self._thrust_chain(x[0], self._bound(x), ops, sign)[0]
 
     def steady_state(self, omega: float) -> tuple[float, float]:
@@ -224,12 +224,12 @@ class TorquePlant:
     def from_params(cls, params: MotorParams) -> TorquePlant:
         return cls(k=params.k, c_f=params.c_f)
 
-    def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: float | None = None) -> list[Expr]:
+    def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: Expr | None = None) -> list[Expr]:
         w = x[0]
         # eq:omega_dyn  w' = u - k w|w|
         return [u - self.k * signed_square(w, ops, sign)]
 
-    def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: float | None = None) -> Expr:
+    def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
         return thrust_from_speed(x[0], self.c_f, ops, sign)
 
 

@@ -1,0 +1,325 @@
+"""Mission -> optimised reference: phases, data for the cached collocation program, solve, verify.
+
+``optimize(mission)`` never raises for a numerical failure: when IPOPT fails, times out, or the
+mission's limits cannot be met, it returns the analytic fallback (``source="analytic-fallback"``)
+with the reason. Bad missions raise :class:`~ocp.errors.MissionError` naming the field.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ocp import collocation as col
+from ocp.crossings import find_zeros
+from ocp.errors import MissionError
+from ocp.mission import MAX_INTERVALS, Mission
+from ocp.plant import DCMotorPlant, Plant, TorquePlant, speed_from_thrust
+from ocp.result import OptimizeResult, analytic_fallback, finish_result
+from ocp.theory import ReversalRegularity
+
+#: weights of (track, time, stretch, smooth, effort) per objective
+WEIGHTS = {"track": (1.0, 0.0, 1e-3, 1e-6, 1e-9), "min-time": (0.0, 1.0, 0.0, 1e-4, 0.0)}
+MAX_REFINEMENTS = 3  # back-off rounds when the simulated response exceeds a limit between nodes
+
+
+@dataclass(frozen=True)
+class Phases:
+    """Desired profile split at its reversals.
+
+    Attributes:
+        bounds: phase boundaries in desired time [s], shape (P+1,)
+        signs: speed sign per phase (+1/-1), shape (P,)
+    """
+
+    bounds: np.ndarray
+    signs: np.ndarray
+
+    @property
+    def durations(self) -> np.ndarray:
+        return np.diff(self.bounds)
+
+
+def split_phases(t: np.ndarray, f: np.ndarray) -> Phases:
+    """Phases between sign changes of the desired thrust ``f`` (N,) on ``t`` (N,)."""
+    cuts = []
+    for k, sign_change in find_zeros(t, f, 0.0):
+        if not sign_change:
+            continue
+        if f[k] == 0.0:
+            cuts.append(float(t[k]))
+        else:
+            cuts.append(float(t[k] + (t[k + 1] - t[k]) * f[k] / (f[k] - f[k + 1])))
+    bounds = np.array([t[0], *cuts, t[-1]])
+    signs = []
+    for a, b in itertools.pairwise(bounds):
+        inside = f[(t > a) & (t < b)]
+        s = np.sign(np.sum(np.sign(inside))) if inside.size else np.sign(np.interp(0.5 * (a + b), t, f))
+        signs.append(1.0 if s >= 0 else -1.0)
+    if np.any(np.diff(bounds) <= 0):
+        raise MissionError("profile", "reversals are closer than the sampling allows")
+    return Phases(bounds=bounds, signs=np.array(signs))
+
+
+def make_plant(mission: Mission) -> Plant:
+    params = mission.motor()
+    return DCMotorPlant(params) if mission.plant == "dc-motor" else TorquePlant.from_params(params)
+
+
+def chain_order(mission: Mission) -> int:
+    """Input-chain length: 0 piecewise-constant command, 1 continuous, 2 C^1 (see ocp.collocation)."""
+    base = {ReversalRegularity.BOUNDED: 0, ReversalRegularity.CONTINUOUS_CURRENT: 0,
+            ReversalRegularity.CONTINUOUS_VOLTAGE: 1, ReversalRegularity.C1_VOLTAGE: 2}[mission.regularity]
+    if mission.limits.voltage_rate is not None:
+        base = max(base, 1)  # a slew limit makes the command a state
+    return base
+
+
+@dataclass
+class Problem:
+    """Everything one solve needs, derived from a mission (arrays documented in ocp.collocation)."""
+
+    mission: Mission
+    plant: Plant
+    structure: col.Structure
+    t_desired: np.ndarray
+    f_desired: np.ndarray
+    phases: Phases
+    scales: dict[str, Any] = field(default_factory=dict)
+
+
+def _plant_key(mission: Mission) -> str:
+    return f"{mission.plant}:{mission.motor().model_dump_json()}"
+
+
+def problem_for(mission: Mission, intervals: int | None = None) -> Problem:
+    """Phases, plant and structure of a mission (no solve)."""
+    t, f = mission.desired()
+    phases = split_phases(t, f)
+    n_phases = phases.signs.size
+    total = mission.collocation.intervals if intervals is None else intervals
+    per_phase = max(8, total // n_phases)
+    if per_phase * n_phases > 2 * MAX_INTERVALS:
+        raise MissionError("collocation.intervals", f"{n_phases} phases need more than {2 * MAX_INTERVALS} intervals")
+    st = col.Structure(plant_key=_plant_key(mission), n_phases=n_phases, intervals=per_phase,
+                       chain=chain_order(mission))
+    return Problem(mission=mission, plant=make_plant(mission), structure=st, t_desired=t, f_desired=f,
+                   phases=phases)
+
+
+def ipopt_options(time_limit: float) -> dict[str, object]:
+    return {
+        "ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+        "ipopt.tol": 1e-7, "ipopt.acceptable_tol": 1e-4, "ipopt.acceptable_iter": 5,
+        "ipopt.max_iter": 1000, "ipopt.max_wall_time": float(time_limit),
+        "ipopt.mu_strategy": "adaptive", "ipopt.linear_solver": "mumps",
+    }
+
+
+def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
+    """Optimised reference for ``mission`` (or the analytic fallback with the reason).
+
+    When the simulated response exceeds a limit between collocation nodes, the limit is backed off
+    by the excess (plus 20 %) and the same cached program is solved again, warm-started.
+    """
+    started = time.perf_counter()
+    problem = problem_for(mission)
+    try:
+        data = problem_data(problem)
+    except MissionError as exc:
+        return analytic_fallback(mission, f"limits cannot be met: {exc}")
+    result = solve_problem(problem, data, warm)
+    backoff = 1.0
+    for _ in range(MAX_REFINEMENTS):
+        if result.source != "optimized" or result.path_ok:
+            break
+        v = result.verification
+        excess = max(v["max_abs_current"] / mission.limits.current, v["max_abs_voltage"] / mission.limits.voltage)
+        backoff *= 1.0 / (1.0 + 1.2 * (excess - 1.0))
+        data = problem_data(problem, backoff)
+        result = solve_problem(problem, data, warm=True)
+    if result.source == "optimized" and not result.path_ok:
+        result = analytic_fallback(mission, "the optimised response exceeds a limit between nodes after "
+                                            f"{MAX_REFINEMENTS} back-off rounds", result.solver)
+    result.total_time_s = time.perf_counter() - started
+    return result
+
+
+# ---------------------------------------------------------------------------------------------
+# data: parameters, bounds, initial guess
+
+
+def _steady(plant: Plant, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(current, input) that hold speed ``w`` constant; input is voltage (DC) or torque/J."""
+    if isinstance(plant, DCMotorPlant):
+        p = plant.params
+        i = (p.B * w + p.c_tau * w * np.abs(w)) / p.k_t
+        return i, p.R * i + p.k_e * w
+    assert isinstance(plant, TorquePlant)
+    return np.zeros_like(w), plant.k * w * np.abs(w)
+
+
+def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray]:
+    """Parameter vector, bounds and initial guess for the cached program of ``problem``.
+
+    ``backoff`` (<= 1) shrinks the current and voltage bounds relative to the limits.
+    """
+    m, st, plant = problem.mission, problem.structure, problem.plant
+    params = m.motor()
+    P, N, chain = st.n_phases, st.intervals, st.chain
+    npx = len(plant.state_names)
+    nx = npx + chain
+    lim = m.limits
+    dur = problem.phases.durations
+    f_scale = max(float(np.max(np.abs(problem.f_desired))), 1e-6)
+    w_scale = math.sqrt(f_scale / params.c_f)
+    if lim.speed is not None and lim.speed < w_scale * math.sqrt(0.999):
+        raise MissionError("limits.speed", f"{lim.speed} rad/s cannot produce the desired peak thrust "
+                                           f"{f_scale:.4g} N (needs {w_scale:.4g} rad/s)")
+    dc = isinstance(plant, DCMotorPlant)
+    if dc:
+        u_lim = lim.voltage
+    elif lim.torque is not None:
+        u_lim = lim.torque / params.J
+    else:
+        u_lim = 4.0 * params.k * w_scale**2
+    t_int = float(np.sum(dur)) / (P * N)
+    rate = lim.voltage_rate if lim.voltage_rate is not None else u_lim / t_int
+    xscale = [w_scale] + ([lim.current] if dc else []) + [u_lim, rate][:chain]
+    uscale = [u_lim, rate, rate / t_int][chain]
+    rho = _residual_scaling(plant, np.array(xscale), u_lim, N, float(np.mean(dur)), npx, chain)
+
+    # desired thrust at the collocation points, normalised time of each desired phase
+    taus = (np.arange(N)[:, None] + col.TAU[None, 1:]) / N  # (N, DEGREE)
+    fd = np.zeros((P, N * col.DEGREE))
+    for j in range(P):
+        tq = problem.phases.bounds[j] + taus.ravel() * dur[j]
+        fd[j] = np.interp(tq, problem.t_desired, problem.f_desired) / f_scale
+    weights = WEIGHTS[m.objective]
+    p = np.concatenate([fd.ravel(), problem.phases.signs, dur, xscale, [uscale], rho, [f_scale], weights])
+
+    lay = _layout_for(st, nx)
+    inf = np.inf
+    lbx, ubx, x0 = np.full(lay.n, -inf), np.full(lay.n, inf), np.zeros(lay.n)
+    if m.objective == "track":
+        lbx[lay.stretch], ubx[lay.stretch] = m.retiming.min_stretch, m.retiming.max_stretch
+    else:
+        lbx[lay.stretch], ubx[lay.stretch] = 1e-3, max(100.0, m.retiming.max_stretch)
+    x0[lay.stretch] = np.clip(1.0, lbx[lay.stretch], ubx[lay.stretch])
+
+    # state bounds at the collocation points (scaled)
+    w_max = (lim.speed if lim.speed is not None else inf) / w_scale
+    for j in range(P):
+        sl = lay.xc[j, :, :, 0]
+        if problem.phases.signs[j] > 0:
+            lbx[sl], ubx[sl] = 0.0, w_max
+        else:
+            lbx[sl], ubx[sl] = -w_max, 0.0
+        if dc:
+            lbx[lay.xc[j, :, :, 1]], ubx[lay.xc[j, :, :, 1]] = -backoff, backoff
+        if chain >= 1:
+            lbx[lay.xc[j, :, :, npx]], ubx[lay.xc[j, :, :, npx]] = -backoff, backoff
+        if chain >= 2 and lim.voltage_rate is not None:
+            lbx[lay.xc[j, :, :, npx + 1]], ubx[lay.xc[j, :, :, npx + 1]] = -1.0, 1.0
+    if chain == 0:
+        lbx[lay.u], ubx[lay.u] = -backoff, backoff
+    elif chain == 1 and lim.voltage_rate is not None:
+        lbx[lay.u], ubx[lay.u] = -1.0, 1.0
+
+    # initial state: steady at the desired initial thrust
+    w0 = float(speed_from_thrust(problem.f_desired[0], params.c_f))
+    i0, u0 = (float(v[0]) for v in _steady(plant, np.array([w0])))
+    start = [w0] + ([i0] if dc else []) + [u0, 0.0][:chain]
+    lbx[lay.x0] = ubx[lay.x0] = x0[lay.x0] = np.array(start) / np.array(xscale)
+    if not (abs(start[-1 if chain else 0]) <= (u_lim if chain else inf) and (not dc or abs(i0) <= lim.current)):
+        raise MissionError("limits", f"the initial thrust {problem.f_desired[0]:.4g} N needs more than the limits")
+
+    # crossings: w = 0 at every phase boundary, plus the derivative chain for flatter crossings
+    vanish = [0, 1, 2] if m.min_crossing_order == 6 else [0]  # omega ~ s^3: omega = omega' = omega'' = 0
+    if max(vanish) >= nx:
+        raise MissionError("min_crossing_order", f"order {m.min_crossing_order} needs the input to be a state")
+    for j in range(P - 1):
+        for s in vanish:
+            lbx[lay.xc[j, -1, -1, s]] = ubx[lay.xc[j, -1, -1, s]] = 0.0
+    if m.objective == "min-time":
+        w1 = float(speed_from_thrust(problem.f_desired[-1], params.c_f))
+        i1, u1 = (float(v[0]) for v in _steady(plant, np.array([w1])))
+        end = np.array([w1] + ([i1] if dc else []) + [u1, 0.0][:chain]) / np.array(xscale)
+        lbx[lay.xc[-1, -1, -1, :]] = ubx[lay.xc[-1, -1, -1, :]] = end
+
+    x0[:] = _initial_guess(problem, lay, x0, fd * f_scale, np.array(xscale), uscale, chain, lbx, ubx)
+    return {"p": p, "lbx": lbx, "ubx": ubx, "x0": x0, "lbg": np.zeros(0), "xscale": np.array(xscale),
+            "uscale": np.array([uscale]), "f_scale": np.array([f_scale])}
+
+
+def _layout_for(st: col.Structure, nx: int) -> col.Layout:
+    return col._layout(st.n_phases, st.intervals, nx)
+
+
+def _residual_scaling(plant: Plant, xscale: np.ndarray, u_nom: float, N: int, d_nom: float, npx: int,
+                      chain: int) -> np.ndarray:
+    """Per-state factor min(1, tau_m N / d): tau_m from the diagonal of the plant Jacobian."""
+    x = 0.5 * xscale[:npx]
+    base = np.array(plant.rhs(list(x), 0.5 * u_nom), dtype=float)
+    rho = np.ones(npx + chain)
+    for m in range(npx):
+        dx = x.copy()
+        dx[m] += 1e-6 * xscale[m]
+        jac = (np.array(plant.rhs(list(dx), 0.5 * u_nom), dtype=float)[m] - base[m]) / (1e-6 * xscale[m])
+        if jac != 0:
+            rho[m] = min(1.0, N / (abs(jac) * d_nom))
+    return rho
+
+
+def _initial_guess(problem: Problem, lay: col.Layout, x0: np.ndarray, fd: np.ndarray, xscale: np.ndarray,
+                   uscale: float, chain: int, lbx: np.ndarray, ubx: np.ndarray) -> np.ndarray:
+    """Static inverse of the desired thrust at the collocation points, clipped into the bounds."""
+    params = problem.mission.motor()
+    P, N = problem.structure.n_phases, problem.structure.intervals
+    npx = len(problem.plant.state_names)
+    guess = x0.copy()
+    for j in range(P):
+        w = speed_from_thrust(fd[j], params.c_f).reshape(N, col.DEGREE)
+        w = problem.phases.signs[j] * np.abs(w)
+        i, u = _steady(problem.plant, w)
+        guess[lay.xc[j, :, :, 0]] = w / xscale[0]
+        if npx > 1:
+            guess[lay.xc[j, :, :, 1]] = i / xscale[1]
+        if chain >= 1:
+            guess[lay.xc[j, :, :, npx]] = u / xscale[npx]
+        if chain == 0:
+            guess[lay.u[j, :, 0]] = u[:, -1] / uscale
+    return np.clip(guess, lbx, ubx)
+
+
+def solve_problem(problem: Problem, data: dict[str, np.ndarray], warm: bool) -> OptimizeResult:
+    m = problem.mission
+    build_start = time.perf_counter()
+    prog = col.solver_for(problem.plant, problem.structure, ipopt_options(m.time_limit_s))
+    build_time = time.perf_counter() - build_start
+    args: dict[str, Any] = {"x0": data["x0"], "p": data["p"], "lbx": data["lbx"], "ubx": data["ubx"],
+                            "lbg": 0.0, "ubg": 0.0}
+    with prog.lock:
+        if warm and "x" in prog.last and prog.last["x"].size == data["x0"].size:
+            args["x0"] = np.clip(prog.last["x"], data["lbx"], data["ubx"])
+            args["lam_x0"], args["lam_g0"] = prog.last["lam_x"], prog.last["lam_g"]
+        t0 = time.perf_counter()
+        sol = prog.solver(**args)
+        solve_time = time.perf_counter() - t0
+        stats = prog.solver.stats()
+        x = np.asarray(sol["x"]).ravel()
+        prog.last = {"x": x, "lam_x": np.asarray(sol["lam_x"]).ravel(), "lam_g": np.asarray(sol["lam_g"]).ravel()}
+    status = str(stats.get("return_status", "unknown"))
+    ok = bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level"
+    g_viol = float(np.max(np.abs(np.asarray(sol["g"])))) if prog.n_g else 0.0
+    solver_info = {"status": status, "iterations": int(stats.get("iter_count", -1)), "solve_time_s": solve_time,
+                   "build_time_s": build_time, "objective": float(sol["f"]), "constraint_violation": g_viol}
+    if not ok:
+        reason = ("solver time limit reached" if "Wall" in status or "CPU" in status else f"IPOPT: {status}")
+        return analytic_fallback(m, reason, solver_info)
+    return finish_result(problem, prog, x, data, solver_info)

@@ -1,0 +1,333 @@
+"""Optimisation results: extraction of the collocation solution, a-posteriori verification, fallback.
+
+Verification integrates the plant (fixed-step RK4 on a grid of at most 0.25 ms, an integrator
+independent of the collocation scheme) under the returned input and reports the reproduction error.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Hashable
+from dataclasses import dataclass, field
+from functools import lru_cache
+from typing import TYPE_CHECKING, Any, cast
+
+import casadi as ca
+import numpy as np
+from scipy.integrate import cumulative_trapezoid
+
+from ocp import collocation as col
+from ocp.analytic import SinProfile, reference
+from ocp.errors import MissionError
+from ocp.fallback import design_sin
+from ocp.mission import Mission
+from ocp.plant import CASADI, DCMotorPlant, Plant
+
+if TYPE_CHECKING:
+    from ocp.optimize import Problem
+
+OUTPUT_RATE = 1000.0  # Hz of the returned arrays
+PATH_TOLERANCE = 1e-3  # relative excess over a limit accepted as rounding
+SIM_STEP = 2.5e-4  # s, verification step
+
+
+@dataclass
+class OptimizeResult:
+    """A reference and how it was obtained. Arrays have shape (N,) on ``t`` [s], SI units.
+
+    Attributes:
+        source: "optimized" or "analytic-fallback"
+        status: IPOPT return status, or "fallback"
+        reason: why the fallback was used ("" when optimised)
+        arrays: t, thrust, thrust_desired, omega, theta, current, voltage (and ``torque`` for the
+            torque plant: normalised input [rad/s^2])
+        crossings: [{"t", "exponent", "sign_change"}] at each reversal of the returned thrust
+        stretch: per phase, achieved duration / desired duration
+        verification: thrust_rms_error, thrust_max_error [N] (simulation vs returned), tracking_rms_error
+            [N] (returned vs desired), max_abs_current [A], max_abs_voltage [V], margins, path_ok
+        solver: status, iterations, solve_time_s, build_time_s, objective, constraint_violation
+    """
+
+    name: str
+    source: str
+    status: str
+    reason: str
+    arrays: dict[str, np.ndarray]
+    crossings: list[dict[str, Any]]
+    stretch: list[float]
+    verification: dict[str, Any]
+    solver: dict[str, Any] = field(default_factory=dict)
+    total_time_s: float = 0.0
+
+    @property
+    def path_ok(self) -> bool:
+        return bool(self.verification.get("path_ok", False))
+
+    @property
+    def solve_time_s(self) -> float:
+        return float(self.solver.get("solve_time_s", 0.0))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (no NaN/inf) dict: the CLI's ``--json`` and the service's answer."""
+        out: dict[str, Any] = {
+            "name": self.name, "source": self.source, "status": self.status, "reason": self.reason,
+            "solve_time_s": self.solve_time_s, "total_time_s": self.total_time_s,
+            "iterations": self.solver.get("iterations"), "solver": _clean(self.solver),
+            "verification": _clean(self.verification), "crossings": _clean(self.crossings),
+            "stretch": _clean(self.stretch),
+        }
+        for k, v in self.arrays.items():
+            out[k] = _clean(np.asarray(v, float).tolist())
+        return out
+
+
+def _clean(obj: Any) -> Any:
+    if isinstance(obj, dict):
+        return {k: _clean(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_clean(v) for v in obj]
+    if isinstance(obj, float | np.floating):
+        return float(obj) if math.isfinite(obj) else None
+    if isinstance(obj, np.integer):
+        return int(obj)
+    if isinstance(obj, np.bool_):
+        return bool(obj)
+    return obj
+
+
+# ---------------------------------------------------------------------------------------------
+# evaluation of the collocation solution
+
+
+@dataclass(frozen=True)
+class Solution:
+    """Piecewise-polynomial states of a solved program (SI).
+
+    Attributes:
+        edges: interval boundaries [s], shape (P*N+1,)
+        points: interval node values, shape (P*N, DEGREE+1, nx)
+        controls: piecewise-constant control per interval, shape (P*N,)
+        signs: speed sign per interval, shape (P*N,)
+        phase_edges: phase boundaries [s], shape (P+1,)
+    """
+
+    edges: np.ndarray
+    points: np.ndarray
+    controls: np.ndarray
+    signs: np.ndarray
+    phase_edges: np.ndarray
+    chain: int
+    n_plant_states: int
+
+    def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(states (nx, M), plant input (M,)) at times ``t`` (M,)."""
+        k = np.clip(np.searchsorted(self.edges, t, side="right") - 1, 0, self.controls.size - 1)
+        s = (t - self.edges[k]) / (self.edges[k + 1] - self.edges[k])
+        basis = col.lagrange_basis(s)  # (M, D+1)
+        x = np.einsum("md,mdn->nm", basis, self.points[k])
+        u = x[self.n_plant_states] if self.chain else self.controls[k]
+        return x, u
+
+
+def extract(problem: Problem, prog: col.Program, xopt: np.ndarray, data: dict[str, np.ndarray]) -> Solution:
+    st = problem.structure
+    lay = prog.layout
+    xs, us = data["xscale"], float(data["uscale"][0])
+    P, N = st.n_phases, st.intervals
+    h = xopt[lay.stretch] * problem.phases.durations
+    phase_edges = np.concatenate([[0.0], np.cumsum(h)])
+    edges = np.concatenate([phase_edges[j] + np.arange(N) * h[j] / N for j in range(P)] + [phase_edges[-1:]])
+    xc = xopt[lay.xc] * xs  # (P, N, D, nx)
+    start = np.empty((P, N, prog.nx))
+    flat = xc.reshape(P * N, col.DEGREE, prog.nx)
+    start_flat = start.reshape(P * N, prog.nx)
+    start_flat[0] = xopt[lay.x0] * xs
+    start_flat[1:] = flat[:-1, -1, :]
+    points = np.concatenate([start_flat[:, None, :], flat], axis=1)
+    controls = xopt[lay.u].reshape(P * N) * us
+    signs = np.repeat(problem.phases.signs, N)
+    return Solution(edges=edges, points=points, controls=controls, signs=signs, phase_edges=phase_edges,
+                    chain=st.chain, n_plant_states=prog.n_plant_states)
+
+
+@lru_cache(maxsize=16)
+def _rk4_function(plant: Any) -> ca.Function:
+    """CasADi RK4 step ``(x, u, dt) -> x+`` with 2 sub-steps, built once per plant."""
+    nx = len(plant.state_names)
+    x, u, dt = ca.SX.sym("x", nx), ca.SX.sym("u"), ca.SX.sym("dt")
+
+    def f(z: ca.SX) -> ca.SX:
+        return ca.vertcat(*plant.rhs([z[i] for i in range(nx)], u, CASADI))
+
+    z, h = x, dt / 2
+    for _ in range(2):
+        k1 = f(z)
+        k2 = f(z + h / 2 * k1)
+        k3 = f(z + h / 2 * k2)
+        k4 = f(z + h * k3)
+        z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    return ca.Function("rk4", [x, u, dt], [z])
+
+
+def verify_simulation(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarray, x0: np.ndarray,
+                      t_out: np.ndarray) -> np.ndarray:
+    """Integrate ``plant`` from ``x0`` under the input held at ``u_of_interval[k]`` on
+    ``[t_knots[k], t_knots[k+1])``; return states (nx, M) at ``t_out`` (M,)."""
+    grid = np.union1d(t_knots, t_out)
+    n_sub = np.maximum(1, np.ceil(np.diff(grid) / SIM_STEP).astype(int))
+    fine = np.concatenate([np.linspace(a, b, n + 1)[:-1] for a, b, n in zip(grid[:-1], grid[1:], n_sub,
+                                                                              strict=True)] + [grid[-1:]])
+    k = np.clip(np.searchsorted(t_knots, fine[:-1], side="right") - 1, 0, u_of_interval.size - 1)
+    step = _rk4_function(cast(Hashable, plant)).mapaccum("sim", fine.size - 1)
+    xs = np.asarray(step(x0, u_of_interval[k][None, :], np.diff(fine)[None, :]))
+    states = np.concatenate([np.asarray(x0, float)[:, None], xs], axis=1)
+    idx = np.searchsorted(fine, t_out)
+    return states[:, np.clip(idx, 0, fine.size - 1)]
+
+
+def _output_grid(total: float) -> np.ndarray:
+    n = max(2, math.ceil(total * OUTPUT_RATE) + 1)
+    return np.linspace(0.0, total, n)
+
+
+def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: dict[str, np.ndarray],
+                  solver_info: dict[str, Any]) -> OptimizeResult:
+    """Evaluate, verify and package a solved program.
+
+    The returned speed, current and thrust are the plant's response to the returned command
+    (simulated); the collocation solution is the plan, and the gap between the two is reported as
+    ``verification.thrust_rms_error``. Between nodes the polynomial of a fast state (the current,
+    with L/R ~ 0.4 ms) says little, the simulated response is what the motor does.
+    """
+    m, plant = problem.mission, problem.plant
+    sol = extract(problem, prog, xopt, data)
+    t = _output_grid(float(sol.phase_edges[-1]))
+    x_plan, u = sol.states(t)
+    npx = prog.n_plant_states
+    f_plan = np.asarray(plant.thrust([x_plan[i] for i in range(npx)]), float)
+    # desired thrust at the retimed time (same normalised time within each phase)
+    j = np.clip(np.searchsorted(sol.phase_edges, t, side="right") - 1, 0, problem.phases.signs.size - 1)
+    frac = (t - sol.phase_edges[j]) / np.diff(sol.phase_edges)[j]
+    f_des = np.interp(problem.phases.bounds[j] + frac * problem.phases.durations[j], problem.t_desired,
+                      problem.f_desired)
+    if sol.chain:  # continuous input: knots on the output grid, value at each step's middle
+        knots = t
+        u_knots = sol.states(0.5 * (t[:-1] + t[1:]))[1]
+    else:
+        knots, u_knots = sol.edges, sol.controls
+    x = verify_simulation(plant, knots, u_knots, sol.points[0, 0, :npx], t)
+    thrust = np.asarray(plant.thrust([x[i] for i in range(npx)]), float)
+    arrays = {"t": t, "thrust": thrust, "thrust_desired": f_des, "omega": x[0],
+              "theta": cumulative_trapezoid(x[0], t, initial=0.0)}
+    dc = isinstance(plant, DCMotorPlant)
+    if dc:
+        arrays["current"], arrays["voltage"] = x[1], u
+    else:
+        arrays["torque"] = u
+        arrays["current"], arrays["voltage"] = _torque_plant_commands(m, x[0], u)
+    arrays["command_t"], arrays["command"] = knots, np.append(u_knots, u_knots[-1])
+    verification = _verification(m, arrays, f_plan)
+    crossings = _crossings(sol, data["xscale"], float(data["uscale"][0]))
+    stretch = (np.diff(sol.phase_edges) / problem.phases.durations).tolist()
+    return OptimizeResult(name=m.name, source="optimized", status=solver_info["status"], reason="",
+                          arrays=arrays, crossings=crossings, stretch=stretch, verification=verification,
+                          solver=solver_info)
+
+
+def _torque_plant_commands(m: Mission, w: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Current and voltage a DC motor would need for the torque-plant solution (tau = J u)."""
+    p = m.motor()
+    i = p.J * u / p.k_t + p.B * w / p.k_t  # torque input J u covers inertia + drag; B adds
+    return i, p.R * i + p.k_e * w
+
+
+def _verification(m: Mission, arrays: dict[str, np.ndarray], f_plan: np.ndarray) -> dict[str, Any]:
+    """Reproduction error (simulated vs planned thrust), peaks and margins of the simulated response."""
+    err = arrays["thrust"] - f_plan
+    i_max = float(np.max(np.abs(arrays["current"])))
+    v_max = float(np.max(np.abs(arrays["voltage"])))
+    w_max = float(np.max(np.abs(arrays["omega"])))
+    lim = m.limits
+    tol = 1.0 + PATH_TOLERANCE
+    path_ok = i_max <= lim.current * tol and v_max <= lim.voltage * tol
+    if lim.speed is not None:
+        path_ok = path_ok and w_max <= lim.speed * tol
+    return {
+        "thrust_rms_error": float(np.sqrt(np.mean(err**2))),
+        "thrust_max_error": float(np.max(np.abs(err))),
+        "tracking_rms_error": float(np.sqrt(np.mean((arrays["thrust"] - arrays["thrust_desired"]) ** 2))),
+        "max_abs_current": i_max, "max_abs_voltage": v_max, "max_abs_speed": w_max,
+        "current_margin": lim.current - i_max, "voltage_margin": lim.voltage - v_max,
+        "path_ok": bool(path_ok),
+    }
+
+
+def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[str, Any]]:
+    """Local exponent g (|F| ~ |t - t_s|^g) achieved at each phase boundary, exact from the ODE.
+
+    At a boundary omega = 0, and omega' is proportional to the next element of the chain
+    (current, then voltage, then its slew: dc_mechanical / dc_electrical; for the torque plant the
+    input, then its slew). If the first ``n`` elements vanish, omega ~ s^(n+1) and the thrust
+    ~ s^(2n+2). Elements count as zero below 1e-6 of their scale; the held control stands last,
+    taken on both sides of the crossing.
+    """
+    out = []
+    N = sol.controls.size // (sol.phase_edges.size - 1)
+    for k, ts in enumerate(sol.phase_edges[1:-1]):
+        node = sol.points[(k + 1) * N - 1, -1, :] / xscale
+        left, right = sol.controls[(k + 1) * N - 1], sol.controls[(k + 1) * N]
+        chain = [*np.abs(node[1:]), max(abs(left), abs(right)) / uscale]
+        n = 0
+        while n < len(chain) and chain[n] <= 1e-6:
+            n += 1
+        out.append({"t": float(ts), "exponent": float(2 * n + 2), "sign_change": True})
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# fallback
+
+
+def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | None = None) -> OptimizeResult:
+    """The ``A sin^(2q+1)`` reference within the mission's limits, aligned to its first reversal."""
+    params = m.motor()
+    t_d, f_d = m.desired()
+    amp = max(float(np.max(np.abs(f_d))), 1e-6)
+    voltage_driven = m.plant == "dc-motor"
+    try:
+        design = design_sin(params, m.limits.current, m.limits.voltage, m.regularity, amplitude=amp,
+                            voltage_driven=voltage_driven)
+    except MissionError:
+        design = design_sin(params, m.limits.current, m.limits.voltage, m.regularity,
+                            period=2.0 * float(t_d[-1] - t_d[0]), voltage_driven=voltage_driven)
+        reason += f"; amplitude reduced to {design.profile.amplitude:.4g} N to meet the limits"
+    prof = design.profile
+    first = [k for k, sc in _sign_changes(f_d) if sc]
+    phase = 0.0
+    if first:
+        k = first[0]
+        ts = float(t_d[k] - t_d[0])
+        rising = f_d[k + 1] > f_d[k]
+        phase = (0.0 if rising else math.pi) - prof.W * ts
+    prof = SinProfile(prof.amplitude, prof.period, prof.q, phase)
+    t = _output_grid(float(t_d[-1] - t_d[0]))
+    ref = reference(prof, params, t)
+    arrays = {"t": t, "thrust": ref.thrust, "thrust_desired": np.interp(t + t_d[0], t_d, f_d), "omega": ref.omega,
+              "theta": ref.theta, "current": ref.current, "voltage": ref.voltage}
+    plant = DCMotorPlant(params)
+    u_knots = 0.5 * (ref.voltage[:-1] + ref.voltage[1:])
+    sim = verify_simulation(plant, t, u_knots, np.array([ref.omega[0], ref.current[0]]), t)
+    arrays["command_t"], arrays["command"] = t, np.append(u_knots, u_knots[-1])
+    verification = _verification(m, {**arrays, "thrust": np.asarray(plant.thrust([sim[0], sim[1]]), float)},
+                                 ref.thrust)
+    crossings = [{"t": float(ts), "exponent": float(prof.p), "sign_change": True} for ts in ref.crossing_times
+                 if 0.0 < ts < t[-1]]
+    return OptimizeResult(name=m.name, source="analytic-fallback", status="fallback", reason=reason, arrays=arrays,
+                          crossings=crossings, stretch=[], verification=verification, solver=solver_info or {})
+
+
+def _sign_changes(f: np.ndarray) -> list[tuple[int, bool]]:
+    from ocp.crossings import find_zeros
+
+    return find_zeros(np.arange(f.size, dtype=float), f, 0.0)
+
