@@ -53,7 +53,7 @@ class TooLarge(Exception):
 def _field(err: dict[str, Any]) -> tuple[str, str]:
     loc = [str(p) for p in err.get("loc", ())]
     if loc and loc[0] in ("body", "query", "path", "header"):
-        loc = loc[1:] if loc[0] == "body" else loc
+        loc = loc[1:]
     # tagged unions put the tag in the location: drop it (body.sin.amplitude -> amplitude)
     loc = [p for p in loc if p not in ("sin", "design", "function-after[_no_paths(), str]")]
     reason = {"extra_forbidden": "unknown field", "missing": "missing field"}.get(err.get("type", ""),

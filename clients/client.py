@@ -1,0 +1,320 @@
+"""HTTP client of the thrustshape service: :class:`Client` (sync) and :class:`AsyncClient`, on httpx.
+
+Both wrap an ``httpx`` client; pass ``transport=`` to talk to an app in-process (e.g.
+``httpx.ASGITransport(app)``) or through any other httpx transport. A 503 is retried up to
+``retries`` times, waiting what the server's ``Retry-After`` says (capped by ``max_retry_wait``).
+Errors form a tree, so callers catch as broadly or as narrowly as they need::
+
+    ClientError                      root: everything this module raises
+    ├── TransportError               no HTTP answer (connection refused, reset, ...)
+    │   └── Timeout                  no answer within the client's timeout
+    └── APIError                     the server answered with an error (problem+json parsed)
+        ├── BadRequest(ValueError)   4xx: .field and .reason say what to fix
+        │   ├── Unauthorized         401: missing or wrong API key
+        │   ├── NotFound             404
+        │   ├── PayloadTooLarge      413
+        │   └── InvalidInput         422
+        ├── ServerBusy               503 after the retries
+        └── ServerError              other 5xx (504: ComputationTimeout)
+            └── ComputationTimeout
+"""
+
+from __future__ import annotations
+
+import asyncio
+import email.utils
+import time
+from collections.abc import Callable, Iterable, Mapping
+from typing import Any
+
+import httpx
+from pydantic import BaseModel
+
+DEFAULT_TIMEOUT = httpx.Timeout(60.0, connect=5.0)
+
+
+class ClientError(Exception):
+    """Root of the client's errors."""
+
+
+class TransportError(ClientError):
+    """The request got no HTTP answer."""
+
+
+class Timeout(TransportError):
+    """No answer within the client's timeout."""
+
+
+class APIError(ClientError):
+    """The server answered with an error status; fields of its problem+json body are attributes."""
+
+    def __init__(self, status: int, problem: Mapping[str, Any], headers: Mapping[str, str] | None = None) -> None:
+        self.status = status
+        self.problem = dict(problem)
+        self.title = str(problem.get("title", ""))
+        self.detail = str(problem.get("detail", ""))
+        self.field: str | None = problem.get("field")
+        self.reason: str | None = problem.get("reason")
+        self.headers = dict(headers or {})
+        super().__init__(f"{status} {self.title}: {self.detail}".strip())
+
+
+class BadRequest(APIError, ValueError):
+    """4xx: the request must change before it can succeed."""
+
+
+class Unauthorized(BadRequest):
+    """401: missing or wrong API key."""
+
+
+class NotFound(BadRequest):
+    """404."""
+
+
+class PayloadTooLarge(BadRequest):
+    """413: a body, batch or profile over the server's limits."""
+
+
+class InvalidInput(BadRequest):
+    """422: ``field`` names the offending input, ``reason`` what is wrong with it."""
+
+
+class ServerBusy(APIError):
+    """503 still after the retries; ``retry_after`` [s] from the last answer."""
+
+    @property
+    def retry_after(self) -> float | None:
+        return _retry_after(self.headers.get("retry-after"))
+
+
+class ServerError(APIError):
+    """5xx other than 503."""
+
+
+class ComputationTimeout(ServerError):
+    """504: the computation hit the server's hard timeout."""
+
+
+_BY_STATUS: dict[int, type[APIError]] = {401: Unauthorized, 404: NotFound, 413: PayloadTooLarge, 422: InvalidInput,
+                                         503: ServerBusy, 504: ComputationTimeout}
+
+
+def _retry_after(value: str | None) -> float | None:
+    if value is None:
+        return None
+    try:
+        return max(float(value), 0.0)
+    except ValueError:
+        when = email.utils.parsedate_to_datetime(value) if value else None
+        return None if when is None else max(when.timestamp() - time.time(), 0.0)
+
+
+def _error(resp: httpx.Response) -> APIError:
+    try:
+        body = resp.json()
+    except ValueError:
+        body = None
+    if not isinstance(body, dict):
+        body = {"title": resp.reason_phrase, "detail": resp.text[:500]}
+    cls = _BY_STATUS.get(resp.status_code) or (BadRequest if resp.status_code < 500 else ServerError)
+    return cls(resp.status_code, body, {k.lower(): v for k, v in resp.headers.items()})
+
+
+def _json(obj: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
+    return obj.model_dump(mode="json") if isinstance(obj, BaseModel) else dict(obj)
+
+
+class _Spec:
+    """What both clients share: request building, answer parsing, the retry policy."""
+
+    def __init__(self, base_url: str, api_key: str | None, retries: int, max_retry_wait: float) -> None:
+        if retries < 0:
+            raise ValueError("retries must be >= 0")
+        self.base_url = base_url.rstrip("/")
+        self.headers = {"Accept": "application/json"}
+        if api_key:
+            self.headers["Authorization"] = f"Bearer {api_key}"
+        self.retries, self.max_retry_wait = retries, max_retry_wait
+
+    def wait(self, resp: httpx.Response, attempt: int) -> float | None:
+        """Seconds to wait before retrying ``resp``, or None when it is final."""
+        if resp.status_code != 503 or attempt >= self.retries:
+            return None
+        after = _retry_after(resp.headers.get("retry-after"))
+        return min(after if after is not None else 0.5 * 2**attempt, self.max_retry_wait)
+
+    @staticmethod
+    def result(resp: httpx.Response) -> httpx.Response:
+        if resp.status_code >= 400:
+            raise _error(resp)
+        return resp
+
+
+class Client:
+    """Synchronous client; use as a context manager or call :meth:`close`.
+
+    Args:
+        base_url: e.g. ``http://127.0.0.1:8000``.
+        api_key: bearer token when the server requires one.
+        timeout: seconds (or an ``httpx.Timeout``) per HTTP request.
+        retries: extra attempts after a 503; waits honour ``Retry-After``.
+        transport: any httpx transport (tests: the app in-process).
+    """
+
+    def __init__(self, base_url: str = "http://127.0.0.1:8000", *, api_key: str | None = None,
+                 timeout: float | httpx.Timeout = DEFAULT_TIMEOUT, retries: int = 3, max_retry_wait: float = 30.0,
+                 transport: httpx.BaseTransport | None = None) -> None:
+        self._spec = _Spec(base_url, api_key, retries, max_retry_wait)
+        self._http = httpx.Client(base_url=self._spec.base_url, headers=self._spec.headers, timeout=timeout,
+                                  transport=transport)
+
+    def __enter__(self) -> Client:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._http.close()
+
+    def _request(self, method: str, path: str, **kw: Any) -> httpx.Response:
+        attempt = 0
+        while True:
+            try:
+                resp = self._http.request(method, path, **kw)
+            except httpx.TimeoutException as exc:
+                raise Timeout(f"{method} {path}: {exc}") from exc
+            except httpx.TransportError as exc:
+                raise TransportError(f"{method} {path}: {exc}") from exc
+            delay = self._spec.wait(resp, attempt)
+            if delay is None:
+                return self._spec.result(resp)
+            time.sleep(delay)
+            attempt += 1
+
+    def health(self) -> dict[str, Any]:
+        return self._request("GET", "/healthz").json()
+
+    def info(self) -> dict[str, Any]:
+        return self._request("GET", "/v1/info").json()
+
+    def analytic(self, request: Mapping[str, Any]) -> dict[str, Any]:
+        """``{"amplitude", "period", "q", ...}`` or a design request ``{"amplitude" | "period", "limits", ...}``."""
+        return self._request("POST", "/v1/references/analytic", json=dict(request)).json()
+
+    def optimize(self, mission: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
+        return self._request("POST", "/v1/references/optimize", json=_json(mission)).json()
+
+    def compare(self, mission: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
+        return self._request("POST", "/v1/compare", json=_json(mission)).json()
+
+    def submit_batch(self, missions: Iterable[BaseModel | Mapping[str, Any]],
+                     idempotency_key: str | None = None) -> dict[str, Any]:
+        """Submit missions; returns ``{"id", "status"}``. With a key, resubmitting returns the same batch."""
+        headers = {"Idempotency-Key": idempotency_key} if idempotency_key else None
+        body = {"missions": [_json(m) for m in missions]}
+        return self._request("POST", "/v1/batches", json=body, headers=headers).json()
+
+    def batch(self, batch_id: str) -> dict[str, Any]:
+        return self._request("GET", f"/v1/batches/{batch_id}").json()
+
+    def batch_results(self, batch_id: str) -> dict[str, Any]:
+        return self._request("GET", f"/v1/batches/{batch_id}/results").json()
+
+    def batch_results_csv(self, batch_id: str) -> str:
+        return self._request("GET", f"/v1/batches/{batch_id}/results", params={"format": "csv"}).text
+
+    def wait_batch(self, batch_id: str, *, poll: float = 0.5, timeout: float | None = None,
+                   on_progress: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+        """Poll until the batch is done or failed; returns its last status. Raises :class:`Timeout`."""
+        end = None if timeout is None else time.monotonic() + timeout
+        while True:
+            status = self.batch(batch_id)
+            if on_progress is not None:
+                on_progress(status)
+            if status["status"] in ("done", "failed"):
+                return status
+            if end is not None and time.monotonic() > end:
+                raise Timeout(f"batch {batch_id} not finished after {timeout} s")
+            time.sleep(poll)
+
+
+class AsyncClient:
+    """Asynchronous twin of :class:`Client` (same arguments, ``await`` every call, ``async with``)."""
+
+    def __init__(self, base_url: str = "http://127.0.0.1:8000", *, api_key: str | None = None,
+                 timeout: float | httpx.Timeout = DEFAULT_TIMEOUT, retries: int = 3, max_retry_wait: float = 30.0,
+                 transport: httpx.AsyncBaseTransport | None = None) -> None:
+        self._spec = _Spec(base_url, api_key, retries, max_retry_wait)
+        self._http = httpx.AsyncClient(base_url=self._spec.base_url, headers=self._spec.headers, timeout=timeout,
+                                       transport=transport)
+
+    async def __aenter__(self) -> AsyncClient:
+        return self
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.aclose()
+
+    async def aclose(self) -> None:
+        await self._http.aclose()
+
+    async def _request(self, method: str, path: str, **kw: Any) -> httpx.Response:
+        attempt = 0
+        while True:
+            try:
+                resp = await self._http.request(method, path, **kw)
+            except httpx.TimeoutException as exc:
+                raise Timeout(f"{method} {path}: {exc}") from exc
+            except httpx.TransportError as exc:
+                raise TransportError(f"{method} {path}: {exc}") from exc
+            delay = self._spec.wait(resp, attempt)
+            if delay is None:
+                return self._spec.result(resp)
+            await asyncio.sleep(delay)
+            attempt += 1
+
+    async def _json(self, method: str, path: str, **kw: Any) -> dict[str, Any]:
+        return (await self._request(method, path, **kw)).json()
+
+    async def health(self) -> dict[str, Any]:
+        return await self._json("GET", "/healthz")
+
+    async def info(self) -> dict[str, Any]:
+        return await self._json("GET", "/v1/info")
+
+    async def analytic(self, request: Mapping[str, Any]) -> dict[str, Any]:
+        return await self._json("POST", "/v1/references/analytic", json=dict(request))
+
+    async def optimize(self, mission: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
+        return await self._json("POST", "/v1/references/optimize", json=_json(mission))
+
+    async def compare(self, mission: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
+        return await self._json("POST", "/v1/compare", json=_json(mission))
+
+    async def submit_batch(self, missions: Iterable[BaseModel | Mapping[str, Any]],
+                           idempotency_key: str | None = None) -> dict[str, Any]:
+        headers = {"Idempotency-Key": idempotency_key} if idempotency_key else None
+        return await self._json("POST", "/v1/batches", json={"missions": [_json(m) for m in missions]},
+                                headers=headers)
+
+    async def batch(self, batch_id: str) -> dict[str, Any]:
+        return await self._json("GET", f"/v1/batches/{batch_id}")
+
+    async def batch_results(self, batch_id: str) -> dict[str, Any]:
+        return await self._json("GET", f"/v1/batches/{batch_id}/results")
+
+    async def batch_results_csv(self, batch_id: str) -> str:
+        return (await self._request("GET", f"/v1/batches/{batch_id}/results", params={"format": "csv"})).text
+
+    async def wait_batch(self, batch_id: str, *, poll: float = 0.5, timeout: float | None = None,
+                         on_progress: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+        end = None if timeout is None else time.monotonic() + timeout
+        while True:
+            status = await self.batch(batch_id)
+            if on_progress is not None:
+                on_progress(status)
+            if status["status"] in ("done", "failed"):
+                return status
+            if end is not None and time.monotonic() > end:
+                raise Timeout(f"batch {batch_id} not finished after {timeout} s")
+            await asyncio.sleep(poll)
