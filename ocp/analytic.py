@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.integrate import cumulative_simpson
@@ -204,8 +205,12 @@ def _crossing_limits(alpha: float, p: int, c_f: float) -> tuple[float, float, fl
     return 0.0, dw, ddw
 
 
-def reference(profile: SinProfile | LocalReversal, params: MotorParams, t: np.ndarray) -> Reference:
-    """Exact feedforward of ``profile`` for ``params`` on the grid ``t`` (N,) [s]."""
+def reference(profile: Any, params: MotorParams, t: np.ndarray) -> Reference:
+    """Exact feedforward of ``profile`` for ``params`` on the grid ``t`` (N,) [s].
+
+    ``profile`` is a :class:`SinProfile`, a :class:`LocalReversal` or anything with their
+    ``thrust(t)`` and ``crossings(t0, t1)`` methods (e.g. :class:`ocp.fallback.ReversalChain`).
+    """
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):
         raise MissionError("t", "must be a strictly increasing finite grid of at least two samples")

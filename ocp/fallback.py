@@ -1,4 +1,4 @@
-"""Analytic fallback: the ``A sin^(2q+1)`` reference that meets given current/voltage limits.
+"""Analytic fallbacks: ``A sin^(2q+1)`` or local polynomial reversals within current/voltage limits.
 
 For a requested regularity the smallest admissible ``q`` comes from the theory
 (:func:`ocp.theory.min_sin_q`); then, with the amplitude fixed, the shortest period -- or, with the
@@ -8,12 +8,13 @@ limits is found by bisection (peaks fall monotonically with the period and rise 
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ocp.analytic import SinProfile, reference
+from ocp.analytic import Crossing, LocalReversal, SinProfile, reference
 from ocp.errors import MissionError
 from ocp.params import MotorParams
 from ocp.theory import ReversalRegularity, min_sin_q
@@ -103,3 +104,72 @@ def _largest_amplitude(params: MotorParams, i_max: float, v_max: float, q: int, 
     prof = SinProfile(lo, period, q)
     i, v = sin_peaks(params, prof)
     return SinDesign(prof, i, v)
+
+
+@dataclass(frozen=True)
+class ReversalChain:
+    """Hold levels joined by local polynomial reversals (``alpha (t - t_s)^p chi(t)``, smooth blend).
+
+    ``reversals[k]`` acts on ``[edges[k], edges[k+1]]``; outside its blend it equals its side levels
+    exactly, so the pieces join smoothly. Implements the profile interface of
+    :func:`ocp.analytic.reference` (``thrust``, ``crossings``, ``theta``).
+    """
+
+    reversals: tuple[LocalReversal, ...]
+    edges: tuple[float, ...]
+
+    def thrust(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        out = [np.zeros_like(t) for _ in range(3)]
+        k = np.clip(np.searchsorted(np.asarray(self.edges), t, side="right") - 1, 0, len(self.reversals) - 1)
+        for j, rev in enumerate(self.reversals):
+            sel = k == j
+            if sel.any():
+                for o, v in zip(out, rev.thrust(t[sel]), strict=True):
+                    o[sel] = v
+        return out[0], out[1], out[2]
+
+    def crossings(self, t0: float, t1: float) -> list[Crossing]:
+        return [c for r in self.reversals for c in r.crossings(t0, t1)]
+
+    def theta(self, t: np.ndarray, c_f: float) -> np.ndarray:
+        raise NotImplementedError  # reference() integrates omega numerically for non-sine profiles
+
+
+def design_reversals(params: MotorParams, t: np.ndarray, f: np.ndarray, current_limit: float,
+                     voltage_limit: float, regularity: ReversalRegularity,
+                     voltage_driven: bool = True) -> ReversalChain | None:
+    """Local-polynomial fallback for a sampled desired thrust ``f`` (N,) on ``t`` (N,) [s, N].
+
+    Each phase between sign changes becomes a hold at its peak thrust; each reversal the local
+    reversal of the smallest order ``p = 2q+1`` meeting ``regularity``, lasting the shortest time
+    (bisection, at most the room between neighbouring reversals) whose exact current and voltage stay
+    within the limits. ``None`` when ``f`` never changes sign.
+    """
+    cuts = [k for k in range(f.size - 1) if f[k] * f[k + 1] < 0]
+    if not cuts:
+        return None
+    p = 2 * min_sin_q(regularity, voltage_driven) + 1
+    ts = [float(t[k] + (t[k + 1] - t[k]) * f[k] / (f[k] - f[k + 1])) for k in cuts]
+    bounds = [float(t[0]), *ts, float(t[-1])]
+    levels = []
+    for a, b in itertools.pairwise(bounds):
+        seg = f[(t >= a) & (t <= b)]
+        levels.append(float(seg[np.argmax(np.abs(seg))]) if seg.size else 0.0)
+    edges = [float(t[0])] + [0.5 * (x + y) for x, y in itertools.pairwise(ts)] + [float(t[-1])]
+    revs = []
+    for k, tk in enumerate(ts):
+        room = 2.0 * min(tk - edges[k], edges[k + 1] - tk)
+
+        def fits(d: float, k: int = k, tk: float = tk) -> bool:
+            rev = LocalReversal.between(levels[k], levels[k + 1], tk, p, d)
+            grid = np.linspace(tk - d / 2, tk + d / 2, 801)
+            ref = reference(rev, params, grid)
+            return ref.peak("current") <= current_limit and ref.peak("voltage") <= voltage_limit
+
+        lo, hi = 1e-4 * room, room
+        if fits(hi):
+            while hi / lo > 1.0 + 1e-3:
+                mid = math.sqrt(lo * hi)
+                lo, hi = (lo, mid) if fits(mid) else (mid, hi)
+        revs.append(LocalReversal.between(levels[k], levels[k + 1], tk, p, hi))
+    return ReversalChain(reversals=tuple(revs), edges=tuple(edges))

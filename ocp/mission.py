@@ -20,7 +20,8 @@ Units: voltage [V], current [A], voltage_rate [V/s], speed [rad/s], torque [N m]
 ``min_crossing_order`` is the local exponent ``g`` of the thrust at each reversal, ``|F| ~ |t - t_s|^g``.
 The speed must change sign, so ``omega ~ s^(2n+1)`` and ``g = 2(2n+1)``: ``2`` (``omega ~ s``: bounded
 current and voltage, the default) or ``6`` (``omega ~ s^3``: current and voltage both zero at the reversal,
-which needs the voltage to be a continuous state). ``g = 4`` would make the speed touch zero
+which needs the voltage to be a continuous state; the default for ``continuous-voltage`` and
+``c1-voltage``). ``g = 4`` would make the speed touch zero
 without reversing. Neither is in Table I: ``F ~ sign(s)|s|^g`` is not analytic in time.
 """
 
@@ -33,7 +34,15 @@ from typing import Annotated, Any, Literal
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    ValidationError,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
 
 from ocp.errors import MissionError
 from ocp.params import MotorParams, load_params
@@ -148,6 +157,14 @@ class Mission(_Strict):
     profile: Profile | None = None
     segments: list[Segment] | None = Field(default=None, min_length=1, max_length=1000)
 
+    @field_validator("min_crossing_order")
+    @classmethod
+    def _order_fits_regularity(cls, v: int | None, info: ValidationInfo) -> int | None:
+        if v == 6 and info.data.get("regularity") in ("bounded", "continuous-current"):
+            raise ValueError("order 6 needs regularity continuous-voltage or c1-voltage "
+                             "(omega ~ s^3 at the reversal needs current and voltage both zero there)")
+        return v
+
     @field_validator("params")
     @classmethod
     def _params_ok(cls, v: str | dict[str, Any]) -> str | dict[str, Any]:
@@ -160,9 +177,6 @@ class Mission(_Strict):
             raise ValueError("give exactly one of 'profile' and 'segments'")
         if self.segments is not None and sum(s.duration for s in self.segments) * SEGMENT_RATE > MAX_PROFILE_SAMPLES:
             raise ValueError(f"segments last longer than {MAX_PROFILE_SAMPLES / SEGMENT_RATE:.0f} s")
-        if self.min_crossing_order == 6 and self.regularity in ("bounded", "continuous-current"):
-            raise ValueError("min_crossing_order 6 needs regularity continuous-voltage or c1-voltage "
-                             "(omega ~ s^3 at the reversal needs current and voltage both zero there)")
         return self
 
     def motor(self) -> MotorParams:

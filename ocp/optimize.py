@@ -18,6 +18,7 @@ import numpy as np
 from ocp import collocation as col
 from ocp.crossings import find_zeros
 from ocp.errors import MissionError
+from ocp.fallback import design_sin
 from ocp.mission import MAX_INTERVALS, Mission
 from ocp.plant import DCMotorPlant, Plant, TorquePlant, speed_from_thrust
 from ocp.result import OptimizeResult, analytic_fallback, finish_result
@@ -48,7 +49,7 @@ class Phases:
 def split_phases(t: np.ndarray, f: np.ndarray) -> Phases:
     """Phases between sign changes of the desired thrust ``f`` (N,) on ``t`` (N,)."""
     cuts = []
-    for k, sign_change in find_zeros(t, f, 0.0):
+    for k, sign_change in find_zeros(t, f, 1e-12 * float(np.max(np.abs(f)))):
         if not sign_change:
             continue
         if f[k] == 0.0:
@@ -78,6 +79,15 @@ def chain_order(mission: Mission) -> int:
     if mission.limits.voltage_rate is not None:
         base = max(base, 1)  # a slew limit makes the command a state
     return base
+
+
+def crossing_order(mission: Mission) -> int:
+    """Thrust exponent g imposed at reversals: the mission's, else 6 when the voltage must be continuous
+    (current and voltage both vanish at the reversal, as for sin^5), else 2."""
+    if mission.min_crossing_order is not None:
+        return mission.min_crossing_order
+    smooth_v = mission.regularity in (ReversalRegularity.CONTINUOUS_VOLTAGE, ReversalRegularity.C1_VOLTAGE)
+    return 6 if smooth_v and mission.plant == "dc-motor" else 2
 
 
 @dataclass
@@ -132,6 +142,8 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
     try:
         data = problem_data(problem)
     except MissionError as exc:
+        if not exc.field.startswith("limits"):
+            raise
         return analytic_fallback(mission, f"limits cannot be met: {exc}")
     result = solve_problem(problem, data, warm)
     backoff = 1.0
@@ -146,8 +158,24 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
     if result.source == "optimized" and not result.path_ok:
         result = analytic_fallback(mission, "the optimised response exceeds a limit between nodes after "
                                             f"{MAX_REFINEMENTS} back-off rounds", result.solver)
+    if mission.objective == "min-time":
+        result.verification.update(_min_time_summary(mission, result))
     result.total_time_s = time.perf_counter() - started
     return result
+
+
+def _min_time_summary(mission: Mission, result: OptimizeResult) -> dict[str, float | None]:
+    """Minimum transition time beside the fastest analytic sin^(2q+1) reversal within the same limits
+    (half a period of :func:`ocp.fallback.design_sin` at the larger of the two levels)."""
+    _, f = mission.desired()
+    amp = max(abs(float(f[0])), abs(float(f[-1])))
+    try:
+        design = design_sin(mission.motor(), mission.limits.current, mission.limits.voltage, mission.regularity,
+                            amplitude=amp, voltage_driven=mission.plant == "dc-motor")
+        analytic: float | None = 0.5 * design.profile.period
+    except MissionError:
+        analytic = None
+    return {"min_time_s": float(result.arrays["t"][-1]), "analytic_min_time_s": analytic}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -240,7 +268,7 @@ def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray
         raise MissionError("limits", f"the initial thrust {problem.f_desired[0]:.4g} N needs more than the limits")
 
     # crossings: w = 0 at every phase boundary, plus the derivative chain for flatter crossings
-    vanish = [0, 1, 2] if m.min_crossing_order == 6 else [0]  # omega ~ s^3: omega = omega' = omega'' = 0
+    vanish = [0, 1, 2] if crossing_order(m) == 6 else [0]  # omega ~ s^3: omega = omega' = omega'' = 0
     if max(vanish) >= nx:
         raise MissionError("min_crossing_order", f"order {m.min_crossing_order} needs the input to be a state")
     for j in range(P - 1):

@@ -17,9 +17,9 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
 from ocp import collocation as col
-from ocp.analytic import SinProfile, reference
+from ocp.analytic import reference
 from ocp.errors import MissionError
-from ocp.fallback import design_sin
+from ocp.fallback import design_reversals, design_sin
 from ocp.mission import Mission
 from ocp.plant import CASADI, DCMotorPlant, Plant
 
@@ -265,7 +265,8 @@ def _verification(m: Mission, arrays: dict[str, np.ndarray], f_plan: np.ndarray)
 def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[str, Any]]:
     """Local exponent g (|F| ~ |t - t_s|^g) achieved at each phase boundary, exact from the ODE.
 
-    At a boundary omega = 0, and omega' is proportional to the next element of the chain
+    Also the planned current and input (voltage; the held value after the crossing for a piecewise
+    constant command) at the crossing. At a boundary omega = 0, and omega' is proportional to the next element of the chain
     (current, then voltage, then its slew: dc_mechanical / dc_electrical; for the torque plant the
     input, then its slew). If the first ``n`` elements vanish, omega ~ s^(n+1) and the thrust
     ~ s^(2n+2). Elements count as zero below 1e-6 of their scale; the held control stands last,
@@ -280,7 +281,10 @@ def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[st
         n = 0
         while n < len(chain) and chain[n] <= 1e-6:
             n += 1
-        out.append({"t": float(ts), "exponent": float(2 * n + 2), "sign_change": True})
+        node_si = node * xscale
+        volts = node_si[sol.n_plant_states] if sol.chain else right
+        out.append({"t": float(ts), "exponent": float(2 * n + 2), "sign_change": True,
+                    "current": float(node_si[1]) if node.size > 1 else None, "voltage": float(volts)})
     return out
 
 
@@ -289,30 +293,27 @@ def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[st
 
 
 def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | None = None) -> OptimizeResult:
-    """The ``A sin^(2q+1)`` reference within the mission's limits, aligned to its first reversal."""
+    """Analytic reference within the mission's limits: hold levels joined by local polynomial reversals
+    of the order the regularity needs (``alpha (t - t_s)^p chi``), or, for a profile that never
+    reverses, the ``A sin^(2q+1)`` design at the mission's peak thrust."""
     params = m.motor()
     t_d, f_d = m.desired()
-    amp = max(float(np.max(np.abs(f_d))), 1e-6)
+    t_d = t_d - t_d[0]
     voltage_driven = m.plant == "dc-motor"
-    try:
-        design = design_sin(params, m.limits.current, m.limits.voltage, m.regularity, amplitude=amp,
-                            voltage_driven=voltage_driven)
-    except MissionError:
-        design = design_sin(params, m.limits.current, m.limits.voltage, m.regularity,
-                            period=2.0 * float(t_d[-1] - t_d[0]), voltage_driven=voltage_driven)
-        reason += f"; amplitude reduced to {design.profile.amplitude:.4g} N to meet the limits"
-    prof = design.profile
-    first = [k for k, sc in _sign_changes(f_d) if sc]
-    phase = 0.0
-    if first:
-        k = first[0]
-        ts = float(t_d[k] - t_d[0])
-        rising = f_d[k + 1] > f_d[k]
-        phase = (0.0 if rising else math.pi) - prof.W * ts
-    prof = SinProfile(prof.amplitude, prof.period, prof.q, phase)
-    t = _output_grid(float(t_d[-1] - t_d[0]))
+    t = _output_grid(float(t_d[-1]))
+    prof: Any = design_reversals(params, t_d, f_d, m.limits.current, m.limits.voltage, m.regularity,
+                                 voltage_driven)
+    if prof is None:
+        amp = max(float(np.max(np.abs(f_d))), 1e-6)
+        try:
+            prof = design_sin(params, m.limits.current, m.limits.voltage, m.regularity, amplitude=amp,
+                              voltage_driven=voltage_driven).profile
+        except MissionError:
+            prof = design_sin(params, m.limits.current, m.limits.voltage, m.regularity, period=2.0 * float(t_d[-1]),
+                              voltage_driven=voltage_driven).profile
+            reason += f"; amplitude reduced to {prof.amplitude:.4g} N to meet the limits"
     ref = reference(prof, params, t)
-    arrays = {"t": t, "thrust": ref.thrust, "thrust_desired": np.interp(t + t_d[0], t_d, f_d), "omega": ref.omega,
+    arrays = {"t": t, "thrust": ref.thrust, "thrust_desired": np.interp(t, t_d, f_d), "omega": ref.omega,
               "theta": ref.theta, "current": ref.current, "voltage": ref.voltage}
     plant = DCMotorPlant(params)
     u_knots = 0.5 * (ref.voltage[:-1] + ref.voltage[1:])
@@ -320,8 +321,8 @@ def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | Non
     arrays["command_t"], arrays["command"] = t, np.append(u_knots, u_knots[-1])
     verification = _verification(m, {**arrays, "thrust": np.asarray(plant.thrust([sim[0], sim[1]]), float)},
                                  ref.thrust)
-    crossings = [{"t": float(ts), "exponent": float(prof.p), "sign_change": True} for ts in ref.crossing_times
-                 if 0.0 < ts < t[-1]]
+    crossings = [{"t": float(ts), "exponent": float(p), "sign_change": True}
+                 for ts, p in zip(ref.crossing_times, ref.crossing_orders, strict=True) if 0.0 < ts < t[-1]]
     return OptimizeResult(name=m.name, source="analytic-fallback", status="fallback", reason=reason, arrays=arrays,
                           crossings=crossings, stretch=[], verification=verification, solver=solver_info or {})
 

@@ -1,0 +1,188 @@
+"""Optimiser tests: every claim checked against an independent oracle (scipy Radau simulation of the
+exact returned command, the closed-form analytic family, Theorem 1 on the desired profile)."""
+
+import json
+import math
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ocp import collocation as col
+from ocp.crossings import classify_profile
+from ocp.errors import MissionError
+from ocp.fallback import design_sin
+from ocp.mission import mission_from_mapping
+from ocp.optimize import optimize, problem_for
+from ocp.plant import DCMotorPlant
+from ocp.simulate import simulate
+from ocp.theory import UNBOUNDED, ReversalRegularity
+
+EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
+SINE = {"name": "sine", "limits": {"voltage": 12.0, "current": 1.0},
+        "segments": [{"kind": "sine", "duration": 2.0, "amplitude": 0.4, "period": 2.0}]}
+
+
+def _scipy_replay(result, params, t_eval):
+    """Independent oracle: scipy Radau on the exact held command (knots, values) of a result."""
+    ct, cv = result.arrays["command_t"], result.arrays["command"]
+
+    def v(tt: float) -> float:
+        k = min(max(int(np.searchsorted(ct, tt, side="right")) - 1, 0), cv.size - 1)
+        return float(cv[k])
+
+    x0 = (result.arrays["omega"][0], result.arrays["current"][0])
+    return simulate(DCMotorPlant(params), t_eval, v, x0, rtol=1e-9, atol=1e-10)
+
+
+def test_linear_crossing_becomes_reproducible_within_limits():
+    m = mission_from_mapping(SINE)
+    t_d, f_d = m.desired()
+    assert classify_profile(t_d, f_d, c_f=m.motor().c_f).current == UNBOUNDED  # the request is not reproducible
+    r = optimize(m)
+    assert r.source == "optimized", r.reason
+    fine = np.linspace(0.0, r.arrays["t"][-1], 8001)
+    sim = _scipy_replay(r, m.motor(), fine)
+    # limits hold everywhere on a fine grid, not only at the collocation nodes (0.1 % rounding allowed)
+    assert np.max(np.abs(sim.state("current"))) <= 1.0 * 1.001
+    assert np.max(np.abs(r.arrays["command"])) <= 12.0 * 1.001
+    # the simulated thrust reproduces the returned thrust (stated tolerance: 0.2 % of the peak)
+    f_ret = np.interp(fine, r.arrays["t"], r.arrays["thrust"])
+    assert np.max(np.abs(sim.thrust - f_ret)) <= 2e-3 * 0.4
+    assert r.verification["thrust_rms_error"] <= 1e-3 * 0.4
+    assert [c["exponent"] for c in r.crossings] == [2.0]
+    assert abs(r.crossings[0]["t"] - 1.0) < 0.05
+
+
+def test_continuous_voltage_gives_zero_current_and_voltage_at_crossings():
+    m = mission_from_mapping({**EXAMPLE, "regularity": "continuous-voltage"})
+    r = optimize(m)
+    assert r.source == "optimized", r.reason
+    assert r.crossings
+    for c in r.crossings:
+        assert c["exponent"] == 6.0
+        assert c["current"] == 0.0 and c["voltage"] == 0.0  # the plan, exactly
+        # the simulated response under the returned command agrees near the crossing
+        assert abs(np.interp(c["t"], r.arrays["t"], r.arrays["current"])) <= 1e-2 * m.limits.current
+        k = np.searchsorted(r.arrays["t"], c["t"])
+        assert np.max(np.abs(r.arrays["voltage"][k - 1:k + 1])) <= 1e-2 * m.limits.voltage
+    # the voltage is continuous: no jump between output samples beyond what its bounded slew allows
+    dv = np.abs(np.diff(r.arrays["voltage"]))
+    assert np.max(dv) < 0.2 * m.limits.voltage
+
+
+def _sin5_mission(period: float) -> dict:
+    t = np.linspace(0.0, period, 801)
+    f = 0.4 * np.sin(2 * np.pi * t / period) ** 5
+    return {"name": "sin5", "limits": {"voltage": 12.0, "current": 1.0}, "regularity": "continuous-voltage",
+            "retiming": {"min_stretch": 1.0, "max_stretch": 3.0}, "profile": {"t": t.tolist(), "thrust": f.tolist()}}
+
+
+def test_retiming_stretches_only_as_much_as_needed(rig):
+    t_min = design_sin(rig, 1.0, 12.0, ReversalRegularity.CONTINUOUS_VOLTAGE, amplitude=0.4).profile.period
+    slow = optimize(mission_from_mapping(_sin5_mission(1.3 * t_min)))
+    assert slow.source == "optimized" and max(slow.stretch) <= 1.0 + 1e-3
+    fast = optimize(mission_from_mapping(_sin5_mission(0.6 * t_min)))
+    assert fast.source == "optimized", fast.reason
+    # stretched, but never more than what makes the exact sin^5 fit the limits (an analytic upper bound)
+    assert max(fast.stretch) > 1.05
+    assert max(fast.stretch) <= (t_min / (0.6 * t_min)) * 1.02
+    assert fast.verification["max_abs_current"] <= 1.001 and fast.verification["max_abs_voltage"] <= 12.012
+
+
+def test_unmeetable_limits_give_fallback_with_reason():
+    m = mission_from_mapping({**EXAMPLE, "limits": {"voltage": 12.0, "current": 0.05}})
+    r = optimize(m)
+    assert r.source == "analytic-fallback"
+    assert "limits" in r.reason
+    assert r.to_dict()["reason"] == r.reason
+
+
+def test_solver_time_limit_gives_fallback():
+    m = mission_from_mapping({**EXAMPLE, "time_limit_s": 1e-4, "collocation": {"intervals": 400}})
+    r = optimize(m)
+    assert r.source == "analytic-fallback" and "time limit" in r.reason
+
+
+@pytest.mark.parametrize(
+    ("patch", "field"),
+    [
+        ({"retiming": {"min_stretch": 2.0, "max_stretch": 1.0}}, "retiming"),
+        ({"limits": {"current": -1.0}}, "limits.current"),
+        ({"regularity": "bounded", "min_crossing_order": 6}, "min_crossing_order"),
+        ({"objective": "fastest"}, "objective"),
+        ({"collocation": {"intervals": 10**6}}, "collocation.intervals"),
+        ({"surprise": 1}, "surprise"),
+        ({"params": {"J": 1.0}}, "params.B"),
+        ({"segments": [{"kind": "hold", "duration": -1.0, "thrust": 0.1}]}, "segments.0.hold.duration"),
+    ],
+)
+def test_bad_missions_name_the_field(patch, field):
+    with pytest.raises(MissionError) as ei:
+        mission_from_mapping({**EXAMPLE, **patch})
+    assert ei.value.field == field
+
+
+def test_profile_must_be_monotonic():
+    with pytest.raises(MissionError) as ei:
+        mission_from_mapping({"profile": {"t": [0.0, 2.0, 1.0], "thrust": [0.1, 0.2, 0.3]}})
+    assert ei.value.field == "profile" and "increasing" in ei.value.reason
+
+
+def test_structure_is_built_once_and_warm_start_helps():
+    m = mission_from_mapping(EXAMPLE)
+    first = optimize(m)
+    prog = col.solver_for(problem_for(m).plant, problem_for(m).structure,
+                          __import__("ocp.optimize", fromlist=["ipopt_options"]).ipopt_options(m.time_limit_s))
+    again = optimize(m)
+    assert again.solver["build_time_s"] < 0.05 <= first.solver["build_time_s"] + 0.05
+    assert col.solver_for(problem_for(m).plant, problem_for(m).structure,
+                          __import__("ocp.optimize", fromlist=["ipopt_options"]).ipopt_options(m.time_limit_s)) is prog
+    warm = optimize(mission_from_mapping({**EXAMPLE, "limits": {"voltage": 12.0, "current": 0.98}}), warm=True)
+    assert warm.source == "optimized"
+    assert warm.solver["iterations"] <= again.solver["iterations"]
+
+
+def test_torque_plant_respects_torque_bound(rig):
+    m = mission_from_mapping({**EXAMPLE, "plant": "torque", "limits": {"torque": 0.02}})
+    r = optimize(m)
+    assert r.source == "optimized", r.reason
+    assert np.max(np.abs(r.arrays["torque"])) * rig.J <= 0.02 * 1.001
+    assert r.verification["thrust_rms_error"] <= 1e-3 * 0.4
+
+
+def test_min_time_is_no_slower_than_the_fastest_analytic_reversal():
+    m = mission_from_mapping({**EXAMPLE, "objective": "min-time"})
+    r = optimize(m)
+    assert r.source == "optimized", r.reason
+    v = r.verification
+    assert v["analytic_min_time_s"] is not None
+    assert v["min_time_s"] <= v["analytic_min_time_s"]
+    assert abs(r.arrays["thrust"][-1] + 0.4) < 5e-3 and abs(r.arrays["thrust"][0] - 0.4) < 1e-6
+    assert v["max_abs_current"] <= 1.001
+
+
+def test_cli_optimize_and_compare(tmp_path):
+    out = tmp_path / "ref.csv"
+    run = subprocess.run([sys.executable, "-m", "clients.cli", "optimize", "examples/reversal.json", "--json",
+                          "--out", str(out)], capture_output=True, text=True, check=True)
+    payload = json.loads(run.stdout)
+    for key in ("source", "status", "reason", "solve_time_s", "verification", "crossings", "t", "thrust",
+                "thrust_desired", "omega", "theta", "current", "voltage"):
+        assert key in payload
+    assert out.read_text().splitlines()[0] == "t,thrust,thrust_desired,omega,theta,current,voltage"
+    plot = tmp_path / "cmp.svg"
+    run = subprocess.run([sys.executable, "-m", "clients.cli", "compare", "examples/reversal.json", "--json",
+                          "--plot", str(plot)], capture_output=True, text=True, check=True)
+    table = json.loads(run.stdout)["table"]
+    assert [r["label"] for r in table][0] == "optimized" and len(table) == 5
+    assert table[0]["within_limits"] and not table[1]["within_limits"]  # sin^1 is unbounded
+    assert table[1]["peak_current_a"] is None  # inf is not JSON: reported as null
+    assert plot.stat().st_size > 1000
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({**EXAMPLE, "limits": {"voltage": -3}}))
+    run = subprocess.run([sys.executable, "-m", "clients.cli", "optimize", str(bad)], capture_output=True, text=True)
+    assert run.returncode == 1 and "limits.voltage" in run.stderr
+    assert math.isfinite(payload["solve_time_s"])
