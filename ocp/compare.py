@@ -103,7 +103,7 @@ def compare(m: Mission, qs: tuple[int, ...] = (0, 1, 2, 3)) -> CompareResult:
     except MissionError:
         period = 2.0 * float(t_des[-1])
     sc = np.nonzero(np.sign(f_des[:-1]) * np.sign(f_des[1:]) < 0)[0]
-    t = np.linspace(0.0, float(t_des[-1]), max(2, int(round(t_des[-1] * 1000)) + 1))
+    t = np.linspace(0.0, float(t_des[-1]), max(2, round(float(t_des[-1]) * 1000) + 1))
     for q in qs:
         prof = SinProfile(amp, period, q)
         if sc.size:

@@ -265,12 +265,12 @@ def _verification(m: Mission, arrays: dict[str, np.ndarray], f_plan: np.ndarray)
 def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[str, Any]]:
     """Local exponent g (|F| ~ |t - t_s|^g) achieved at each phase boundary, exact from the ODE.
 
-    Also the planned current and input (voltage; the held value after the crossing for a piecewise
-    constant command) at the crossing. At a boundary omega = 0, and omega' is proportional to the next element of the chain
-    (current, then voltage, then its slew: dc_mechanical / dc_electrical; for the torque plant the
-    input, then its slew). If the first ``n`` elements vanish, omega ~ s^(n+1) and the thrust
-    ~ s^(2n+2). Elements count as zero below 1e-6 of their scale; the held control stands last,
-    taken on both sides of the crossing.
+    At a boundary omega = 0 and omega' is proportional to the next element of the chain: current,
+    then voltage, then its slew (dc_mechanical / dc_electrical); for the torque plant the input,
+    then its slew. If the first ``n`` elements vanish, omega ~ s^(n+1) and the thrust ~ s^(2n+2).
+    Elements count as zero below 1e-6 of their scale; the held control, taken on both sides of the
+    crossing, stands last. Also reported: the planned current and input (voltage; for a piecewise
+    constant command the value held after the crossing) at the crossing.
     """
     out = []
     N = sol.controls.size // (sol.phase_edges.size - 1)
@@ -321,7 +321,7 @@ def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | Non
     arrays["command_t"], arrays["command"] = t, np.append(u_knots, u_knots[-1])
     verification = _verification(m, {**arrays, "thrust": np.asarray(plant.thrust([sim[0], sim[1]]), float)},
                                  ref.thrust)
-    crossings = [{"t": float(ts), "exponent": float(p), "sign_change": True}
+    crossings = [{"t": float(ts), "exponent": float(p or 0), "sign_change": True}
                  for ts, p in zip(ref.crossing_times, ref.crossing_orders, strict=True) if 0.0 < ts < t[-1]]
     return OptimizeResult(name=m.name, source="analytic-fallback", status="fallback", reason=reason, arrays=arrays,
                           crossings=crossings, stretch=[], verification=verification, solver=solver_info or {})

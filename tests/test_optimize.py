@@ -177,7 +177,7 @@ def test_cli_optimize_and_compare(tmp_path):
     run = subprocess.run([sys.executable, "-m", "clients.cli", "compare", "examples/reversal.json", "--json",
                           "--plot", str(plot)], capture_output=True, text=True, check=True)
     table = json.loads(run.stdout)["table"]
-    assert [r["label"] for r in table][0] == "optimized" and len(table) == 5
+    assert table[0]["label"] == "optimized" and len(table) == 5
     assert table[0]["within_limits"] and not table[1]["within_limits"]  # sin^1 is unbounded
     assert table[1]["peak_current_a"] is None  # inf is not JSON: reported as null
     assert plot.stat().st_size > 1000
