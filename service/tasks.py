@@ -65,10 +65,10 @@ def analytic_reference(payload: Payload) -> Payload:
 
         prof = SinProfile(req.amplitude, req.period, req.q, req.phase)
     duration = prof.period if req.duration is None else req.duration
-    n = math.floor(duration * req.rate) + 1
-    if n > int(payload["max_samples"]):
+    n = duration * req.rate + 1.0
+    if not n <= int(payload["max_samples"]):
         raise MissionError("duration" if req.duration is not None else "rate",
-                           f"the reference would have {n} samples; at most {payload['max_samples']} allowed")
+                           f"the reference would have {n:.4g} samples; at most {payload['max_samples']} allowed")
     out = reference(prof, params, time_grid(duration, req.rate)).to_dict()
     if design is not None:
         out["design"] = design

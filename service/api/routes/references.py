@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import asyncio
-import math
 from typing import Any
 
 from fastapi import APIRouter, Request
@@ -25,9 +24,9 @@ optimize_router = APIRouter(prefix="/v1/references", tags=["references"])
 async def analytic(req: AnalyticRequest, settings: SettingsDep, pool: PoolDep, tasks: TasksDep) -> Any:
     duration = req.duration if req.duration is not None else req.period
     if duration is not None:
-        n = math.floor(duration * req.rate) + 1
-        if n > settings.max_reference_samples:
-            raise MissionError("rate", f"duration x rate gives {n} samples; this server returns at most "
+        n = duration * req.rate + 1.0  # float: may overflow to inf, never raises
+        if not n <= settings.max_reference_samples:
+            raise MissionError("rate", f"duration x rate gives {n:.4g} samples; this server returns at most "
                                        f"{settings.max_reference_samples}")
     elif isinstance(req, DesignRequest) and req.rate > settings.max_reference_samples:
         raise MissionError("rate", f"at most {settings.max_reference_samples} Hz")
