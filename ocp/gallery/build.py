@@ -71,9 +71,9 @@ def build_gallery(out: Path | str, interaction: InteractionSetup | None = None,
          figs.fig_closed_loop(paper_rows, "Section V rig, simulated: Case 1 (A sin), 4 (A sin^5), 5 (A sin^7)")),
     ]
     if opt_rows:
-        made.append(("closed_loop_optimised", "Case 1 vs the optimised reference of the same mission, "
-                     "without and with its voltage feedforward.",
-                     figs.fig_closed_loop([paper_rows[0], *opt_rows], "Case 1 vs optimised reference")))
+        made.append(("closed_loop_optimised", f"Case 1 vs {opt_rows[0].note.split(',')[0]} for the same mission "
+                     f"(rows '{opt_rows[0].label}'), without and with its voltage feedforward.",
+                     figs.fig_closed_loop([paper_rows[0], *opt_rows], f"Case 1 vs {opt_rows[0].label} reference")))
     files = {name: (caption, figs.save(fig, out, name)) for name, caption, fig in made}
     table = table_rows(rows)
     _write_table(out, table)
