@@ -36,10 +36,11 @@ def test_sigkill_mid_batch_then_restart_completes_exactly_once(tmp_path: Path) -
         assert r.status_code == 202
         batch_id = r.json()["id"]
         end = time.monotonic() + 60
-        while (done := httpx.get(f"{first.url}/v1/batches/{batch_id}", timeout=10).json()["counts"]["done"]) < 3:
+        while httpx.get(f"{first.url}/v1/batches/{batch_id}", timeout=10).json()["counts"]["done"] < 3:
             assert time.monotonic() < end, "batch made no progress"
             time.sleep(0.05)
-        before = {it["index"]: it["result"] for it in _results(first.url, batch_id)["results"] if it["status"] == "done"}
+        snapshot = _results(first.url, batch_id)["results"]
+        before = {it["index"]: it["result"] for it in snapshot if it["status"] == "done"}
     finally:
         first.kill()
     assert 3 <= len(before) < N, f"kill came too late to be mid-batch ({len(before)} of {N} done)"

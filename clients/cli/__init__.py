@@ -15,7 +15,8 @@ from collections.abc import Sequence
 from ocp.errors import ThrustshapeError
 
 #: command modules, in help order; each has ``register(subparsers) -> None``
-COMMAND_MODULES: tuple[str, ...] = ("clients.cli.core", "clients.cli.optimize", "clients.cli.gallery")
+COMMAND_MODULES: tuple[str, ...] = ("clients.cli.core", "clients.cli.optimize", "clients.cli.gallery",
+                                    "clients.cli.service")
 
 
 def build_parser() -> argparse.ArgumentParser:

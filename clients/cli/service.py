@@ -1,0 +1,241 @@
+"""Service commands: ``serve`` (run the HTTP service) and ``batch`` (optimise many missions).
+
+``thrustshape batch`` talks to a server over HTTP (``--server URL``, through :class:`clients.Client`)
+or runs the core locally (default, ``--local``) on worker processes or a Dask cluster. Either way it
+shows a progress bar on stderr, prints a summary table and, with ``--out DIR``, writes one JSON
+result per mission plus ``summary.csv``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import json
+import os
+import re
+import sys
+import time
+from collections.abc import Callable, Iterator
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from clients.client import ClientError
+from ocp.errors import MissionError, ThrustshapeError
+from ocp.mission import Mission, mission_from_mapping
+
+SUMMARY_COLUMNS = ("index", "name", "status", "source", "solve_time_s", "thrust_rms_error", "max_abs_current",
+                   "max_abs_voltage", "error")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("serve", help="run the HTTP service (FastAPI + uvicorn; docs at /docs)")
+    p.add_argument("--host", default=None, help="bind address (default 127.0.0.1)")
+    p.add_argument("--port", type=int, default=None, help="port (default 8000)")
+    p.add_argument("--workers", type=int, default=None, help="solver worker processes (default 2)")
+    p.add_argument("--db", default=None, help="SQLite job store (default ./thrustshape-data/jobs.sqlite3)")
+    p.add_argument("--dask", default=None, metavar="ADDR", help="run batch items on a Dask scheduler tcp://HOST:PORT")
+    p.add_argument("--log-level", choices=("critical", "error", "warning", "info", "debug"), default="info")
+    p.set_defaults(func=cmd_serve)
+
+    p = sub.add_parser("batch", help="optimise every mission of a file or directory, locally or on a server")
+    p.add_argument("missions", help="mission file (JSON/YAML: one mission, a list, or {missions: [...]}) or directory")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--server", default=None, metavar="URL", help="submit to a thrustshape server")
+    where.add_argument("--local", action="store_true", help="run here (the default)")
+    how = p.add_mutually_exclusive_group()
+    how.add_argument("--workers", type=int, default=None, help="local worker processes (default 2)")
+    how.add_argument("--dask", default=None, metavar="ADDR", help="local run on a Dask scheduler tcp://HOST:PORT")
+    p.add_argument("--out", default=None, metavar="DIR", help="write <index>-<name>.json per mission and summary.csv")
+    p.add_argument("--api-key", default=os.environ.get("THRUSTSHAPE_API_KEY"), help="bearer token for --server")
+    p.add_argument("--idempotency-key", default=None, help="with --server: resubmitting returns the same batch")
+    p.add_argument("--timeout", type=float, default=None, help="give up waiting after this many seconds")
+    p.add_argument("--json", action="store_true", help="print the summary as JSON")
+    p.set_defaults(func=cmd_batch)
+
+
+# -- serve ------------------------------------------------------------------------------------------
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    """Options become THRUSTSHAPE_* settings; uvicorn imports the app factory by name (HTTP boundary kept)."""
+    import uvicorn
+
+    overrides = {"HOST": args.host, "PORT": args.port, "WORKERS": args.workers, "DB_PATH": args.db,
+                 "DASK_ADDRESS": args.dask}
+    for key, value in overrides.items():
+        if value is not None:
+            os.environ[f"THRUSTSHAPE_{key}"] = str(value)
+    host = os.environ.get("THRUSTSHAPE_HOST", "127.0.0.1")
+    port = int(os.environ.get("THRUSTSHAPE_PORT", "8000"))
+    uvicorn.run("service.app:app_from_env", factory=True, host=host, port=port, log_level=args.log_level)
+    return 0
+
+
+# -- batch ------------------------------------------------------------------------------------------
+
+
+def _documents(path: Path) -> Iterator[tuple[str, Any]]:
+    files = sorted(f for f in path.iterdir() if f.suffix.lower() in (".json", ".yaml", ".yml")) if path.is_dir() \
+        else [path]
+    if not files:
+        raise MissionError(str(path), "no .json/.yaml/.yml mission files")
+    for f in files:
+        if not f.is_file():
+            raise MissionError(str(f), "no such file")
+        text = f.read_text(encoding="utf-8")
+        try:
+            data = json.loads(text) if f.suffix.lower() == ".json" else yaml.safe_load(text)
+        except (json.JSONDecodeError, yaml.YAMLError) as exc:
+            raise MissionError(f.name, f"not valid JSON/YAML: {exc}") from None
+        if isinstance(data, dict) and "missions" in data:
+            data = data["missions"]
+        for i, item in enumerate(data if isinstance(data, list) else [data]):
+            yield (f"{f.name}[{i}]" if isinstance(data, list) else f.name), item
+
+
+def load_missions(path: str | Path) -> list[Mission]:
+    """Every mission under ``path``, validated; errors name the file and the field."""
+    out: list[Mission] = []
+    for where, item in _documents(Path(path)):
+        try:
+            out.append(mission_from_mapping(item))
+        except ThrustshapeError as exc:
+            raise MissionError(f"{where}: {exc.field}", exc.reason) from None
+    return out
+
+
+def optimize_one(mission: dict[str, Any]) -> dict[str, Any]:
+    """Local batch item (runs in a worker process or on Dask): result dict, or ``{"error": ...}``."""
+    from ocp.optimize import optimize
+
+    try:
+        return {"result": optimize(Mission.model_validate(mission)).to_dict()}
+    except ThrustshapeError as exc:
+        return {"error": {"type": type(exc).__name__, "field": exc.field, "reason": exc.reason}}
+
+
+class Progress:
+    """``[#####-----] 5/10 done, 0 failed`` on stderr, redrawn in place."""
+
+    def __init__(self, total: int, width: int = 30) -> None:
+        self.total, self.width, self._last = total, width, ""
+
+    def __call__(self, done: int, failed: int) -> None:
+        finished = done + failed
+        filled = self.width * finished // max(self.total, 1)
+        line = f"[{'#' * filled}{'-' * (self.width - filled)}] {finished}/{self.total} done={done} failed={failed}"
+        if line != self._last:
+            sys.stderr.write("\r" + line)
+            sys.stderr.flush()
+            self._last = line
+
+    def close(self) -> None:
+        sys.stderr.write("\n")
+
+
+def _run_local(missions: list[Mission], workers: int, dask: str | None,
+               progress: Callable[[int, int], None]) -> list[dict[str, Any]]:
+    payloads = [m.model_dump(mode="json") for m in missions]
+    outcomes: list[dict[str, Any] | None] = [None] * len(payloads)
+    if dask:
+        from distributed import Client as DaskClient
+        from distributed import as_completed
+
+        with DaskClient(dask, timeout="10s") as dc:
+            futs = {dc.submit(optimize_one, p, pure=False): i for i, p in enumerate(payloads)}
+            for fut in as_completed(futs):
+                outcomes[futs[fut]] = fut.result()
+                progress(*_tally(outcomes))
+    else:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            pending: dict[Future[dict[str, Any]], int] = {pool.submit(optimize_one, p): i
+                                                          for i, p in enumerate(payloads)}
+            while pending:
+                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
+                for fut in finished:
+                    outcomes[pending.pop(fut)] = fut.result()
+                progress(*_tally(outcomes))
+    return [_item(i, m.name, o or {"error": {"type": "Missing", "reason": "no outcome"}})
+            for i, (m, o) in enumerate(zip(missions, outcomes, strict=True))]
+
+
+def _tally(outcomes: list[dict[str, Any] | None]) -> tuple[int, int]:
+    done = sum(1 for o in outcomes if o is not None and "result" in o)
+    return done, sum(1 for o in outcomes if o is not None and "error" in o)
+
+
+def _item(index: int, name: str, outcome: dict[str, Any]) -> dict[str, Any]:
+    ok = "result" in outcome
+    return {"index": index, "name": name, "status": "done" if ok else "failed",
+            "result": outcome.get("result"), "error": outcome.get("error")}
+
+
+def _run_server(missions: list[Mission], args: argparse.Namespace,
+                progress: Callable[[int, int], None]) -> list[dict[str, Any]]:
+    from clients.client import Client
+
+    with Client(args.server, api_key=args.api_key) as client:
+        accepted = client.submit_batch(missions, idempotency_key=args.idempotency_key)
+        client.wait_batch(accepted["id"], poll=0.5, timeout=args.timeout,
+                          on_progress=lambda s: progress(s["counts"]["done"], s["counts"]["failed"]))
+        return list(client.batch_results(accepted["id"])["results"])
+
+
+def _summary_row(item: dict[str, Any]) -> dict[str, Any]:
+    res = item.get("result") or {}
+    ver = res.get("verification") or {}
+    err = item.get("error") or {}
+    return {"index": item["index"], "name": item["name"], "status": item["status"], "source": res.get("source", ""),
+            "solve_time_s": res.get("solve_time_s", ""), "thrust_rms_error": ver.get("thrust_rms_error", ""),
+            "max_abs_current": ver.get("max_abs_current", ""), "max_abs_voltage": ver.get("max_abs_voltage", ""),
+            "error": f"{err.get('field') or ''}: {err.get('reason', '')}" if err else ""}
+
+
+def _fmt(v: Any) -> str:
+    return f"{v:.4g}" if isinstance(v, float) else str(v)
+
+
+def _write_out(out: Path, items: list[dict[str, Any]], rows: list[dict[str, Any]]) -> None:
+    out.mkdir(parents=True, exist_ok=True)
+    for it in items:
+        safe = re.sub(r"[^A-Za-z0-9._-]+", "_", it["name"])[:80]
+        (out / f"{it['index']:04d}-{safe}.json").write_text(json.dumps(it, allow_nan=False) + "\n", encoding="utf-8")
+    with (out / "summary.csv").open("w", newline="", encoding="utf-8") as fh:
+        w = csv.DictWriter(fh, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def cmd_batch(args: argparse.Namespace) -> int:
+    missions = load_missions(args.missions)
+    if args.server and (args.workers is not None or args.dask):
+        raise MissionError("--workers/--dask", "apply to local runs; the server chooses its own workers")
+    if args.workers is not None and args.workers < 1:
+        raise MissionError("--workers", "must be >= 1")
+    bar = Progress(len(missions))
+    t0 = time.monotonic()
+    try:
+        items = (_run_server(missions, args, bar) if args.server
+                 else _run_local(missions, args.workers or 2, args.dask, bar))
+    except ClientError as exc:
+        bar.close()
+        print(f"thrustshape batch: error: {exc}", file=sys.stderr)
+        return 1
+    bar.close()
+    rows = [_summary_row(it) for it in items]
+    if args.out:
+        _write_out(Path(args.out), items, rows)
+    failed = sum(r["status"] != "done" for r in rows)
+    if args.json:
+        json.dump({"summary": rows, "failed": failed, "elapsed_s": time.monotonic() - t0}, sys.stdout)
+        sys.stdout.write("\n")
+    else:
+        widths = {c: max(len(c), *(len(_fmt(r[c])) for r in rows)) for c in SUMMARY_COLUMNS}
+        print("  ".join(c.ljust(widths[c]) for c in SUMMARY_COLUMNS).rstrip())
+        for r in rows:
+            print("  ".join(_fmt(r[c]).ljust(widths[c]) for c in SUMMARY_COLUMNS).rstrip())
+        print(f"{len(rows) - failed} done, {failed} failed in {time.monotonic() - t0:.1f} s")
+    return 1 if failed else 0
