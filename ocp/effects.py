@@ -314,15 +314,25 @@ class StatefulBase(EffectBase):
         """States (n_states, N) reconstructed from measured signals (N,) on the uniform grid ``t``."""
         raise NotImplementedError
 
+    def steady(self, omega: np.ndarray, voltage: np.ndarray, thrust: np.ndarray,
+               theta: np.ndarray | None) -> np.ndarray:
+        """States (n_states, N) at rest at each operating point (steady-state sweeps)."""
+        raise NotImplementedError
+
 
 def _lti_states(a: np.ndarray, b: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
-    """States (n, N) of ``z' = a z + b u`` under zero-order-held ``u`` (N,), starting at steady state."""
+    """States (n, N) of ``z' = a z + b u`` under zero-order-held ``u`` (N,), starting at steady state.
+
+    Exact ZOH discretisation, each state filtered by its own transfer function (``lfilter``, C speed).
+    """
     n = a.shape[0]
     ad, bd, *_ = signal.cont2discrete((a, b.reshape(n, 1), np.eye(n), np.zeros((n, 1))), dt, method="zoh")
     z = np.empty((n, u.size))
-    z[:, 0] = -np.linalg.solve(a, b) * u[0]
-    for k in range(u.size - 1):
-        z[:, k + 1] = ad @ z[:, k] + bd[:, 0] * u[k]
+    for j in range(n):
+        num, den = signal.ss2tf(ad, bd, np.eye(n)[j:j + 1], np.zeros((1, 1)))
+        num = np.atleast_1d(np.squeeze(num))
+        zi = signal.lfilter_zi(num, den) * u[0]
+        z[j] = signal.lfilter(num, den, u, zi=zi)[0]
     return z
 
 
@@ -370,6 +380,10 @@ class InputDelay(StatefulBase):
         a, b = self._ab()
         return _lti_states(a, b, voltage, float(np.median(np.diff(t))))
 
+    def steady(self, omega: np.ndarray, voltage: np.ndarray, thrust: np.ndarray,
+               theta: np.ndarray | None) -> np.ndarray:
+        return np.vstack([voltage * self.delay**2 / 12.0, np.zeros_like(voltage)])
+
 
 @dataclass(frozen=True)
 class ThrustLag(StatefulBase):
@@ -408,6 +422,10 @@ class ThrustLag(StatefulBase):
         mid = np.concatenate([[thrust[0]], 0.5 * (thrust[1:] + thrust[:-1])])
         return _lti_states(np.array([[-1.0 / self.tau]]), np.array([1.0 / self.tau]), np.roll(mid, -1), dt)
 
+    def steady(self, omega: np.ndarray, voltage: np.ndarray, thrust: np.ndarray,
+               theta: np.ndarray | None) -> np.ndarray:
+        return np.asarray(thrust, float).reshape(1, -1)
+
 
 @dataclass(frozen=True)
 class Cogging(StatefulBase):
@@ -445,6 +463,10 @@ class Cogging(StatefulBase):
             return theta.reshape(1, -1)
         th = np.concatenate([[0.0], np.cumsum(0.5 * (omega[1:] + omega[:-1]) * np.diff(t))])
         return th.reshape(1, -1)
+
+    def steady(self, omega: np.ndarray, voltage: np.ndarray, thrust: np.ndarray,
+               theta: np.ndarray | None) -> np.ndarray:
+        return (np.zeros_like(omega) if theta is None else theta).reshape(1, -1)
 
 
 CATALOGUE: dict[str, type[EffectBase]] = {

@@ -1,0 +1,194 @@
+"""Model predictions of a log: free run and one-step (equation) residuals.
+
+Two ways to confront a plant with a time-series log (all arrays (N,) SI unless stated):
+
+* **free run** -- the plant integrated under the measured voltage (zero-order held, as a digital
+  drive applies it), restarted from the measured state at the start of every segment of
+  ``segment_s`` seconds (so a slow drift of the rotor angle cannot hide angle-periodic effects);
+  compared with the measured speed, current and thrust. Integrated by CasADi (``mapaccum``), the
+  same ``plant.rhs`` the optimiser uses, with RK4 sub-steps at most half the fastest time constant.
+* **one-step residuals** -- from the measured state at sample k, one sample of integration under
+  ``V[k]``; the mismatch at k+1 is written in equation units: torque [N m] for eq. dc_mechanical
+  (``J dw / dt``), voltage [V] for eq. dc_electrical (``R di / (1 - exp(-R dt/L))``), thrust [N]
+  for eq. thrust_model (static). Effect states (delay, inflow lag, rotor angle) come from
+  :meth:`ocp.effects.StatefulBase.observe` driven by the measured signals.
+
+Steady-state sweeps have no dynamics: the "free run" is the equilibrium reached under each row's
+voltage (solved per row), and the equation residuals are the right-hand sides at the measured
+operating point (``J w'``, ``L i'``) -- what the plant would accelerate by if the row were not steady.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from ocp.effects import measured_current, stateful, time_scale
+from ocp.errors import LogError, SolverError
+from ocp.logs import Log, LogKind
+from ocp.plant import CASADI, NUMPY, DCMotorPlant, Expr
+
+CHANNELS: tuple[str, ...] = ("omega", "current", "thrust")
+EQUATIONS: tuple[str, ...] = ("mechanical", "electrical", "thrust")
+EQUATION_UNITS = {"mechanical": "N m", "electrical": "V", "thrust": "N"}
+CHANNEL_UNITS = {"omega": "rad/s", "current": "A", "thrust": "N"}
+
+
+@dataclass(frozen=True)
+class FreeRun:
+    """Free-run prediction on the evaluated samples ``idx`` (M,) of the log.
+
+    Attributes:
+        idx: sample indices into the log, (M,)
+        omega [rad/s], current [A] (as the sensor would read it), thrust [N]: predictions, (M,)
+    """
+
+    idx: np.ndarray
+    omega: np.ndarray
+    current: np.ndarray
+    thrust: np.ndarray
+
+    def channel(self, name: str) -> np.ndarray:
+        return {"omega": self.omega, "current": self.current, "thrust": self.thrust}[name]
+
+
+@dataclass(frozen=True)
+class Residuals:
+    """One-step equation residuals at the samples ``idx`` (M,): measured minus model.
+
+    Attributes:
+        mechanical [N m], electrical [V], thrust [N]: (M,)
+    """
+
+    idx: np.ndarray
+    mechanical: np.ndarray
+    electrical: np.ndarray
+    thrust: np.ndarray
+
+    def equation(self, name: str) -> np.ndarray:
+        return {"mechanical": self.mechanical, "electrical": self.electrical, "thrust": self.thrust}[name]
+
+
+def substeps(plant: DCMotorPlant, dt: float) -> int:
+    """RK4 sub-steps per sample so that the step is at most half the fastest time constant."""
+    return max(1, math.ceil(dt / (0.5 * time_scale(plant))))
+
+
+def _rk4(plant: DCMotorPlant, x: list[Expr], u: Expr, dt: float, n: int, ops: object) -> list[Expr]:
+    h = dt / n
+    for _ in range(n):
+        k1 = plant.rhs(x, u, ops)  # type: ignore[arg-type]
+        k2 = plant.rhs([a + 0.5 * h * b for a, b in zip(x, k1, strict=True)], u, ops)  # type: ignore[arg-type]
+        k3 = plant.rhs([a + 0.5 * h * b for a, b in zip(x, k2, strict=True)], u, ops)  # type: ignore[arg-type]
+        k4 = plant.rhs([a + h * b for a, b in zip(x, k3, strict=True)], u, ops)  # type: ignore[arg-type]
+        x = [a + h / 6.0 * (b1 + 2 * b2 + 2 * b3 + b4) for a, b1, b2, b3, b4 in zip(x, k1, k2, k3, k4, strict=True)]
+    return x
+
+
+def current_offset(plant: DCMotorPlant) -> float:
+    """Sensor offset [A]: measured minus true current (current-sensor effects are affine, slope 1)."""
+    return float(measured_current(plant, 0.0))
+
+
+def observed_states(plant: DCMotorPlant, log: Log) -> np.ndarray:
+    """Full plant state (n_states, N) reconstructed from the log: measured speed, true current
+    (sensor offset removed) and the effect states observed from the measured signals."""
+    rows = [log.omega, log.current - current_offset(plant)]
+    ideal = plant.params.c_f * log.omega * np.abs(log.omega)
+    for eff in stateful(plant):
+        if log.kind is LogKind.STEADY_STATE:
+            rows += list(eff.steady(log.omega, log.voltage, ideal, log.theta))
+        else:
+            rows += list(eff.observe(log.t, log.omega, log.voltage, ideal, log.theta))
+    return np.vstack(rows)
+
+
+def segments(log: Log, segment_s: float) -> np.ndarray:
+    """Start indices (B,) of whole segments of ``segment_s`` seconds (a trailing partial one is dropped)."""
+    length = max(2, round(segment_s / log.dt))
+    if log.n < length:
+        raise LogError("t", f"too short for {segment_s} s segments ({log.n} samples of {log.dt:.3g} s)")
+    return np.arange(0, log.n - length + 1, length)
+
+
+def free_run(plant: DCMotorPlant, log: Log, segment_s: float = 0.5) -> FreeRun:
+    """Free-run prediction of a time-series log (see module doc); steady-state sweeps: equilibria."""
+    if log.kind is LogKind.STEADY_STATE:
+        return equilibrium(plant, log)
+    starts = segments(log, segment_s)
+    length = max(2, round(segment_s / log.dt))
+    nx = len(plant.state_names)
+    x = ca.SX.sym("x", nx)
+    u = ca.SX.sym("u")
+    xs = [x[m] for m in range(nx)]
+    nxt = _rk4(plant, xs, u, log.dt, substeps(plant, log.dt), CASADI)
+    step = ca.Function("step", [x, u], [ca.vertcat(*nxt)])
+    sim = step.mapaccum(length - 1).map(starts.size)
+    x_obs = observed_states(plant, log)
+    u_blocks = np.concatenate([log.voltage[s:s + length - 1] for s in starts])
+    traj = np.asarray(sim(x_obs[:, starts], u_blocks.reshape(1, -1)))
+    traj = traj.reshape(nx, starts.size, length - 1)
+    full = np.concatenate([x_obs[:, starts].reshape(nx, starts.size, 1), traj], axis=2).reshape(nx, -1)
+    idx = (starts[:, None] + np.arange(length)[None, :]).ravel()
+    if not np.all(np.isfinite(full)):
+        full = np.where(np.isfinite(full), full, 1e6)  # a diverging model: huge error, not a crash
+    thrust = np.asarray(plant.thrust(list(full)), dtype=float)
+    return FreeRun(idx, full[0], np.asarray(measured_current(plant, full[1]), float), thrust)
+
+
+def one_step(plant: DCMotorPlant, log: Log) -> Residuals:
+    """One-step equation residuals (measured minus model) of a log (see module doc)."""
+    p = plant.params
+    x = observed_states(plant, log)
+    if log.kind is LogKind.STEADY_STATE:
+        d = np.asarray(plant.rhs(list(x), log.voltage, NUMPY)[:2])
+        f = log.thrust - np.asarray(plant.thrust(list(x)), float)
+        return Residuals(np.arange(log.n), -p.J * d[0], -p.L * d[1], f)
+    dt = log.dt
+    xk = [row[:-1] for row in x]
+    pred = _rk4(plant, xk, log.voltage[:-1], dt, substeps(plant, dt), NUMPY)
+    a = math.exp(-p.R * dt / p.L)
+    mech = p.J * (log.omega[1:] - pred[0]) / dt
+    elec = p.R / (1.0 - a) * (log.current[1:] - measured_current(plant, pred[1]))
+    thrust = log.thrust[:-1] - np.asarray(plant.thrust(xk), float)
+    return Residuals(np.arange(log.n - 1), mech, elec, thrust)
+
+
+def equilibrium(plant: DCMotorPlant, log: Log, iterations: int = 60) -> FreeRun:
+    """Steady operating point (omega, current) under each row's voltage (damped Newton, vectorised)."""
+    x = observed_states(plant, log)
+    extra = [row for row in x[2:]]
+    w, i = x[0].copy(), x[1].copy()
+    for _ in range(iterations):
+        f = np.asarray(plant.rhs([w, i, *extra], log.voltage)[:2])
+        hw, hi = 1e-4 * (1.0 + np.abs(w)), 1e-6 * (1.0 + np.abs(i))
+        fw = (np.asarray(plant.rhs([w + hw, i, *extra], log.voltage)[:2]) - f) / hw
+        fi = (np.asarray(plant.rhs([w, i + hi, *extra], log.voltage)[:2]) - f) / hi
+        det = fw[0] * fi[1] - fi[0] * fw[1]
+        dw = (-f[0] * fi[1] + fi[0] * f[1]) / det
+        di = (-fw[0] * f[1] + f[0] * fw[1]) / det
+        w, i = w + np.clip(dw, -20.0, 20.0), i + np.clip(di, -1.0, 1.0)
+    if not (np.all(np.isfinite(w)) and np.all(np.isfinite(i))):
+        raise SolverError("equilibrium", "no steady operating point found for some rows")
+    thrust = np.asarray(plant.thrust([w, i, *extra]), float)
+    return FreeRun(np.arange(log.n), w, np.asarray(measured_current(plant, i), float), thrust)
+
+
+def noise_levels(log: Log) -> dict[str, float]:
+    """Robust white-noise level [channel unit] per channel from second differences (MAD / sqrt(6)).
+
+    For steady-state sweeps (no smooth time axis), 1 % of the channel's RMS is used instead.
+    """
+    out = {}
+    for ch in CHANNELS:
+        y = getattr(log, ch)
+        if log.kind is LogKind.STEADY_STATE or y.size < 10:
+            out[ch] = max(0.01 * float(np.sqrt(np.mean(y * y))), 1e-12)
+            continue
+        d2 = np.diff(y, 2)
+        sig = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(6.0)
+        out[ch] = max(sig, 1e-6 * float(np.max(np.abs(y))), 1e-12)
+    return out
