@@ -26,6 +26,7 @@ from ocp.theory import ReversalRegularity
 
 #: weights of (track, time, stretch, smooth, effort) per objective
 WEIGHTS = {"track": (1.0, 0.0, 1e-3, 1e-6, 1e-9), "min-time": (0.0, 1.0, 0.0, 1e-4, 0.0)}
+MIN_INTERVALS_PER_PHASE = (8, 30)  # piecewise-constant input, input as a state
 MAX_REFINEMENTS = 3  # back-off rounds when the simulated response exceeds a limit between nodes
 
 
@@ -113,11 +114,12 @@ def problem_for(mission: Mission, intervals: int | None = None) -> Problem:
     phases = split_phases(t, f)
     n_phases = phases.signs.size
     total = mission.collocation.intervals if intervals is None else intervals
-    per_phase = max(8, total // n_phases)
+    chain = chain_order(mission)
+    # a flat reversal (chain >= 1, omega ~ s^3) needs room on both sides of each boundary
+    per_phase = max(MIN_INTERVALS_PER_PHASE[min(chain, 1)], total // n_phases)
     if per_phase * n_phases > 2 * MAX_INTERVALS:
         raise MissionError("collocation.intervals", f"{n_phases} phases need more than {2 * MAX_INTERVALS} intervals")
-    st = col.Structure(plant_key=_plant_key(mission), n_phases=n_phases, intervals=per_phase,
-                       chain=chain_order(mission))
+    st = col.Structure(plant_key=_plant_key(mission), n_phases=n_phases, intervals=per_phase, chain=chain)
     return Problem(mission=mission, plant=make_plant(mission), structure=st, t_desired=t, f_desired=f,
                    phases=phases)
 
