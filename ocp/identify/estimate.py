@@ -135,7 +135,7 @@ def _levenberg_marquardt(fun: Callable[[np.ndarray], np.ndarray], x: np.ndarray,
             cn = float(np.einsum("i,i", rn, rn))
             if np.isfinite(cn) and cn < cost:
                 improved, lam = True, max(lam / 5.0, 1e-9)
-                done = cost - cn < 1e-7 * cost or np.all(np.abs(xn - x) <= 1e-7 * (hi - lo))
+                done = bool(cost - cn < 1e-7 * cost or np.all(np.abs(xn - x) <= 1e-7 * (hi - lo)))
                 x, r, cost = xn, rn, cn
                 break
             lam *= 5.0
