@@ -1,0 +1,13 @@
+"""Model check: compare the plant with measurements, find the missing physics, add it, refit.
+
+``check`` (where does the model fail), ``diagnose`` (which effect is missing, ranked by held-out
+error reduction), ``fit`` (add named effects, refit, write a calibrated parameter file). Each is a
+pure function returning a result object with ``to_dict()`` (JSON-ready, no NaN/inf).
+"""
+
+from ocp.identify.check import CheckOptions, CheckResult, check
+from ocp.identify.diagnose import DiagnoseOptions, DiagnoseResult, diagnose
+from ocp.identify.fit import FitOptions, FitResult, fit
+
+__all__ = ["CheckOptions", "CheckResult", "DiagnoseOptions", "DiagnoseResult", "FitOptions", "FitResult", "check",
+           "diagnose", "fit"]
