@@ -61,7 +61,7 @@ def _chirp(t: np.ndarray, spec: RigSpec) -> np.ndarray:
     return spec.chirp_volts * np.sin(phase)
 
 
-def generate(params: MotorParams, spec: RigSpec = RigSpec()) -> Log:  # noqa: B008
+def generate(params: MotorParams, spec: RigSpec = RigSpec()) -> Log:
     """Run the hidden rig and return what its logger records (SI)."""
     plant = DCMotorPlant(params, effects_from_mapping(dict(spec.effects)))
     rng = np.random.default_rng(spec.seed)
