@@ -18,7 +18,6 @@ Unknown effect names or parameters are :class:`~ocp.errors.ParameterError` namin
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, fields
@@ -26,11 +25,10 @@ from pathlib import Path
 from typing import Any, ClassVar, Literal
 
 import numpy as np
-import yaml
 from scipy import signal
 
 from ocp.errors import ParameterError
-from ocp.params import PRESETS, MotorParams, load_params, params_from_mapping
+from ocp.params import PRESETS, MotorParams, load_params, params_from_mapping, read_mapping
 from ocp.plant import DCMotorPlant, Effect, Expr, Ops, effect_states
 
 Channel = Literal["mechanical", "electrical", "thrust", "current-sensor"]
@@ -509,25 +507,11 @@ def effects_from_mapping(block: Any) -> tuple[EffectBase, ...]:
     return tuple(make_effect(str(k), v) for k, v in block.items())
 
 
-def _read_mapping(source: str | Path) -> dict[str, Any]:
-    path = Path(source)
-    if not path.is_file():
-        raise ParameterError("params", f"no preset or file named {str(source)!r}; presets are {list(PRESETS)}")
-    text = path.read_text(encoding="utf-8")
-    try:
-        data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
-    except (json.JSONDecodeError, yaml.YAMLError) as exc:
-        raise ParameterError("params", f"{path.name} is not valid JSON/YAML: {exc}") from None
-    if not isinstance(data, dict):
-        raise ParameterError("params", f"{path.name} must hold a mapping")
-    return data
-
-
 def load_plant(source: str | Path | Mapping[str, Any]) -> DCMotorPlant:
     """Plant from a preset name, a JSON/YAML parameter file, or a mapping: params + ``effects``."""
     if isinstance(source, str) and source in PRESETS:
         return DCMotorPlant(load_params(source))
-    data = dict(source) if isinstance(source, Mapping) else _read_mapping(source)
+    data = dict(source) if isinstance(source, Mapping) else read_mapping(source)
     return DCMotorPlant(params_from_mapping(data), effects_from_mapping(data.get("effects")))
 
 

@@ -137,6 +137,11 @@ def load_params(source: str | Path | Mapping[str, Any]) -> MotorParams:
         return params_from_mapping(source)
     if isinstance(source, str) and source in PRESETS:
         return preset(source)
+    return params_from_mapping(read_mapping(source))
+
+
+def read_mapping(source: str | Path) -> dict[str, Any]:
+    """The mapping stored in a JSON (``.json``) or YAML parameter file; errors name ``params``."""
     path = Path(source)
     if not path.is_file():
         raise ParameterError("params", f"no preset or file named {str(source)!r}; presets are {list(PRESETS)}")
@@ -145,4 +150,6 @@ def load_params(source: str | Path | Mapping[str, Any]) -> MotorParams:
         data = json.loads(text) if path.suffix.lower() == ".json" else yaml.safe_load(text)
     except (json.JSONDecodeError, yaml.YAMLError) as exc:
         raise ParameterError("params", f"{path.name} is not valid JSON/YAML: {exc}") from None
-    return params_from_mapping(data)
+    if not isinstance(data, dict):
+        raise ParameterError("params", f"{path.name} must hold a mapping")
+    return data
