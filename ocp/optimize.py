@@ -148,7 +148,8 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
             raise
         return analytic_fallback(mission, f"limits cannot be met: {exc}")
     result = solve_problem(problem, data, warm)
-    backoff = 1.0
+    build, time_sum, iter_sum = (result.solver.get(k, 0) for k in ("build_time_s", "solve_time_s", "iterations"))
+    backoff, rounds = 1.0, 0
     for _ in range(MAX_REFINEMENTS):
         if result.source != "optimized" or result.path_ok:
             break
@@ -157,6 +158,12 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
         backoff *= 1.0 / (1.0 + 1.2 * (excess - 1.0))
         data = problem_data(problem, backoff)
         result = solve_problem(problem, data, warm=True)
+        rounds += 1
+        time_sum += result.solver.get("solve_time_s", 0)
+        iter_sum += result.solver.get("iterations", 0)
+    # the report covers every round: solve time and iterations add up, the build happened in the first
+    result.solver.update(build_time_s=build, solve_time_s=time_sum, iterations=iter_sum, backoff_rounds=rounds,
+                         limit_backoff=backoff)
     if result.source == "optimized" and not result.path_ok:
         result = analytic_fallback(mission, "the optimised response exceeds a limit between nodes after "
                                             f"{MAX_REFINEMENTS} back-off rounds", result.solver)
