@@ -138,7 +138,7 @@ def unpack(problem: Problem, data: dict[str, np.ndarray]) -> tuple[Unpacked, col
     up = Unpacked(fd=p[sl["fd"]].reshape(st.n_phases, st.intervals * col.DEGREE), sigma=p[sl["sigma"]],
                   dur=p[sl["dur"]], xs=p[sl["xscale"]], us=float(p[sl["uscale"]][0]), rho=p[sl["rho"]],
                   fscale=float(p[sl["fscale"]][0]), weights=p[sl["weights"]])
-    return up, col._layout(st.n_phases, st.intervals, nx)
+    return up, col.layout(st.n_phases, st.intervals, nx)
 
 
 def transcribe(problem: Problem, up: Unpacked, stretch: Any, x0: Any, xc: list[list[Any]],

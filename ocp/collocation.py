@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import threading
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 
 import casadi as ca
 import numpy as np
@@ -186,11 +186,13 @@ def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Prog
     xvec = ca.vertcat(*xs_list)
     solver = ca.nlpsol("collocation", "ipopt", {"x": xvec, "f": obj, "g": ca.vertcat(*g), "p": par},
                        dict(ipopt_options))  # type: ignore[arg-type]
-    return Program(structure=st, nx=nx, n_plant_states=npx, solver=solver, layout=_layout(P, N, nx),
+    return Program(structure=st, nx=nx, n_plant_states=npx, solver=solver, layout=layout(P, N, nx),
                    n_params=n_par, n_g=int(ca.vertcat(*g).numel()))
 
 
-def _layout(P: int, N: int, nx: int) -> Layout:
+@lru_cache(maxsize=64)
+def layout(P: int, N: int, nx: int) -> Layout:
+    """Index maps of the decision vector for P phases of N intervals and nx states (cached)."""
     stretch = np.arange(P)
     x0 = P + np.arange(nx)
     xc = np.zeros((P, N, DEGREE, nx), dtype=int)

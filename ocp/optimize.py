@@ -295,7 +295,7 @@ def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray
 
 
 def _layout_for(st: col.Structure, nx: int) -> col.Layout:
-    return col._layout(st.n_phases, st.intervals, nx)
+    return col.layout(st.n_phases, st.intervals, nx)
 
 
 def _residual_scaling(plant: Plant, xscale: np.ndarray, u_nom: float, N: int, d_nom: float, npx: int,

@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Mapping
+from functools import cache
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -123,8 +124,9 @@ def params_from_mapping(data: Mapping[str, Any]) -> MotorParams:
         raise ParameterError(key, reason) from None
 
 
+@cache
 def preset(name: str) -> MotorParams:
-    """Built-in parameter set by name (see :data:`PRESETS`)."""
+    """Built-in parameter set by name (see :data:`PRESETS`); read once, then cached (it is frozen)."""
     if name not in PRESETS:
         raise ParameterError("params", f"unknown preset {name!r}; presets are {list(PRESETS)}")
     text = resources.files("ocp.presets").joinpath(f"{name}.json").read_text(encoding="utf-8")
