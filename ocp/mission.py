@@ -44,8 +44,8 @@ from pydantic import (
     model_validator,
 )
 
-from ocp.errors import MissionError
-from ocp.params import MotorParams, load_params
+from ocp.errors import MissionError, ParameterError
+from ocp.params import PRESETS, MotorParams, load_params
 from ocp.theory import ReversalRegularity
 
 MAX_PROFILE_SAMPLES = 100_000
@@ -167,7 +167,9 @@ class Mission(_Strict):
 
     @field_validator("params")
     @classmethod
-    def _params_ok(cls, v: str | dict[str, Any]) -> str | dict[str, Any]:
+    def _params_ok(cls, v: str | dict[str, Any], info: ValidationInfo) -> str | dict[str, Any]:
+        if isinstance(v, str) and v not in PRESETS and not (info.context or {}).get("allow_files", True):
+            raise ParameterError("params", f"must be a preset {list(PRESETS)} or a mapping; files are not read here")
         load_params(v)  # raises ParameterError naming the key
         return v
 
@@ -219,12 +221,16 @@ def _location(err: Any) -> str:
     return ".".join(str(p) for p in err["loc"]) or "mission"
 
 
-def mission_from_mapping(data: Any) -> Mission:
-    """Validate a mapping into a :class:`Mission`; errors name the field path and the reason."""
+def mission_from_mapping(data: Any, allow_files: bool = True) -> Mission:
+    """Validate a mapping into a :class:`Mission`; errors name the field path and the reason.
+
+    With ``allow_files=False`` (untrusted input, e.g. over HTTP) ``params`` may only be a preset
+    name or an inline mapping, never a path to a file on this machine.
+    """
     if not isinstance(data, dict):
         raise MissionError("mission", "must be a mapping (JSON object)")
     try:
-        return Mission.model_validate(data)
+        return Mission.model_validate(data, context={"allow_files": allow_files})
     except ValidationError as exc:
         err = exc.errors()[0]
         reason = {"extra_forbidden": "unknown field", "missing": "missing field"}.get(err["type"], err["msg"])

@@ -186,3 +186,14 @@ def test_cli_optimize_and_compare(tmp_path):
     run = subprocess.run([sys.executable, "-m", "clients.cli", "optimize", str(bad)], capture_output=True, text=True)
     assert run.returncode == 1 and "limits.voltage" in run.stderr
     assert math.isfinite(payload["solve_time_s"])
+
+
+def test_untrusted_missions_cannot_name_files(tmp_path):
+    f = tmp_path / "rig.json"
+    f.write_text(json.dumps({"J": 2.71e-5, "B": 5.31e-5, "c_tau": 2.2e-6, "c_f": 1.4e-4, "k_t": 0.0573,
+                             "k_e": 0.0573, "R": 5.0, "L": 0.002}))
+    assert mission_from_mapping({**EXAMPLE, "params": str(f)}).motor().R == 5.0  # trusted: a file is fine
+    with pytest.raises(MissionError) as ei:
+        mission_from_mapping({**EXAMPLE, "params": str(f)}, allow_files=False)
+    assert ei.value.field == "params" and "files are not read" in ei.value.reason
+    assert mission_from_mapping({**EXAMPLE, "params": "paper-rig"}, allow_files=False).motor().R == 5.0
