@@ -23,7 +23,7 @@ from fastapi.responses import HTMLResponse, JSONResponse
 from service.api import problems
 from service.api.deps import require_api_key
 from service.api.middleware import BodyLimit
-from service.api.routes import batches, compare, health, info, references
+from service.api.routes import batches, compare, health, info, page, references
 from service.batches import BatchRunner
 from service.jobs import JobStore
 from service.settings import Settings
@@ -81,6 +81,7 @@ def create_app(settings: Settings | None = None, tasks: TaskSet | None = None) -
     app.add_middleware(BodyLimit, max_bytes=settings.max_body_bytes)
     guard = [Depends(require_api_key)]
     app.include_router(health.router)
+    app.include_router(page.router)
     app.include_router(info.router, dependencies=guard)
     app.include_router(references.analytic_router, dependencies=guard)
     if tasks.optimize is not None and tasks.fallback is not None:
