@@ -17,6 +17,8 @@ import numpy as np
 
 from ocp import collocation as col
 from ocp.crossings import find_zeros
+from ocp.effects import load_plant
+from ocp.equilibrium import equilibrium, speed_for_thrust
 from ocp.errors import MissionError
 from ocp.fallback import design_sin
 from ocp.mission import MAX_INTERVALS, Mission
@@ -69,8 +71,13 @@ def split_phases(t: np.ndarray, f: np.ndarray) -> Phases:
 
 
 def make_plant(mission: Mission) -> Plant:
-    params = mission.motor()
-    return DCMotorPlant(params) if mission.plant == "dc-motor" else TorquePlant.from_params(params)
+    """The mission's plant: the DC motor with the effects of its parameter file (a calibrated plant
+    from ``thrustshape fit``), or the normalised torque channel (which takes no effects)."""
+    if mission.plant == "dc-motor":
+        return load_plant(mission.params)
+    if isinstance(mission.params, dict) and mission.params.get("effects"):
+        raise MissionError("params.effects", "effects act on the dc-motor plant, not on the torque channel")
+    return TorquePlant.from_params(mission.motor())
 
 
 def chain_order(mission: Mission) -> int:
@@ -104,8 +111,8 @@ class Problem:
     scales: dict[str, Any] = field(default_factory=dict)
 
 
-def _plant_key(mission: Mission) -> str:
-    return f"{mission.plant}:{mission.motor().model_dump_json()}"
+def _plant_key(plant: Plant) -> str:
+    return repr(plant)  # frozen dataclasses: constants and effects with their values
 
 
 def problem_for(mission: Mission, intervals: int | None = None) -> Problem:
@@ -119,8 +126,9 @@ def problem_for(mission: Mission, intervals: int | None = None) -> Problem:
     per_phase = max(MIN_INTERVALS_PER_PHASE[min(chain, 1)], total // n_phases)
     if per_phase * n_phases > 2 * MAX_INTERVALS:
         raise MissionError("collocation.intervals", f"{n_phases} phases need more than {2 * MAX_INTERVALS} intervals")
-    st = col.Structure(plant_key=_plant_key(mission), n_phases=n_phases, intervals=per_phase, chain=chain)
-    return Problem(mission=mission, plant=make_plant(mission), structure=st, t_desired=t, f_desired=f,
+    plant = make_plant(mission)
+    st = col.Structure(plant_key=_plant_key(plant), n_phases=n_phases, intervals=per_phase, chain=chain)
+    return Problem(mission=mission, plant=plant, structure=st, t_desired=t, f_desired=f,
                    phases=phases)
 
 
@@ -191,16 +199,6 @@ def _min_time_summary(mission: Mission, result: OptimizeResult) -> dict[str, flo
 # data: parameters, bounds, initial guess
 
 
-def _steady(plant: Plant, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(current, input) that hold speed ``w`` constant; input is voltage (DC) or torque/J."""
-    if isinstance(plant, DCMotorPlant):
-        p = plant.params
-        i = (p.B * w + p.c_tau * w * np.abs(w)) / p.k_t
-        return i, p.R * i + p.k_e * w
-    assert isinstance(plant, TorquePlant)
-    return np.zeros_like(w), plant.k * w * np.abs(w)
-
-
 def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray]:
     """Parameter vector, bounds and initial guess for the cached program of ``problem``.
 
@@ -227,7 +225,13 @@ def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray
         u_lim = 4.0 * params.k * w_scale**2
     t_int = float(np.sum(dur)) / (P * N)
     rate = lim.voltage_rate if lim.voltage_rate is not None else u_lim / t_int
-    xscale = [w_scale] + ([lim.current] if dc else []) + [u_lim, rate][:chain]
+    w0 = speed_for_thrust(plant, float(problem.f_desired[0]), params.c_f)
+    x_start, u0 = equilibrium(plant, w0)
+    # effect states: their size at full speed; an angle grows with time, scaled by the angle travelled
+    angle_scale = max(1.0, w_scale * float(np.sum(dur)))
+    effect_scale = [angle_scale if name.endswith(".theta") else max(abs(float(z)), 1e-3)
+                    for name, z in zip(plant.state_names[2:], equilibrium(plant, w_scale)[0][2:], strict=True)]
+    xscale = [w_scale] + ([lim.current] if dc else []) + effect_scale + [u_lim, rate][:chain]
     uscale = [u_lim, rate, rate / t_int][chain]
     rho = _residual_scaling(plant, np.array(xscale), u_lim, N, float(np.mean(dur)), npx, chain)
 
@@ -269,25 +273,25 @@ def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray
         lbx[lay.u], ubx[lay.u] = -1.0, 1.0
 
     # initial state: steady at the desired initial thrust
-    w0 = float(speed_from_thrust(problem.f_desired[0], params.c_f))
-    i0, u0 = (float(v[0]) for v in _steady(plant, np.array([w0])))
-    start = [w0] + ([i0] if dc else []) + [u0, 0.0][:chain]
+    start = [*x_start, u0, 0.0][: npx + chain]
     lbx[lay.x0] = ubx[lay.x0] = x0[lay.x0] = np.array(start) / np.array(xscale)
-    if not (abs(start[-1 if chain else 0]) <= (u_lim if chain else inf) and (not dc or abs(i0) <= lim.current)):
+    if abs(u0) > u_lim or (dc and abs(x_start[1]) > lim.current):
         raise MissionError("limits", f"the initial thrust {problem.f_desired[0]:.4g} N needs more than the limits")
 
     # crossings: w = 0 at every phase boundary, plus the derivative chain for flatter crossings
-    vanish = [0, 1, 2] if crossing_order(m) == 6 else [0]  # omega ~ s^3: omega = omega' = omega'' = 0
+    # omega ~ s^3: omega = 0 and, through the chain, omega' (current) = omega'' (voltage) = 0
+    vanish = [0, 1, npx] if crossing_order(m) == 6 else [0]
     if max(vanish) >= nx:
         raise MissionError("min_crossing_order", f"order {m.min_crossing_order} needs the input to be a state")
     for j in range(P - 1):
         for s in vanish:
             lbx[lay.xc[j, -1, -1, s]] = ubx[lay.xc[j, -1, -1, s]] = 0.0
     if m.objective == "min-time":
-        w1 = float(speed_from_thrust(problem.f_desired[-1], params.c_f))
-        i1, u1 = (float(v[0]) for v in _steady(plant, np.array([w1])))
-        end = np.array([w1] + ([i1] if dc else []) + [u1, 0.0][:chain]) / np.array(xscale)
-        lbx[lay.xc[-1, -1, -1, :]] = ubx[lay.xc[-1, -1, -1, :]] = end
+        x_end, u1 = equilibrium(plant, speed_for_thrust(plant, float(problem.f_desired[-1]), params.c_f))
+        end = np.array([*x_end, u1, 0.0][: npx + chain]) / np.array(xscale)
+        rest = [k for k, name in enumerate(plant.state_names) if not name.endswith(".theta")]
+        rest += list(range(npx, npx + chain))
+        lbx[lay.xc[-1, -1, -1, rest]] = ubx[lay.xc[-1, -1, -1, rest]] = end[rest]
 
     x0[:] = _initial_guess(problem, lay, x0, fd * f_scale, np.array(xscale), uscale, chain, lbx, ubx)
     return {"p": p, "lbx": lbx, "ubx": ubx, "x0": x0, "lbg": np.zeros(0), "xscale": np.array(xscale),
@@ -315,15 +319,22 @@ def _residual_scaling(plant: Plant, xscale: np.ndarray, u_nom: float, N: int, d_
 
 def _initial_guess(problem: Problem, lay: col.Layout, x0: np.ndarray, fd: np.ndarray, xscale: np.ndarray,
                    uscale: float, chain: int, lbx: np.ndarray, ubx: np.ndarray) -> np.ndarray:
-    """Static inverse of the desired thrust at the collocation points, clipped into the bounds."""
+    """Static inverse of the desired thrust at the collocation points (nominal steady current and
+    input), effect states held at their initial values; clipped into the bounds."""
     params = problem.mission.motor()
     P, N = problem.structure.n_phases, problem.structure.intervals
     npx = len(problem.plant.state_names)
     guess = x0.copy()
+    start = x0[lay.x0]
     for j in range(P):
-        w = speed_from_thrust(fd[j], params.c_f).reshape(N, col.DEGREE)
-        w = problem.phases.signs[j] * np.abs(w)
-        i, u = _steady(problem.plant, w)
+        w = problem.phases.signs[j] * np.abs(speed_from_thrust(fd[j], params.c_f).reshape(N, col.DEGREE))
+        if isinstance(problem.plant, TorquePlant):
+            i, u = np.zeros_like(w), problem.plant.k * w * np.abs(w)
+        else:
+            i = (params.B * w + params.c_tau * w * np.abs(w)) / params.k_t
+            u = params.R * i + params.k_e * w
+        for k in range(2, npx):
+            guess[lay.xc[j, :, :, k]] = start[k]
         guess[lay.xc[j, :, :, 0]] = w / xscale[0]
         if npx > 1:
             guess[lay.xc[j, :, :, 1]] = i / xscale[1]

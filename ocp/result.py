@@ -285,7 +285,9 @@ def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[st
     for k, ts in enumerate(sol.phase_edges[1:-1]):
         node = sol.points[(k + 1) * N - 1, -1, :] / xscale
         left, right = sol.controls[(k + 1) * N - 1], sol.controls[(k + 1) * N]
-        chain = [*np.abs(node[1:]), max(abs(left), abs(right)) / uscale]
+        npx = sol.n_plant_states
+        links = ([1] if npx > 1 else []) + list(range(npx, npx + sol.chain))  # current, then the input chain
+        chain = [*np.abs(node[links]), max(abs(left), abs(right)) / uscale]
         n = 0
         while n < len(chain) and chain[n] <= 1e-6:
             n += 1
