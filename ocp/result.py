@@ -18,6 +18,8 @@ from scipy.integrate import cumulative_trapezoid
 
 from ocp import collocation as col
 from ocp.analytic import reference
+from ocp.effects import load_plant
+from ocp.equilibrium import equilibrium
 from ocp.errors import MissionError
 from ocp.fallback import design_reversals, design_sin
 from ocp.mission import Mission
@@ -325,12 +327,15 @@ def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | Non
     ref = reference(prof, params, t)
     arrays = {"t": t, "thrust": ref.thrust, "thrust_desired": np.interp(t, t_d, f_d), "omega": ref.omega,
               "theta": ref.theta, "current": ref.current, "voltage": ref.voltage}
-    plant = DCMotorPlant(params)
+    # the closed forms are the nominal model's; the check runs the mission's plant, effects included
+    plant = load_plant(m.params) if m.plant == "dc-motor" else DCMotorPlant(params)
+    x0 = equilibrium(plant, float(ref.omega[0]))[0]
+    x0[1] = ref.current[0]
     u_knots = 0.5 * (ref.voltage[:-1] + ref.voltage[1:])
-    sim = verify_simulation(plant, t, u_knots, np.array([ref.omega[0], ref.current[0]]), t)
+    sim = verify_simulation(plant, t, u_knots, x0, t)
     arrays["command_t"], arrays["command"] = t, np.append(u_knots, u_knots[-1])
-    verification = _verification(m, {**arrays, "thrust": np.asarray(plant.thrust([sim[0], sim[1]]), float)},
-                                 ref.thrust)
+    f_sim = np.asarray(plant.thrust([sim[k] for k in range(sim.shape[0])]), float)
+    verification = _verification(m, {**arrays, "thrust": f_sim}, ref.thrust)
     crossings = [{"t": float(ts), "exponent": float(p or 0), "sign_change": True}
                  for ts, p in zip(ref.crossing_times, ref.crossing_orders, strict=True) if 0.0 < ts < t[-1]]
     return OptimizeResult(name=m.name, source="analytic-fallback", status="fallback", reason=reason, arrays=arrays,
