@@ -185,6 +185,82 @@ class LocalReversal:
         return [Crossing(self.t_s, self.p, self.alpha)] if t0 <= self.t_s <= t1 else []
 
 
+@dataclass(frozen=True)
+class SinReversal:
+    """One reversal of the ``sin^(2q+1)`` family between two hold levels (eq. sin_family, locally).
+
+    ``F = after sin^n(pi s / (2 rise))`` for ``0 <= s <= rise`` and ``F = -before sin^n(pi s / (2 fall))``
+    for ``-fall <= s < 0`` (``s = t - t_s``, ``n = 2q+1``), the levels outside. The joins are at the
+    sine's peaks (F' = 0 there); on a sine between its peaks (``rise = fall`` = a quarter period,
+    ``before = -after``) it is exactly ``A sin^(2q+1)``.
+    """
+
+    t_s: float
+    q: int
+    before: float
+    after: float
+    fall: float
+    rise: float
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.q, int) and 0 <= self.q <= 20):
+            raise MissionError("q", "must be an integer in 0..20")
+        if self.fall <= 0 or self.rise <= 0 or not (math.isfinite(self.fall) and math.isfinite(self.rise)):
+            raise MissionError("rise", "rise and fall must be finite positive times [s]")
+        if self.before * self.after >= 0:
+            raise MissionError("after", "a reversal needs levels of opposite signs")
+
+    @property
+    def p(self) -> int:
+        return sin_family_order(self.q)
+
+    def thrust(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(F, F', F''), each shape (N,)."""
+        s = np.asarray(t, float) - self.t_s
+        right = s >= 0
+        amp = np.where(right, self.after, -self.before)
+        W = np.where(right, math.pi / (2 * self.rise), math.pi / (2 * self.fall))
+        x = np.clip(W * s, -math.pi / 2, math.pi / 2)
+        inside = np.abs(W * s) <= math.pi / 2  # the window includes its peaks
+        n = self.p
+        sn, cs = np.sin(x), np.cos(x)
+        sn = np.where(np.abs(sn) <= _SNAP, 0.0, sn)
+        f = amp * sn**n
+        df = np.where(inside, amp * n * W * sn ** (n - 1) * cs, 0.0)
+        curv = (n - 1) * sn ** (n - 2) * cs * cs - sn**n if n > 1 else -sn
+        ddf = np.where(inside, amp * n * W**2 * curv, 0.0)
+        return f, df, ddf
+
+    def crossings(self, t0: float, t1: float) -> list[Crossing]:
+        alpha = self.after * (math.pi / (2 * self.rise)) ** self.p  # right-hand coefficient
+        return [Crossing(self.t_s, self.p, alpha)] if t0 <= self.t_s <= t1 else []
+
+
+@dataclass(frozen=True)
+class PiecewiseProfile:
+    """Reversal pieces (:class:`LocalReversal`, :class:`SinReversal`) joined at hold levels.
+
+    ``pieces[k]`` acts on ``[edges[k], edges[k+1]]``; each equals its side levels exactly outside its
+    reversal window, so neighbouring pieces join where both hold the same level.
+    """
+
+    pieces: tuple[LocalReversal | SinReversal, ...]
+    edges: tuple[float, ...]
+
+    def thrust(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        out = [np.zeros_like(t) for _ in range(3)]
+        k = np.clip(np.searchsorted(np.asarray(self.edges), t, side="right") - 1, 0, len(self.pieces) - 1)
+        for j, piece in enumerate(self.pieces):
+            sel = k == j
+            if sel.any():
+                for o, v in zip(out, piece.thrust(t[sel]), strict=True):
+                    o[sel] = v
+        return out[0], out[1], out[2]
+
+    def crossings(self, t0: float, t1: float) -> list[Crossing]:
+        return [c for piece in self.pieces for c in piece.crossings(t0, t1)]
+
+
 def _crossing_limits(alpha: float, p: int, c_f: float) -> tuple[float, float, float]:
     """Right-hand limits of (omega, omega', omega'') at ``x2d ~ alpha s^p``.
 
@@ -209,7 +285,7 @@ def reference(profile: Any, params: MotorParams, t: np.ndarray) -> Reference:
     """Exact feedforward of ``profile`` for ``params`` on the grid ``t`` (N,) [s].
 
     ``profile`` is a :class:`SinProfile`, a :class:`LocalReversal` or anything with their
-    ``thrust(t)`` and ``crossings(t0, t1)`` methods (e.g. :class:`ocp.fallback.ReversalChain`).
+    ``thrust(t)`` and ``crossings(t0, t1)`` methods (e.g. :class:`PiecewiseProfile`).
     """
     t = np.asarray(t, dtype=float)
     if t.ndim != 1 or t.size < 2 or np.any(np.diff(t) <= 0) or not np.all(np.isfinite(t)):

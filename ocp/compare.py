@@ -1,9 +1,9 @@
 """Optimised vs analytic shapes of the same mission, side by side.
 
-Candidates: the optimised reference of the mission and ``A sin^(2q+1)`` for each requested ``q``, all
-with the mission's peak thrust ``A`` and the same period: the shortest period within the limits for
-the smallest ``q`` that meets the mission's regularity (so the non-singular parts are comparable, as
-in the paper's experiment), aligned to the mission's first reversal and as long as the mission.
+Candidates: the optimised reference of the mission and, for each requested ``q``, the mission with
+every reversal replaced by the ``sin^(2q+1)`` half-wave between the peaks around it
+(:class:`~ocp.analytic.SinReversal`; on a sine mission this is exactly ``A sin^(2q+1)``), same levels,
+same timing, so only the crossing order differs -- as in the paper's experiment.
 For each: duration, peak current/voltage of the ideal feedforward (inf where unbounded), electrical
 energy, RMS error to the desired thrust, crossing exponents, and the Section V closed loop
 (:mod:`ocp.closed_loop`, 1 ms sampling, saturation, quantisation) tracking it with the reference's
@@ -12,6 +12,7 @@ voltage as feedforward.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -20,10 +21,9 @@ from typing import Any
 import numpy as np
 from scipy.integrate import trapezoid
 
-from ocp.analytic import SinProfile, reference
+from ocp.analytic import PiecewiseProfile, SinReversal, reference
 from ocp.closed_loop import track
 from ocp.errors import MissionError
-from ocp.fallback import design_sin
 from ocp.mission import Mission
 from ocp.optimize import make_plant, optimize
 from ocp.plant import DCMotorPlant
@@ -83,6 +83,46 @@ def _figures(m: Mission, c: Candidate, t_des: np.ndarray, f_des: np.ndarray, exp
     return figures
 
 
+@dataclass(frozen=True)
+class Window:
+    """A reversal of the desired thrust: crossing ``t_s`` [s], levels [N] and the times from the
+    previous peak (``fall``) and to the next peak (``rise``) [s]."""
+
+    t_s: float
+    before: float
+    after: float
+    fall: float
+    rise: float
+
+
+def mission_reversals(t: np.ndarray, f: np.ndarray) -> list[Window]:
+    """The reversals of a desired thrust ``f`` (N,) on ``t`` (N,): each between the peaks of |f| in the
+    phases around it (a phase's peak is its signed largest value; the last sample within 0.1 % of it
+    before the crossing, the first after)."""
+    cuts = [k for k in range(f.size - 1) if f[k] * f[k + 1] < 0]
+    if not cuts:
+        raise MissionError("profile", "compare needs at least one thrust reversal (a sign change)")
+    ts = [float(t[k] + (t[k + 1] - t[k]) * f[k] / (f[k] - f[k + 1])) for k in cuts]
+    bounds = [float(t[0]), *ts, float(t[-1])]
+    out = []
+    for k, tk in enumerate(ts):
+        levels = []
+        for a, b in ((bounds[k], tk), (tk, bounds[k + 2])):
+            sel = (t >= a) & (t <= b)
+            levels.append((t[sel], f[sel], float(f[sel][np.argmax(np.abs(f[sel]))])))
+        (tb, fb, before), (ta, fa, after) = levels
+        t_peak_before = float(tb[np.nonzero(np.abs(fb) >= 0.999 * abs(before))[0][-1]])
+        t_peak_after = float(ta[np.nonzero(np.abs(fa) >= 0.999 * abs(after))[0][0]])
+        out.append(Window(tk, before, after, max(tk - t_peak_before, 1e-3), max(t_peak_after - tk, 1e-3)))
+    return out
+
+
+def reversal_edges(t: np.ndarray, windows: list[Window]) -> list[float]:
+    """Where one reversal piece hands over to the next: midway between crossings, and the grid ends."""
+    mids = [0.5 * (a.t_s + b.t_s) for a, b in itertools.pairwise(windows)]
+    return [float(t[0]), *mids, float(t[-1])]
+
+
 def compare(m: Mission, qs: tuple[int, ...] = (0, 1, 2, 3)) -> CompareResult:
     """Optimised reference vs ``A sin^(2q+1)`` for each ``q`` in ``qs`` (see module doc)."""
     if not qs or any(q < 0 or q > 10 for q in qs):
@@ -96,26 +136,18 @@ def compare(m: Mission, qs: tuple[int, ...] = (0, 1, 2, 3)) -> CompareResult:
                        a["current"], a["voltage"])]
     cands[0].figures = _figures(m, cands[0], a["t"], a["thrust_desired"], [c["exponent"] for c in opt.crossings],
                                 False)
-    amp = max(float(np.max(np.abs(f_des))), 1e-6)
+    windows = mission_reversals(t_des, f_des)
     q_min = min_sin_q(m.regularity, m.plant == "dc-motor")
-    try:
-        period = design_sin(params, m.limits.current, m.limits.voltage, m.regularity, amplitude=amp).profile.period
-    except MissionError:
-        period = 2.0 * float(t_des[-1])
-    sc = np.nonzero(np.sign(f_des[:-1]) * np.sign(f_des[1:]) < 0)[0]
     t = np.linspace(0.0, float(t_des[-1]), max(2, round(float(t_des[-1]) * 1000) + 1))
     for q in qs:
-        prof = SinProfile(amp, period, q)
-        if sc.size:
-            k = int(sc[0])
-            phase = (0.0 if f_des[k + 1] > f_des[k] else math.pi) - prof.W * float(t_des[k])
-            prof = SinProfile(amp, period, q, phase)
+        prof = PiecewiseProfile(tuple(SinReversal(w.t_s, q, w.before, w.after, w.fall, w.rise) for w in windows),
+                                tuple(float(e) for e in reversal_edges(t_des, windows)))
         ref = reference(prof, params, t)
         unbounded = ref.unbounded["current"] or ref.unbounded["voltage"]
         cur = np.where(np.isfinite(ref.current), ref.current, np.sign(ref.current) * 1e9)
         volt = np.where(np.isfinite(ref.voltage), ref.voltage, np.sign(ref.voltage) * 1e9)
         c = Candidate(f"sin^{2 * q + 1}" + (" (mission q)" if q == q_min else ""), t, ref.thrust, ref.omega, cur, volt)
-        c.figures = _figures(m, c, t_des, f_des, [float(prof.p)] * len(ref.crossing_times), unbounded)
+        c.figures = _figures(m, c, t_des, f_des, [float(2 * q + 1)] * len(ref.crossing_times), unbounded)
         cands.append(c)
     return CompareResult(mission=m.name, candidates=cands, optimized=opt)
 

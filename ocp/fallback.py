@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ocp.analytic import Crossing, LocalReversal, SinProfile, reference
+from ocp.analytic import LocalReversal, PiecewiseProfile, SinProfile, reference
 from ocp.errors import MissionError
 from ocp.params import MotorParams
 from ocp.theory import ReversalRegularity, min_sin_q
@@ -106,38 +106,9 @@ def _largest_amplitude(params: MotorParams, i_max: float, v_max: float, q: int, 
     return SinDesign(prof, i, v)
 
 
-@dataclass(frozen=True)
-class ReversalChain:
-    """Hold levels joined by local polynomial reversals (``alpha (t - t_s)^p chi(t)``, smooth blend).
-
-    ``reversals[k]`` acts on ``[edges[k], edges[k+1]]``; outside its blend it equals its side levels
-    exactly, so the pieces join smoothly. Implements the profile interface of
-    :func:`ocp.analytic.reference` (``thrust``, ``crossings``, ``theta``).
-    """
-
-    reversals: tuple[LocalReversal, ...]
-    edges: tuple[float, ...]
-
-    def thrust(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        out = [np.zeros_like(t) for _ in range(3)]
-        k = np.clip(np.searchsorted(np.asarray(self.edges), t, side="right") - 1, 0, len(self.reversals) - 1)
-        for j, rev in enumerate(self.reversals):
-            sel = k == j
-            if sel.any():
-                for o, v in zip(out, rev.thrust(t[sel]), strict=True):
-                    o[sel] = v
-        return out[0], out[1], out[2]
-
-    def crossings(self, t0: float, t1: float) -> list[Crossing]:
-        return [c for r in self.reversals for c in r.crossings(t0, t1)]
-
-    def theta(self, t: np.ndarray, c_f: float) -> np.ndarray:
-        raise NotImplementedError  # reference() integrates omega numerically for non-sine profiles
-
-
 def design_reversals(params: MotorParams, t: np.ndarray, f: np.ndarray, current_limit: float,
                      voltage_limit: float, regularity: ReversalRegularity,
-                     voltage_driven: bool = True) -> ReversalChain | None:
+                     voltage_driven: bool = True) -> PiecewiseProfile | None:
     """Local-polynomial fallback for a sampled desired thrust ``f`` (N,) on ``t`` (N,) [s, N].
 
     Each phase between sign changes becomes a hold at its peak thrust; each reversal the local
@@ -172,4 +143,4 @@ def design_reversals(params: MotorParams, t: np.ndarray, f: np.ndarray, current_
                 mid = math.sqrt(lo * hi)
                 lo, hi = (lo, mid) if fits(mid) else (mid, hi)
         revs.append(LocalReversal.between(levels[k], levels[k + 1], tk, p, hi))
-    return ReversalChain(reversals=tuple(revs), edges=tuple(edges))
+    return PiecewiseProfile(pieces=tuple(revs), edges=tuple(edges))

@@ -113,3 +113,21 @@ def test_local_reversal_rejects_inconsistent_signs():
 
     with pytest.raises(MissionError, match="before"):
         LocalReversal.between(0.4, 0.5, 1.0, 3, 0.8)
+
+
+@pytest.mark.parametrize("q", [0, 1, 2, 3])
+def test_sin_reversal_is_the_sine_power_between_its_peaks(q, rig):
+    from ocp.analytic import PiecewiseProfile, SinReversal
+
+    t = np.linspace(0.5, 1.5, 1001)  # peak, crossing at t = 1 (a sample), opposite peak
+    piece = reference(PiecewiseProfile((SinReversal(1.0, q, 0.4, -0.4, 0.5, 0.5),), (0.0, 2.0)), rig, t)
+    exact = reference(SinProfile(0.4, 2.0, q), rig, t)
+    finite = np.isfinite(exact.voltage)
+    np.testing.assert_allclose(piece.thrust, exact.thrust, atol=1e-12)
+    np.testing.assert_allclose(piece.voltage[finite], exact.voltage[finite], rtol=1e-9, atol=1e-9)
+    assert piece.unbounded == exact.unbounded
+    np.testing.assert_array_equal(np.isinf(piece.voltage), np.isinf(exact.voltage))
+    # outside the window the levels hold, with zero slope at the joins
+    f, df, _ = SinReversal(1.0, q, 0.4, -0.3, 0.5, 0.2).thrust(np.array([0.2, 0.5, 1.2, 1.9]))
+    np.testing.assert_allclose(f, [0.4, 0.4, -0.3, -0.3], atol=1e-15)
+    np.testing.assert_allclose(df, 0.0, atol=1e-9)
