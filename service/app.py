@@ -23,7 +23,7 @@ from fastapi.responses import HTMLResponse, JSONResponse
 from service.api import problems
 from service.api.deps import require_api_key
 from service.api.middleware import BodyLimit
-from service.api.routes import batches, compare, health, info, page, references
+from service.api.routes import batches, compare, health, info, model_check, page, references
 from service.batches import BatchRunner
 from service.jobs import JobStore
 from service.settings import Settings
@@ -31,6 +31,8 @@ from service.tasks import TaskSet, available_tasks
 from service.workers import DaskRunner, Runner, WorkerPool
 
 log = logging.getLogger("thrustshape.service")
+
+_FORM_SLACK = 512 * 1024  # multipart framing and the non-file fields of a model-check upload [bytes]
 
 
 def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
@@ -78,7 +80,9 @@ def create_app(settings: Settings | None = None, tasks: TaskSet | None = None) -
         docs_url=None, redoc_url=None, openapi_url=None,
     )
     problems.install(app)
-    app.add_middleware(BodyLimit, max_bytes=settings.max_body_bytes)
+    # a log upload may exceed max_body_bytes: its own limit, plus room for the small form fields
+    app.add_middleware(BodyLimit, max_bytes=settings.max_body_bytes,
+                       uploads={model_check.PREFIX: (settings.max_upload_bytes + _FORM_SLACK, "log")})
     guard = [Depends(require_api_key)]
     app.include_router(health.router)
     app.include_router(page.router)
@@ -90,6 +94,8 @@ def create_app(settings: Settings | None = None, tasks: TaskSet | None = None) -
         app.include_router(compare.router, dependencies=guard)
     if tasks.batch_item is not None:
         app.include_router(batches.router, dependencies=guard)
+    if tasks.model_check is not None:
+        app.include_router(model_check.router, dependencies=guard)
     _docs(app)
     app.state.settings, app.state.tasks = settings, tasks
     return app

@@ -163,6 +163,40 @@ class OptimizePublic(_Open):
     verification: Verification | None = None
 
 
+class CheckPublic(_Open):
+    """:meth:`ocp.identify.CheckResult.to_dict`: where the model fails (free-run and one-step errors, breakdowns)."""
+
+    kind: Literal["time-series", "steady-state"]
+    free_run: dict[str, Any] = Field(description="label, rms, max, units per channel (omega, current, thrust)")
+    one_step: dict[str, Any] = Field(description="label, rms, mean, units per equation")
+    noise: dict[str, float | None]
+    breakdown: dict[str, Any] = Field(description="group -> bin -> statistics")
+    correlation: dict[str, Any] = Field(description="residual auto/cross-correlations and the 95 % band")
+
+
+class DiagnosePublic(_Open):
+    """:meth:`ocp.identify.DiagnoseResult.to_dict`: which effects are missing, most important first."""
+
+    verdict: list[str] = Field(description="missing effects, most important first; empty: nothing missing")
+    ranking: list[dict[str, Any]] = Field(description="first round: every candidate by held-out error reduction")
+    explanations: list[str]
+    message: str
+    noise: dict[str, float | None]
+    rounds: list[dict[str, Any]]
+
+
+class FitPublic(_Open):
+    """:meth:`ocp.identify.FitResult.to_dict` plus ``calibrated_params``, the calibrated parameter mapping
+    (readable by :func:`ocp.effects.load_plant`, and as ``params`` of a mission or a model check)."""
+
+    effects: list[str]
+    stage: Literal["equation-error", "free-run"]
+    parameters: dict[str, dict[str, float | None]] = Field(description="name -> {value, stderr}")
+    rms_before: dict[str, float | None]
+    rms_after: dict[str, float | None]
+    calibrated_params: dict[str, Any]
+
+
 class BatchCreate(_Strict):
     missions: list[MissionRequest] = Field(min_length=1, description="missions to optimise, in order")
 
@@ -215,6 +249,8 @@ class LimitsPublic(_Strict):
     max_intervals: int
     max_batch_missions: int
     max_reference_samples: int
+    max_upload_bytes: int
+    max_log_samples: int
     optimize_deadline_s: float
     task_timeout_s: float
 

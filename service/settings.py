@@ -39,6 +39,10 @@ class Settings(BaseSettings):
     max_intervals: Annotated[int, Field(ge=8, le=2_000)] = 1_000
     max_batch_missions: Annotated[int, Field(ge=1, le=100_000)] = 1_000
     max_reference_samples: Annotated[int, Field(ge=2, le=2_000_001)] = 200_001
+    #: size of a model-check log upload (CSV/Parquet) [bytes]; replaces max_body_bytes on /v1/model-check/*
+    max_upload_bytes: Annotated[int, Field(ge=1024)] = 32 * 1024 * 1024
+    #: rows of a model-check log
+    max_log_samples: Annotated[int, Field(ge=50, le=10_000_000)] = 500_000
 
     # time
     #: hard wall-clock deadline of a synchronous optimisation [s]; the mission's time_limit_s may shorten it

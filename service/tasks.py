@@ -93,11 +93,14 @@ def fallback_mission(payload: Payload) -> Payload:
 
 
 def compare_mission(payload: Payload) -> Payload:
-    """Mission -> :meth:`ocp.compare.CompareResult.to_dict`."""
+    """``{"mission": Mission, "qs": [q, ...] | None}`` -> :meth:`ocp.compare.CompareResult.to_dict`."""
     from ocp.mission import Mission
 
     compare = importlib.import_module("ocp.compare").compare
-    return json_safe(compare(Mission.model_validate(payload)).to_dict())
+    qs = payload.get("qs")
+    mission = Mission.model_validate(payload["mission"])
+    result = compare(mission) if not qs else compare(mission, tuple(int(q) for q in qs))
+    return json_safe(result.to_dict())
 
 
 def _has(module: str, *names: str) -> bool:
@@ -122,6 +125,7 @@ class TaskSet:
     fallback: TaskFn | None = None
     compare: TaskFn | None = None
     batch_item: TaskFn | None = None
+    model_check: TaskFn | None = None
     extra_preload: tuple[str, ...] = field(default=())
 
 
@@ -129,10 +133,15 @@ def available_tasks() -> TaskSet:
     """Tasks whose core modules exist in this install (checked when the app is created)."""
     has_opt = _has("ocp.optimize", "optimize", "analytic_fallback")
     has_cmp = _has("ocp.compare", "compare")
+    has_mc = _has("ocp.identify", "check", "diagnose", "fit")
+    from service.modelcheck import model_check
+
     return TaskSet(
         optimize=optimize_mission if has_opt else None,
         fallback=fallback_mission if has_opt else None,
         compare=compare_mission if has_cmp else None,
         batch_item=optimize_mission if has_opt else None,
-        extra_preload=tuple(m for m, ok in (("ocp.optimize", has_opt), ("ocp.compare", has_cmp)) if ok),
+        model_check=model_check if has_mc else None,
+        extra_preload=tuple(m for m, ok in (("ocp.optimize", has_opt), ("ocp.compare", has_cmp),
+                                            ("ocp.identify", has_mc)) if ok),
     )

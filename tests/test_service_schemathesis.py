@@ -51,3 +51,4 @@ def test_no_server_errors(fuzz_server: Server) -> None:
         fuzz()
         tried.append(op.label)
     assert "POST /v1/batches" in tried and "POST /v1/references/analytic" in tried
+    assert {"POST /v1/model-check/check", "POST /v1/model-check/diagnose", "POST /v1/model-check/fit"} <= set(tried)

@@ -70,7 +70,7 @@ def task_set(kind: str) -> TaskSet:
     real = available_tasks()
     if kind == "slow-batch":
         return TaskSet(analytic=analytic_reference, optimize=real.optimize, fallback=real.fallback,
-                       compare=real.compare, batch_item=slow_item)
+                       compare=real.compare, batch_item=slow_item, model_check=real.model_check)
     if kind == "hang-optimize":
         return TaskSet(analytic=analytic_reference, optimize=hang, fallback=real.fallback, batch_item=slow_item)
     return real

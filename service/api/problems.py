@@ -38,7 +38,8 @@ def problem(status: int, title: str, detail: str, field: str | None = None, reas
 class BodyTooLarge(HTTPException):
     """Request body over ``max_body_bytes`` (an HTTPException so FastAPI's body parsing passes it through)."""
 
-    def __init__(self, limit: int) -> None:
+    def __init__(self, limit: int, field: str = "body") -> None:
+        self.field = field
         super().__init__(413, f"request body larger than {limit} bytes")
 
 
@@ -92,7 +93,7 @@ async def _http(request: Request, exc: Exception) -> JSONResponse:
     if not isinstance(exc, HTTPException):
         raise exc
     headers = dict(exc.headers or {})
-    field = "body" if exc.status_code == 413 else None
+    field = getattr(exc, "field", "body") if exc.status_code == 413 else None
     return problem(exc.status_code, _TITLES.get(exc.status_code, "Error"), str(exc.detail), field,
                    str(exc.detail) if field else None, headers=headers or None)
 

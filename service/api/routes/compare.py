@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated, Any
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Query
+from pydantic import Field
 
 from ocp.errors import MissionError
 from service.api.deps import PoolDep, SettingsDep, TasksDep, check_mission_limits
@@ -17,8 +18,13 @@ _ERRORS = error_responses(401, 413, 422, 503, 504)
 
 @router.post("/compare", response_model=dict[str, Any], responses=_ERRORS,
              summary="Compare the analytic family with the optimised reference (peaks, energy, regularity)")
-async def compare(mission: MissionRequest, settings: SettingsDep, pool: PoolDep, tasks: TasksDep) -> Any:
+async def compare(mission: MissionRequest, settings: SettingsDep, pool: PoolDep, tasks: TasksDep,
+                  qs: Annotated[list[Annotated[int, Field(ge=0, le=10)]] | None,
+                                Query(max_length=8, description="q values of the analytic shapes "
+                                                                "(repeat: ?qs=0&qs=2); default 0, 1, 2, 3")] = None
+                  ) -> Any:
     check_mission_limits(mission, settings)
     if tasks.compare is None:  # the route is only registered when the backend exists
         raise MissionError("route", "comparison is not available on this server")
-    return await pool.run(tasks.compare, mission.model_dump(mode="json"), settings.task_timeout_s)
+    payload = {"mission": mission.model_dump(mode="json"), "qs": list(dict.fromkeys(qs)) if qs else None}
+    return await pool.run(tasks.compare, payload, settings.task_timeout_s)

@@ -2,12 +2,11 @@
 
 from __future__ import annotations
 
-import importlib
 import importlib.metadata
-import importlib.util
 
 from fastapi import APIRouter
 
+from ocp.effects import CATALOGUE
 from ocp.params import PRESETS
 from ocp.theory import ReversalRegularity
 from service.api.deps import SettingsDep, TasksDep
@@ -24,13 +23,8 @@ def _version() -> str:
 
 
 def effect_names() -> list[str]:
-    """Names of the plant effects the core offers (``ocp.effects.CATALOGUE``), empty when absent."""
-    if importlib.util.find_spec("ocp.effects") is None:
-        return []
-    registry = getattr(importlib.import_module("ocp.effects"), "CATALOGUE", None)
-    if registry is None:
-        return []
-    return sorted(str(k) for k in registry)
+    """Names of the plant effects in the core's catalogue (``ocp.effects.CATALOGUE``)."""
+    return sorted(CATALOGUE)
 
 
 @router.get("/info", response_model=InfoPublic, summary="Version, presets, effects, limits")
@@ -42,8 +36,9 @@ async def info(settings: SettingsDep, tasks: TasksDep) -> InfoPublic:
         limits=LimitsPublic(max_body_bytes=s.max_body_bytes, max_profile_samples=s.max_profile_samples,
                             max_intervals=s.max_intervals, max_batch_missions=s.max_batch_missions,
                             max_reference_samples=s.max_reference_samples,
+                            max_upload_bytes=s.max_upload_bytes, max_log_samples=s.max_log_samples,
                             optimize_deadline_s=s.optimize_deadline_s, task_timeout_s=s.task_timeout_s),
         features={"optimize": tasks.optimize is not None, "compare": tasks.compare is not None,
-                  "batches": tasks.batch_item is not None, "model_check": False},
+                  "batches": tasks.batch_item is not None, "model_check": tasks.model_check is not None},
         workers=s.workers, batch_backend="dask" if s.dask_address else "local",
     )

@@ -1,0 +1,92 @@
+"""``POST /v1/model-check/{check,diagnose,fit}``: upload a rig log, confront the model with it.
+
+``multipart/form-data``: ``log`` (CSV or Parquet file, by file name suffix or content), ``params``
+(a preset name or the JSON text of a parameter mapping, optionally with an ``effects`` block --
+never a server path), optional ``columns`` (JSON column map, see :mod:`ocp.logs`) and
+``steady_state`` (``true``/``false``); ``/fit`` also ``effects`` (comma-separated names). The
+answer is the core result's ``to_dict()``; ``/check?report=html`` answers the self-contained HTML
+report. The work runs in a worker process under the hard ``task_timeout_s``.
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, File, Form, Query, UploadFile
+from fastapi.responses import HTMLResponse
+
+from ocp.errors import MissionError
+from service.api.deps import PoolDep, SettingsDep, TasksDep
+from service.api.problems import TooLarge, error_responses
+from service.modelcheck import PARAMS_HELP, Op, parse_columns, parse_effects, parse_params
+from service.schemas import CheckPublic, DiagnosePublic, FitPublic
+from service.settings import Settings
+from service.tasks import TaskSet
+from service.workers import WorkerPool
+
+PREFIX = "/v1/model-check"
+router = APIRouter(prefix=PREFIX, tags=["model check"])
+_ERRORS = error_responses(401, 413, 422, 503, 504)
+
+LogFile = Annotated[UploadFile, File(description="measurement log: CSV (header row) or Parquet; columns t, voltage, "
+                                                 "current, omega and/or theta, thrust (SI) or as `columns` maps them")]
+ParamsField = Annotated[str, Form(min_length=1, max_length=200_000, description=PARAMS_HELP)]
+ColumnsField = Annotated[str | None, Form(max_length=20_000, description='column map as JSON, e.g. {"omega": '
+                                                                         '{"column": "speed", "unit": "rpm"}}')]
+SteadyField = Annotated[bool, Form(description="the log is a steady-state sweep (one row per operating point)")]
+
+
+async def _run(op: Op, log: UploadFile, params: str, columns: str | None, steady_state: bool, settings: Settings,
+               pool: WorkerPool, tasks: TaskSet, **extra: Any) -> dict[str, Any]:
+    if tasks.model_check is None:  # the routes are only registered when the backend exists
+        raise MissionError("route", "model checks are not available on this server")
+    source = parse_params(params)
+    column_map = parse_columns(columns)
+    if log.size is not None and log.size > settings.max_upload_bytes:
+        raise TooLarge("log", f"{log.size} bytes; this server accepts logs of at most {settings.max_upload_bytes}")
+    data = await log.read(settings.max_upload_bytes + 1)
+    if len(data) > settings.max_upload_bytes:
+        raise TooLarge("log", f"larger than {settings.max_upload_bytes} bytes, the most this server accepts")
+    payload = {"op": op, "log": data, "filename": log.filename, "params": source, "columns": column_map,
+               "steady_state": steady_state, "max_samples": settings.max_log_samples, **extra}
+    return await pool.run(tasks.model_check, payload, settings.task_timeout_s)
+
+
+@router.post("/check", response_model=CheckPublic,
+             responses={**_ERRORS, 200: {"content": {"text/html": {}},
+                                         "description": "the result as JSON, or the HTML report (report=html)"}},
+             summary="Where does the model fail on this log? Free-run and one-step errors, broken down")
+async def check(log: LogFile, params: ParamsField, settings: SettingsDep, pool: PoolDep, tasks: TasksDep,
+                columns: ColumnsField = None, steady_state: SteadyField = False,
+                report: Annotated[Literal["json", "html"], Query(description="html: the self-contained report")]
+                = "json") -> Any:
+    out = await _run("check", log, params, columns, steady_state, settings, pool, tasks, report=report == "html")
+    if report == "html":
+        return HTMLResponse(out["html"])
+    return out
+
+
+@router.post("/diagnose", response_model=DiagnosePublic, responses=_ERRORS,
+             summary="Which catalogue effect is missing? Candidates ranked by held-out error reduction")
+async def diagnose(log: LogFile, params: ParamsField, settings: SettingsDep, pool: PoolDep, tasks: TasksDep,
+                   columns: ColumnsField = None, steady_state: SteadyField = False,
+                   max_effects: Annotated[int, Form(ge=1, le=10, description="at most this many effects")] = 3,
+                   corrections: Annotated[bool, Form(description="also try corrections of the nominal constants")]
+                   = True) -> Any:
+    return await _run("diagnose", log, params, columns, steady_state, settings, pool, tasks,
+                      options={"max_effects": max_effects, "include_params": corrections})
+
+
+@router.post("/fit", response_model=FitPublic, responses=_ERRORS,
+             summary="Add named effects, refit, answer before/after errors and the calibrated parameters")
+async def fit(log: LogFile, params: ParamsField,
+              effects: Annotated[str, Form(min_length=1, max_length=2_000,
+                                           description="comma-separated effect names (see GET /v1/info) or "
+                                                       "param:<key> corrections")],
+              settings: SettingsDep, pool: PoolDep, tasks: TasksDep, columns: ColumnsField = None,
+              steady_state: SteadyField = False,
+              refine: Annotated[bool, Form(description="free-run refinement after the equation-error fit")] = True,
+              ) -> Any:
+    names = parse_effects(effects)
+    return await _run("fit", log, params, columns, steady_state, settings, pool, tasks, effects=names,
+                      options={"refine": refine})

@@ -1,0 +1,176 @@
+"""Model-check inputs as they arrive over HTTP, checked in the server before a worker is used, and the
+worker task that reads the uploaded log and runs :mod:`ocp.identify`.
+
+Every problem raises a :class:`~ocp.errors.ThrustshapeError` whose ``field`` is the form field
+(``log``, ``params``, ``effects``, ``columns``) or, for a log that lacks or spoils a column, that
+column's name -- never a server path, never a 500 for anything a user can send.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import re
+import tempfile
+from pathlib import Path
+from typing import Any, Literal
+
+from ocp.errors import LogError, ParameterError, SolverError, ThrustshapeError
+
+Payload = dict[str, Any]
+Op = Literal["check", "diagnose", "fit"]
+
+PARQUET_MAGIC = b"PAR1"
+PARAMS_HELP = "a preset name or the JSON text of a parameter mapping (J, B, ..., optional 'effects')"
+
+
+def parse_params(text: str) -> str | dict[str, Any]:
+    """A preset name, or the JSON mapping in ``text``; validated by building the plant. Never a file."""
+    from ocp.effects import load_plant
+    from ocp.params import PRESETS
+
+    source: str | dict[str, Any]
+    if text.strip() in PRESETS:
+        source = text.strip()
+    else:
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise ParameterError("params", f"not a preset {list(PRESETS)} and not valid JSON ({exc}); give "
+                                           f"{PARAMS_HELP}; files are not read here") from None
+        if not isinstance(data, dict):
+            raise ParameterError("params", f"must be {PARAMS_HELP}")
+        source = data
+    try:
+        load_plant(source)
+    except ThrustshapeError as exc:
+        raise _in("params", exc) from None
+    return source
+
+
+def parse_columns(text: str | None) -> dict[str, Any] | None:
+    """The column map ``{quantity: "column" | {"column", "unit"}}`` as :mod:`ocp.logs` accepts it."""
+    from pydantic import ValidationError
+
+    from ocp.logs import QUANTITIES, UNITS, ColumnSpec
+
+    if text is None or not text.strip():
+        return None
+    try:
+        data = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise LogError("columns", f"not valid JSON: {exc}") from None
+    if not isinstance(data, dict):
+        raise LogError("columns", 'must be a JSON object {quantity: {"column": ..., "unit": ...}}')
+    for q, spec in data.items():
+        if q not in UNITS:
+            raise LogError("columns", f"unknown quantity {q!r}; use {list(QUANTITIES)}")
+        try:
+            cs = ColumnSpec(column=spec) if isinstance(spec, str) else ColumnSpec.model_validate(spec)
+        except ValidationError as exc:
+            raise LogError("columns", f"{q}: {exc.errors()[0]['msg']}") from None
+        if cs.unit is not None and cs.unit not in UNITS[q]:
+            raise LogError("columns", f"{q}: unknown unit {cs.unit!r}; use one of {list(UNITS[q])}")
+    return data
+
+
+def parse_effects(text: str) -> list[str]:
+    """Comma-separated effect names (catalogue names or ``param:<key>`` corrections), at least one."""
+    from ocp.identify.candidates import candidate
+
+    names = list(dict.fromkeys(n.strip() for n in text.split(",") if n.strip()))
+    if not names:
+        raise ParameterError("effects", "give at least one effect name (comma-separated)")
+    for n in names:
+        try:
+            candidate(n)
+        except ThrustshapeError as exc:
+            raise ParameterError("effects", f"{n!r}: {exc.reason}") from None
+    return names
+
+
+def _in(field: str, exc: ThrustshapeError) -> ThrustshapeError:
+    """``exc`` re-raised under the form field ``field`` (its own field kept in the reason)."""
+    reason = exc.reason if exc.field == field else f"{exc.field}: {exc.reason}"
+    return type(exc)(field, reason)
+
+
+def log_suffix(filename: str | None, head: bytes) -> str:
+    """``.parquet`` or ``.csv``: by the upload's file name, else by its first bytes."""
+    suffix = Path(filename or "").suffix.lower()
+    if suffix in (".parquet", ".pq"):
+        return ".parquet"
+    if suffix in (".csv", ".txt"):
+        return ".csv"
+    return ".parquet" if head.startswith(PARQUET_MAGIC) else ".csv"
+
+
+def _read_log(payload: Payload) -> Any:
+    """The uploaded log (bytes in ``payload["log"]``) as an :class:`ocp.logs.Log`; errors name the column or ``log``."""
+    from ocp.logs import LogKind, read_log
+
+    data: bytes = payload["log"]
+    name = re.sub(r"[^A-Za-z0-9._ -]+", "_", str(payload.get("filename") or "log"))[:120] or "log"
+    kind = LogKind.STEADY_STATE if payload.get("steady_state") else LogKind.TIME_SERIES
+    if not data:
+        raise LogError("log", "the uploaded file is empty")
+    with tempfile.TemporaryDirectory(prefix="thrustshape-log-") as tmp:
+        path = Path(tmp) / f"upload{log_suffix(name, data[:4])}"
+        path.write_bytes(data)
+        try:
+            log = read_log(path, payload.get("columns"), kind)
+        except LogError as exc:
+            if exc.field in (path.name, str(path)):
+                raise LogError("log", exc.reason.replace(str(path), name)) from None
+            raise
+        except Exception as exc:  # any reader failure (csv, UnicodeDecodeError, pyarrow's errors) is the file's
+            fmt = "Parquet" if path.suffix == ".parquet" else "CSV (UTF-8, header row)"
+            detail = f"{type(exc).__name__}: {exc}".replace(str(path), name)[:500]
+            raise LogError("log", f"cannot be read as {fmt}: {detail}") from None
+    if log.n > int(payload["max_samples"]):
+        raise LogError("log", f"{log.n} rows; this server accepts at most {payload['max_samples']}")
+    return dataclasses.replace(log, source=name)
+
+
+def model_check(payload: Payload) -> Payload:
+    """Worker task: ``{"op", "log" (bytes), "filename", "params", "columns", "steady_state", "max_samples",
+    "effects", "options", "report"}`` -> the core result's ``to_dict()`` (``/fit`` adds ``calibrated_params``;
+    ``report`` -> ``{"html": page}``)."""
+    from ocp.effects import load_plant
+    from ocp.params import PRESETS
+
+    op: Op = payload["op"]
+    log = _read_log(payload)
+    source = payload["params"]
+    if not (isinstance(source, dict) or source in PRESETS):  # never a path, even from a stored payload
+        raise ParameterError("params", f"must be {PARAMS_HELP}")
+    try:
+        plant = load_plant(source)
+    except ThrustshapeError as exc:
+        raise _in("params", exc) from None
+    options = dict(payload.get("options") or {})
+    try:
+        return _run(op, plant, log, payload, options)
+    except ThrustshapeError:
+        raise
+    except (ArithmeticError, ValueError, RuntimeError) as exc:  # numerics on a degenerate log (e.g. constant)
+        raise SolverError("log", f"the model check failed on this log: {type(exc).__name__}: {exc}"[:500]) from None
+
+
+def _run(op: Op, plant: Any, log: Any, payload: Payload, options: dict[str, Any]) -> Payload:
+    from ocp.identify import CheckOptions, DiagnoseOptions, FitOptions, check, diagnose, fit
+    from service.tasks import json_safe
+
+    if op == "check":
+        res = check(plant, log, CheckOptions(**options))
+        if payload.get("report"):
+            from ocp.identify.report import html_report
+
+            return {"html": html_report(res, log)}
+        return json_safe(res.to_dict())
+    if op == "diagnose":
+        return json_safe(diagnose(plant, log, DiagnoseOptions(**options)).to_dict())
+    fitted = fit(plant, log, list(payload["effects"]), FitOptions(**options))
+    out = fitted.to_dict()
+    out.setdefault("calibrated_params", fitted.calibrated())
+    return json_safe(out)
