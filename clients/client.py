@@ -23,8 +23,11 @@ from __future__ import annotations
 
 import asyncio
 import email.utils
+import json
+import os
 import time
 from collections.abc import Callable, Iterable, Mapping
+from pathlib import Path
 from typing import Any
 
 import httpx
@@ -124,6 +127,45 @@ def _json(obj: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
     return obj.model_dump(mode="json") if isinstance(obj, BaseModel) else dict(obj)
 
 
+#: a log to upload: a local file path, or ``(file name, bytes)``
+LogSource = str | os.PathLike[str] | tuple[str, bytes]
+Form = tuple[dict[str, tuple[str, bytes]], dict[str, str]]
+
+
+def model_check_form(log: LogSource, params: str | Mapping[str, Any], *, columns: Mapping[str, Any] | None = None,
+                     steady_state: bool = False, **fields: Any) -> Form:
+    """``(files, data)`` of a ``/v1/model-check/*`` upload.
+
+    ``params`` is a preset name, the JSON text of a parameter mapping, or the mapping itself (never a
+    path: read a local parameter file yourself and pass its mapping). ``fields`` are the extra form
+    fields (``effects`` as a comma-separated string or a list of names; ``max_effects``, ``corrections``,
+    ``refine``); ``None`` values are left out.
+    """
+    if isinstance(log, tuple):
+        name, data = log
+    else:
+        path = Path(log)
+        name, data = path.name, path.read_bytes()
+    form = {"params": params if isinstance(params, str) else json.dumps(dict(params), allow_nan=False),
+            "steady_state": "true" if steady_state else "false"}
+    if columns is not None:
+        form["columns"] = json.dumps(dict(columns))
+    for key, value in fields.items():
+        if value is None:
+            continue
+        if isinstance(value, bool):
+            form[key] = "true" if value else "false"
+        elif isinstance(value, list | tuple):
+            form[key] = ",".join(str(v) for v in value)
+        else:
+            form[key] = str(value)
+    return {"log": (name, data)}, form
+
+
+def _qs(qs: Iterable[int] | None) -> dict[str, list[int]] | None:
+    return None if qs is None else {"qs": [int(q) for q in qs]}
+
+
 class _Spec:
     """What both clients share: request building, answer parsing, the retry policy."""
 
@@ -205,8 +247,38 @@ class Client:
     def optimize(self, mission: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
         return self._request("POST", "/v1/references/optimize", json=_json(mission)).json()
 
-    def compare(self, mission: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
-        return self._request("POST", "/v1/compare", json=_json(mission)).json()
+    def compare(self, mission: BaseModel | Mapping[str, Any], qs: Iterable[int] | None = None) -> dict[str, Any]:
+        """Analytic ``A sin^(2q+1)`` shapes (``qs``, default 0-3) vs the optimised reference."""
+        return self._request("POST", "/v1/compare", json=_json(mission), params=_qs(qs)).json()
+
+    def check(self, log: LogSource, params: str | Mapping[str, Any], *, columns: Mapping[str, Any] | None = None,
+              steady_state: bool = False) -> dict[str, Any]:
+        """Model check: where the model fails on ``log`` (see :func:`model_check_form` for the arguments)."""
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state)
+        return self._request("POST", "/v1/model-check/check", files=files, data=data).json()
+
+    def check_report(self, log: LogSource, params: str | Mapping[str, Any], *,
+                     columns: Mapping[str, Any] | None = None, steady_state: bool = False) -> str:
+        """The self-contained HTML report of :meth:`check`."""
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state)
+        return self._request("POST", "/v1/model-check/check", files=files, data=data,
+                             params={"report": "html"}).text
+
+    def diagnose(self, log: LogSource, params: str | Mapping[str, Any], *, columns: Mapping[str, Any] | None = None,
+                 steady_state: bool = False, max_effects: int | None = None,
+                 corrections: bool | None = None) -> dict[str, Any]:
+        """Which catalogue effects are missing (``verdict``), candidates ranked by held-out error."""
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state,
+                                       max_effects=max_effects, corrections=corrections)
+        return self._request("POST", "/v1/model-check/diagnose", files=files, data=data).json()
+
+    def fit(self, log: LogSource, params: str | Mapping[str, Any], effects: str | Iterable[str], *,
+            columns: Mapping[str, Any] | None = None, steady_state: bool = False,
+            refine: bool | None = None) -> dict[str, Any]:
+        """Add ``effects`` and refit; the answer's ``calibrated_params`` is the calibrated parameter mapping."""
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state,
+                                       effects=effects if isinstance(effects, str) else list(effects), refine=refine)
+        return self._request("POST", "/v1/model-check/fit", files=files, data=data).json()
 
     def submit_batch(self, missions: Iterable[BaseModel | Mapping[str, Any]],
                      idempotency_key: str | None = None) -> dict[str, Any]:
@@ -288,8 +360,33 @@ class AsyncClient:
     async def optimize(self, mission: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
         return await self._json("POST", "/v1/references/optimize", json=_json(mission))
 
-    async def compare(self, mission: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
-        return await self._json("POST", "/v1/compare", json=_json(mission))
+    async def compare(self, mission: BaseModel | Mapping[str, Any], qs: Iterable[int] | None = None) -> dict[str, Any]:
+        return await self._json("POST", "/v1/compare", json=_json(mission), params=_qs(qs))
+
+    async def check(self, log: LogSource, params: str | Mapping[str, Any], *,
+                    columns: Mapping[str, Any] | None = None, steady_state: bool = False) -> dict[str, Any]:
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state)
+        return await self._json("POST", "/v1/model-check/check", files=files, data=data)
+
+    async def check_report(self, log: LogSource, params: str | Mapping[str, Any], *,
+                           columns: Mapping[str, Any] | None = None, steady_state: bool = False) -> str:
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state)
+        return (await self._request("POST", "/v1/model-check/check", files=files, data=data,
+                                    params={"report": "html"})).text
+
+    async def diagnose(self, log: LogSource, params: str | Mapping[str, Any], *,
+                       columns: Mapping[str, Any] | None = None, steady_state: bool = False,
+                       max_effects: int | None = None, corrections: bool | None = None) -> dict[str, Any]:
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state,
+                                       max_effects=max_effects, corrections=corrections)
+        return await self._json("POST", "/v1/model-check/diagnose", files=files, data=data)
+
+    async def fit(self, log: LogSource, params: str | Mapping[str, Any], effects: str | Iterable[str], *,
+                  columns: Mapping[str, Any] | None = None, steady_state: bool = False,
+                  refine: bool | None = None) -> dict[str, Any]:
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state,
+                                       effects=effects if isinstance(effects, str) else list(effects), refine=refine)
+        return await self._json("POST", "/v1/model-check/fit", files=files, data=data)
 
     async def submit_batch(self, missions: Iterable[BaseModel | Mapping[str, Any]],
                            idempotency_key: str | None = None) -> dict[str, Any]:

@@ -12,6 +12,7 @@ import importlib
 import sys
 from collections.abc import Sequence
 
+from clients.client import ClientError
 from ocp.errors import ThrustshapeError
 
 #: command modules, in help order; each has ``register(subparsers) -> None``
@@ -39,6 +40,9 @@ def main(argv: Sequence[str] | None = None) -> int:
         print(f"thrustshape {args.command}: error: {exc}", file=sys.stderr)
         return 1
     except OSError as exc:
+        print(f"thrustshape {args.command}: error: {exc}", file=sys.stderr)
+        return 1
+    except ClientError as exc:  # --server: the server's problem+json names the field and the reason
         print(f"thrustshape {args.command}: error: {exc}", file=sys.stderr)
         return 1
 

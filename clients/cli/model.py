@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
+from pathlib import Path
 from typing import Any
 
 from clients.cli.io import print_json
+from clients.cli.remote import add_server_args, client, params_for_server
 from ocp.effects import load_plant
 from ocp.errors import LogError, ParameterError
 from ocp.identify import CheckOptions, DiagnoseOptions, FitOptions, check, diagnose, fit
@@ -21,6 +23,7 @@ def _log_args(p: argparse.ArgumentParser) -> None:
                    help='column map as JSON, e.g. \'{"omega": {"column": "speed", "unit": "rpm"}}\'')
     p.add_argument("--steady-state", action="store_true", help="the log is a steady-state sweep (one row per point)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
+    add_server_args(p)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -43,51 +46,80 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_fit)
 
 
+def _columns(args: argparse.Namespace) -> Any:
+    if args.columns is None:
+        return None
+    try:
+        columns = json.loads(args.columns)
+    except json.JSONDecodeError as exc:
+        raise LogError("--columns", f"not valid JSON: {exc}") from None
+    if not isinstance(columns, dict):
+        raise LogError("--columns", "must be a JSON object {quantity: {column, unit}}")
+    return columns
+
+
 def _load_log(args: argparse.Namespace) -> Log:
-    columns: Any = None
-    if args.columns is not None:
-        try:
-            columns = json.loads(args.columns)
-        except json.JSONDecodeError as exc:
-            raise LogError("--columns", f"not valid JSON: {exc}") from None
-        if not isinstance(columns, dict):
-            raise LogError("--columns", "must be a JSON object {quantity: {column, unit}}")
     kind = LogKind.STEADY_STATE if args.steady_state else LogKind.TIME_SERIES
-    return read_log(args.log, columns, kind)
+    return read_log(args.log, _columns(args), kind)
+
+
+def _upload(args: argparse.Namespace) -> dict[str, Any]:
+    """What ``--server`` sends: the log file's bytes, the parameters (a local file read here), the column map."""
+    if not Path(args.log).is_file():
+        raise LogError(str(args.log), "no such file")
+    return {"log": args.log, "params": params_for_server(args.params), "columns": _columns(args),
+            "steady_state": args.steady_state}
+
+
+def _g(v: Any, fmt: str) -> str:
+    """``v`` formatted, or ``nan`` where the JSON answer holds null (a non-finite value)."""
+    return format(v, fmt) if isinstance(v, int | float) else "nan"
 
 
 def cmd_check(args: argparse.Namespace) -> int:
-    log = _load_log(args)
-    res = check(load_plant(args.params), log, CheckOptions())
-    if args.report:
-        write_report(res, log, args.report)
+    if args.server:
+        with client(args) as c:
+            d = c.check(**_upload(args))
+            if args.report:
+                Path(args.report).write_text(c.check_report(**_upload(args)), encoding="utf-8")
+    else:
+        log = _load_log(args)
+        res = check(load_plant(args.params), log, CheckOptions())
+        if args.report:
+            write_report(res, log, args.report)
+        d = res.to_dict()
     if args.json:
-        print_json(res.to_dict())
+        print_json(d)
         return 0
     print("free run (model simulated under the measured voltage) RMS error:")
-    for ch, v in res.free_run_rms.items():
-        print(f"  {ch:8s} {v:.4g}   (sensor noise ~{res.noise[ch]:.3g})")
+    for ch, v in d["free_run"]["rms"].items():
+        print(f"  {ch:8s} {_g(v, '.4g')}   (sensor noise ~{_g(d['noise'][ch], '.3g')})")
     print("one-step equation residual RMS:")
-    for eq, v in res.one_step_rms.items():
-        print(f"  {eq:10s} {v:.4g}")
+    for eq, v in d["one_step"]["rms"].items():
+        print(f"  {eq:10s} {_g(v, '.4g')}")
     return 0
 
 
 def cmd_diagnose(args: argparse.Namespace) -> int:
-    log = _load_log(args)
     if args.max_effects < 1:
         raise ParameterError("--max-effects", "must be >= 1")
-    opt = DiagnoseOptions(max_effects=args.max_effects, include_params=not args.no_corrections)
-    res = diagnose(load_plant(args.params), log, opt)
+    if args.server:
+        with client(args) as c:
+            d = c.diagnose(**_upload(args), max_effects=args.max_effects, corrections=not args.no_corrections)
+    else:
+        log = _load_log(args)
+        opt = DiagnoseOptions(max_effects=args.max_effects, include_params=not args.no_corrections)
+        d = diagnose(load_plant(args.params), log, opt).to_dict()
     if args.json:
-        print_json(res.to_dict())
+        print_json(d)
         return 0
-    print("nothing missing" if not res.verdict else "missing: " + ", ".join(res.verdict))
-    for text in res.explanations:
+    print("nothing missing" if not d["verdict"] else "missing: " + ", ".join(d["verdict"]))
+    for text in d["explanations"]:
         print(f"  {text}")
     print("ranking (held-out error reduction):")
-    for e in res.ranking[:8]:
-        print(f"  {e.name:18s} {100 * e.improvement:6.1f} %  {'significant' if e.significant else ''}")
+    for e in d["ranking"][:8]:
+        imp = 100 * e["improvement"] if isinstance(e["improvement"], int | float) else None
+        print(f"  {e['effect']:18s} {_g(imp, '6.1f'):>6s} %  {'significant' if e['significant'] else ''}")
     return 0
 
 
@@ -95,17 +127,25 @@ def cmd_fit(args: argparse.Namespace) -> int:
     names = [n.strip() for n in args.effects.split(",") if n.strip()]
     if not names:
         raise ParameterError("--effects", "give at least one effect name")
-    log = _load_log(args)
-    res = fit(load_plant(args.params), log, names, FitOptions(refine=not args.no_refine))
-    if args.out:
-        res.write(args.out)
+    if args.server:
+        with client(args) as c:
+            d = c.fit(**_upload(args), effects=names, refine=not args.no_refine)
+        if args.out:  # the same file FitResult.write makes
+            Path(args.out).write_text(json.dumps(d["calibrated_params"], indent=2, allow_nan=False) + "\n",
+                                      encoding="utf-8")
+    else:
+        log = _load_log(args)
+        res = fit(load_plant(args.params), log, names, FitOptions(refine=not args.no_refine))
+        if args.out:
+            res.write(args.out)
+        d = res.to_dict()
     if args.json:
-        print_json(res.to_dict())
+        print_json(d)
         return 0
-    print(f"fitted ({res.stage} stage):")
-    for n, v, s in zip(res.names, res.values, res.stderr, strict=True):
-        print(f"  {n:28s} {v:.5g}  +- {s:.2g}")
+    print(f"fitted ({d['stage']} stage):")
+    for n, p in d["parameters"].items():
+        print(f"  {n:28s} {_g(p['value'], '.5g')}  +- {_g(p['stderr'], '.2g')}")
     print("free-run RMS error   before -> after:")
-    for ch in res.before:
-        print(f"  {ch:8s} {res.before[ch]:.4g} -> {res.after[ch]:.4g}")
+    for ch in d["rms_before"]:
+        print(f"  {ch:8s} {_g(d['rms_before'][ch], '.4g')} -> {_g(d['rms_after'][ch], '.4g')}")
     return 0

@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import argparse
 import math
+from typing import Any
+
+import numpy as np
 
 from clients.cli.io import print_json, write_csv
+from clients.cli.remote import add_server_args, client, params_for_server
 from ocp.errors import MissionError
-from ocp.mission import load_mission
+from ocp.mission import Mission, load_mission
 
 CSV_COLUMNS = ("t", "thrust", "thrust_desired", "omega", "theta", "current", "voltage")
 
@@ -17,6 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("mission", help="mission file (JSON or YAML)")
     p.add_argument("--json", action="store_true", help="print the full result as JSON")
     p.add_argument("--out", default=None, help="write the reference as CSV to this file")
+    add_server_args(p)
     p.set_defaults(func=cmd_optimize)
 
     p = sub.add_parser("compare", help="optimised vs A sin^(2q+1) shapes of the same mission")
@@ -24,32 +29,55 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--qs", default="0,1,2,3", help="q values of the analytic shapes, comma-separated")
     p.add_argument("--plot", default=None, help="write a PNG or SVG plot to this file")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
+    add_server_args(p)
     p.set_defaults(func=cmd_compare)
 
 
-def cmd_optimize(args: argparse.Namespace) -> int:
-    from ocp.optimize import optimize
+def _for_server(mission: Mission) -> dict[str, Any]:
+    """The mission as JSON, a local parameter file replaced by its mapping (the server reads no files)."""
+    body = mission.model_dump(mode="json")
+    body["params"] = params_for_server(mission.params)
+    return body
 
-    result = optimize(load_mission(args.mission))
-    if args.out:
-        write_csv({c: result.arrays[c] for c in CSV_COLUMNS}, args.out)
+
+def _g(v: Any, fmt: str, scale: float = 1.0) -> str:
+    """``v * scale`` formatted, or ``nan`` where a JSON answer holds null (a non-finite value)."""
+    return format(v * scale, fmt) if isinstance(v, int | float) else "nan"
+
+
+def cmd_optimize(args: argparse.Namespace) -> int:
+    mission = load_mission(args.mission)
+    if args.server:
+        with client(args) as c:
+            d = c.optimize(_for_server(mission))
+        if args.out:  # null in the JSON answer = a non-finite sample
+            write_csv({k: np.array([math.nan if x is None else x for x in d[k]], float) for k in CSV_COLUMNS}, args.out)
+    else:
+        from ocp.optimize import optimize
+
+        result = optimize(mission)
+        if args.out:
+            write_csv({c: result.arrays[c] for c in CSV_COLUMNS}, args.out)
+        d = result.to_dict()
     if args.json:
-        print_json(result.to_dict())
+        print_json(d)
         return 0
-    v = result.verification
-    print(f"mission {result.name}: {result.source} ({result.status}){' - ' + result.reason if result.reason else ''}")
-    print(f"  solve {result.solve_time_s * 1e3:.1f} ms, total {result.total_time_s * 1e3:.1f} ms, "
-          f"stretch {', '.join(f'{s:.3f}' for s in result.stretch) or '-'}")
-    print(f"  peaks |i| {v['max_abs_current']:.4g} A, |V| {v['max_abs_voltage']:.4g} V; reproduction rms "
-          f"{v['thrust_rms_error']:.3g} N; tracking rms {v['tracking_rms_error']:.3g} N")
-    for c in result.crossings:
-        print(f"  reversal at {c['t']:.4f} s, local exponent {c['exponent']:.2f}")
+    v = d["verification"]
+    print(f"mission {d['name']}: {d['source']} ({d['status']}){' - ' + d['reason'] if d['reason'] else ''}")
+    print(f"  solve {_g(d['solve_time_s'], '.1f', 1e3)} ms, total {_g(d['total_time_s'], '.1f', 1e3)} ms, "
+          f"stretch {', '.join(_g(s, '.3f') for s in d['stretch']) or '-'}")
+    print(f"  peaks |i| {_g(v['max_abs_current'], '.4g')} A, |V| {_g(v['max_abs_voltage'], '.4g')} V; reproduction "
+          f"rms {_g(v['thrust_rms_error'], '.3g')} N; tracking rms {_g(v['tracking_rms_error'], '.3g')} N")
+    for c in d["crossings"]:
+        print(f"  reversal at {_g(c['t'], '.4f')} s, local exponent {_g(c['exponent'], '.2f')}")
     if not args.out:
         print("  (use --out FILE.csv for the arrays, --json for everything)")
     return 0
 
 
 def _fmt(v: object) -> str:
+    if v is None:  # a JSON answer's non-finite value
+        return "inf"
     if isinstance(v, float):
         return "inf" if math.isinf(v) else f"{v:.4g}"
     if isinstance(v, list):
@@ -58,19 +86,27 @@ def _fmt(v: object) -> str:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
-    from ocp.compare import compare, plot
-
     try:
         qs = tuple(int(q) for q in args.qs.split(","))
     except ValueError:
         raise MissionError("--qs", "must be comma-separated integers") from None
-    result = compare(load_mission(args.mission), qs)
-    if args.plot:
-        plot(result, args.plot)
+    mission = load_mission(args.mission)
+    if args.server:
+        if args.plot:
+            raise MissionError("--plot", "runs here only: the server answers the table, not the curves")
+        with client(args) as c:
+            d = c.compare(_for_server(mission), qs=qs)
+        rows = d["table"]
+    else:
+        from ocp.compare import compare, plot
+
+        result = compare(mission, qs)
+        if args.plot:
+            plot(result, args.plot)
+        d, rows = result.to_dict(), result.table()
     if args.json:
-        print_json(result.to_dict())
+        print_json(d)
         return 0
-    rows = result.table()
     cols = [k for k in rows[0] if k != "label"]
     print(f"{'shape':<22}" + "".join(f"{c[:14]:>16}" for c in cols))
     for r in rows:
