@@ -39,7 +39,13 @@ def preset_or_mapping(v: Any) -> Any:
 
 
 class MissionRequest(Mission):
-    """A :class:`ocp.mission.Mission`; ``params`` is a preset name or a parameter mapping."""
+    """A :class:`ocp.mission.Mission`; ``params`` is a preset name or a parameter mapping.
+
+    The one place the service refuses parameter file paths in missions. (The core's
+    ``mission_from_mapping(data, allow_files=False)`` applies the same rule through a validation
+    context, which FastAPI's body validation cannot pass; this subclass keeps the typed, documented
+    body and reports every error at once.)
+    """
 
     model_config = ConfigDict(title="Mission")
 
