@@ -27,7 +27,7 @@ from ocp.errors import MissionError
 from ocp.mission import Mission
 from ocp.optimize import make_plant, optimize
 from ocp.plant import DCMotorPlant
-from ocp.result import OptimizeResult, _clean
+from ocp.result import OptimizeResult, json_ready
 from ocp.theory import min_sin_q
 
 
@@ -54,7 +54,7 @@ class CompareResult:
         return [{"label": c.label, **c.figures} for c in self.candidates]
 
     def to_dict(self) -> dict[str, Any]:
-        return {"mission": self.mission, "table": _clean(self.table()),
+        return {"mission": self.mission, "table": json_ready(self.table()),
                 "optimized_source": self.optimized.source, "optimized_reason": self.optimized.reason}
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import itertools
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -108,19 +108,18 @@ class Problem:
     t_desired: np.ndarray
     f_desired: np.ndarray
     phases: Phases
-    scales: dict[str, Any] = field(default_factory=dict)
 
 
 def _plant_key(plant: Plant) -> str:
     return repr(plant)  # frozen dataclasses: constants and effects with their values
 
 
-def problem_for(mission: Mission, intervals: int | None = None) -> Problem:
+def problem_for(mission: Mission) -> Problem:
     """Phases, plant and structure of a mission (no solve)."""
     t, f = mission.desired()
     phases = split_phases(t, f)
     n_phases = phases.signs.size
-    total = mission.collocation.intervals if intervals is None else intervals
+    total = mission.collocation.intervals
     chain = chain_order(mission)
     # a flat reversal (chain >= 1, omega ~ s^3) needs room on both sides of each boundary
     per_phase = max(MIN_INTERVALS_PER_PHASE[min(chain, 1)], total // n_phases)
@@ -128,8 +127,7 @@ def problem_for(mission: Mission, intervals: int | None = None) -> Problem:
         raise MissionError("collocation.intervals", f"{n_phases} phases need more than {2 * MAX_INTERVALS} intervals")
     plant = make_plant(mission)
     st = col.Structure(plant_key=_plant_key(plant), n_phases=n_phases, intervals=per_phase, chain=chain)
-    return Problem(mission=mission, plant=plant, structure=st, t_desired=t, f_desired=f,
-                   phases=phases)
+    return Problem(mission=mission, plant=plant, structure=st, t_desired=t, f_desired=f, phases=phases)
 
 
 def ipopt_options(time_limit: float) -> dict[str, object]:
@@ -199,18 +197,26 @@ def _min_time_summary(mission: Mission, result: OptimizeResult) -> dict[str, flo
 # data: parameters, bounds, initial guess
 
 
-def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray]:
-    """Parameter vector, bounds and initial guess for the cached program of ``problem``.
+@dataclass(frozen=True)
+class Scales:
+    """Per-call scaling: every decision variable is ``value / scale`` (O(1)); SI scales.
 
-    ``backoff`` (<= 1) shrinks the current and voltage bounds relative to the limits.
+    Attributes:
+        x: per state (nx,): speed [rad/s], current [A], effect states, input chain [V, V/s, ...]
+        u: control scale (input, its slew or its second derivative)
+        u_lim: input limit [V] (or normalised torque [rad/s^2])
+        f: thrust [N]
     """
-    m, st, plant = problem.mission, problem.structure, problem.plant
-    params = m.motor()
-    P, N, chain = st.n_phases, st.intervals, st.chain
-    npx = len(plant.state_names)
-    nx = npx + chain
-    lim = m.limits
-    dur = problem.phases.durations
+
+    x: np.ndarray
+    u: float
+    u_lim: float
+    f: float
+
+
+def _scales(problem: Problem, x_full_speed: np.ndarray) -> Scales:
+    m, plant, st = problem.mission, problem.plant, problem.structure
+    params, lim, dur = m.motor(), m.limits, problem.phases.durations
     f_scale = max(float(np.max(np.abs(problem.f_desired))), 1e-6)
     w_scale = math.sqrt(f_scale / params.c_f)
     if lim.speed is not None and lim.speed < w_scale * math.sqrt(0.999):
@@ -223,45 +229,31 @@ def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray
         u_lim = lim.torque / params.J
     else:
         u_lim = 4.0 * params.k * w_scale**2
-    t_int = float(np.sum(dur)) / (P * N)
+    t_int = float(np.sum(dur)) / (st.n_phases * st.intervals)
     rate = lim.voltage_rate if lim.voltage_rate is not None else u_lim / t_int
-    w0 = speed_for_thrust(plant, float(problem.f_desired[0]), params.c_f)
-    x_start, u0 = equilibrium(plant, w0)
     # effect states: their size at full speed; an angle grows with time, scaled by the angle travelled
-    angle_scale = max(1.0, w_scale * float(np.sum(dur)))
-    effect_scale = [angle_scale if name.endswith(".theta") else max(abs(float(z)), 1e-3)
-                    for name, z in zip(plant.state_names[2:], equilibrium(plant, w_scale)[0][2:], strict=True)]
-    xscale = [w_scale] + ([lim.current] if dc else []) + effect_scale + [u_lim, rate][:chain]
-    uscale = [u_lim, rate, rate / t_int][chain]
-    rho = _residual_scaling(plant, np.array(xscale), u_lim, N, float(np.mean(dur)), npx, chain)
+    angle = max(1.0, w_scale * float(np.sum(dur)))
+    effects = [angle if name.endswith(".theta") else max(abs(float(z)), 1e-3)
+               for name, z in zip(plant.state_names[2:], x_full_speed[2:], strict=True)] if dc else []
+    x = np.array([w_scale] + ([lim.current] if dc else []) + effects + [u_lim, rate][: st.chain])
+    return Scales(x=x, u=[u_lim, rate, rate / t_int][st.chain], u_lim=u_lim, f=f_scale)
 
-    # desired thrust at the collocation points, normalised time of each desired phase
-    taus = (np.arange(N)[:, None] + col.TAU[None, 1:]) / N  # (N, DEGREE)
-    fd = np.zeros((P, N * col.DEGREE))
-    for j in range(P):
-        tq = problem.phases.bounds[j] + taus.ravel() * dur[j]
-        fd[j] = np.interp(tq, problem.t_desired, problem.f_desired) / f_scale
-    weights = WEIGHTS[m.objective]
-    p = np.concatenate([fd.ravel(), problem.phases.signs, dur, xscale, [uscale], rho, [f_scale], weights])
 
-    lay = _layout_for(st, nx)
-    inf = np.inf
-    lbx, ubx, x0 = np.full(lay.n, -inf), np.full(lay.n, inf), np.zeros(lay.n)
+def _path_bounds(problem: Problem, lay: col.Layout, sc: Scales, backoff: float,
+                 lbx: np.ndarray, ubx: np.ndarray) -> None:
+    """Retiming, speed sign and limit, current, input (chain) bounds, in place (scaled)."""
+    m, chain = problem.mission, problem.structure.chain
+    npx = len(problem.plant.state_names)
+    lim = m.limits
     if m.objective == "track":
         lbx[lay.stretch], ubx[lay.stretch] = m.retiming.min_stretch, m.retiming.max_stretch
     else:
         lbx[lay.stretch], ubx[lay.stretch] = 1e-3, max(100.0, m.retiming.max_stretch)
-    x0[lay.stretch] = np.clip(1.0, lbx[lay.stretch], ubx[lay.stretch])
-
-    # state bounds at the collocation points (scaled)
-    w_max = (lim.speed if lim.speed is not None else inf) / w_scale
-    for j in range(P):
-        sl = lay.xc[j, :, :, 0]
-        if problem.phases.signs[j] > 0:
-            lbx[sl], ubx[sl] = 0.0, w_max
-        else:
-            lbx[sl], ubx[sl] = -w_max, 0.0
-        if dc:
+    w_max = (lim.speed if lim.speed is not None else np.inf) / sc.x[0]
+    for j, sign in enumerate(problem.phases.signs):
+        w = lay.xc[j, :, :, 0]
+        lbx[w], ubx[w] = (0.0, w_max) if sign > 0 else (-w_max, 0.0)
+        if isinstance(problem.plant, DCMotorPlant):
             lbx[lay.xc[j, :, :, 1]], ubx[lay.xc[j, :, :, 1]] = -backoff, backoff
         if chain >= 1:
             lbx[lay.xc[j, :, :, npx]], ubx[lay.xc[j, :, :, npx]] = -backoff, backoff
@@ -272,34 +264,62 @@ def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray
     elif chain == 1 and lim.voltage_rate is not None:
         lbx[lay.u], ubx[lay.u] = -1.0, 1.0
 
-    # initial state: steady at the desired initial thrust
-    start = [*x_start, u0, 0.0][: npx + chain]
-    lbx[lay.x0] = ubx[lay.x0] = x0[lay.x0] = np.array(start) / np.array(xscale)
-    if abs(u0) > u_lim or (dc and abs(x_start[1]) > lim.current):
-        raise MissionError("limits", f"the initial thrust {problem.f_desired[0]:.4g} N needs more than the limits")
 
-    # crossings: w = 0 at every phase boundary, plus the derivative chain for flatter crossings
-    # omega ~ s^3: omega = 0 and, through the chain, omega' (current) = omega'' (voltage) = 0
+def _fix(lbx: np.ndarray, ubx: np.ndarray, idx: Any, value: Any) -> None:
+    lbx[idx] = ubx[idx] = value
+
+
+def _boundary_conditions(problem: Problem, lay: col.Layout, sc: Scales, start: np.ndarray,
+                         lbx: np.ndarray, ubx: np.ndarray) -> None:
+    """Initial state, reversal conditions at phase boundaries, min-time end state, in place (scaled)."""
+    m, plant = problem.mission, problem.plant
+    npx, nx = len(plant.state_names), sc.x.size
+    _fix(lbx, ubx, lay.x0, start / sc.x)
+    # omega = 0 at every phase boundary; omega ~ s^3 also needs omega' (current) = omega'' (voltage) = 0
     vanish = [0, 1, npx] if crossing_order(m) == 6 else [0]
     if max(vanish) >= nx:
         raise MissionError("min_crossing_order", f"order {m.min_crossing_order} needs the input to be a state")
-    for j in range(P - 1):
-        for s in vanish:
-            lbx[lay.xc[j, -1, -1, s]] = ubx[lay.xc[j, -1, -1, s]] = 0.0
-    if m.objective == "min-time":
-        x_end, u1 = equilibrium(plant, speed_for_thrust(plant, float(problem.f_desired[-1]), params.c_f))
-        end = np.array([*x_end, u1, 0.0][: npx + chain]) / np.array(xscale)
-        rest = [k for k, name in enumerate(plant.state_names) if not name.endswith(".theta")]
-        rest += list(range(npx, npx + chain))
-        lbx[lay.xc[-1, -1, -1, rest]] = ubx[lay.xc[-1, -1, -1, rest]] = end[rest]
-
-    x0[:] = _initial_guess(problem, lay, x0, fd * f_scale, np.array(xscale), uscale, chain, lbx, ubx)
-    return {"p": p, "lbx": lbx, "ubx": ubx, "x0": x0, "lbg": np.zeros(0), "xscale": np.array(xscale),
-            "uscale": np.array([uscale]), "f_scale": np.array([f_scale])}
+    for j in range(problem.structure.n_phases - 1):
+        _fix(lbx, ubx, lay.xc[j, -1, -1, vanish], 0.0)
+    if m.objective == "min-time":  # end at rest at the last level (angle-like states stay free)
+        x_end, u1 = equilibrium(plant, speed_for_thrust(plant, float(problem.f_desired[-1]), m.motor().c_f))
+        end = np.array([*x_end, u1, 0.0][:nx]) / sc.x
+        rest = [k for k, name in enumerate(plant.state_names) if not name.endswith(".theta")] + list(range(npx, nx))
+        _fix(lbx, ubx, lay.xc[-1, -1, -1, rest], end[rest])
 
 
-def _layout_for(st: col.Structure, nx: int) -> col.Layout:
-    return col.layout(st.n_phases, st.intervals, nx)
+def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray]:
+    """Parameter vector, bounds and initial guess for the cached program of ``problem``.
+
+    ``backoff`` (<= 1) shrinks the current and voltage bounds relative to the limits.
+    """
+    m, st, plant = problem.mission, problem.structure, problem.plant
+    params, lim, dur = m.motor(), m.limits, problem.phases.durations
+    P, N, chain = st.n_phases, st.intervals, st.chain
+    npx = len(plant.state_names)
+    x_start, u0 = equilibrium(plant, speed_for_thrust(plant, float(problem.f_desired[0]), params.c_f))
+    w_full = math.sqrt(max(float(np.max(np.abs(problem.f_desired))), 1e-6) / params.c_f)
+    sc = _scales(problem, equilibrium(plant, w_full)[0])
+    if abs(u0) > sc.u_lim or (isinstance(plant, DCMotorPlant) and abs(x_start[1]) > lim.current):
+        raise MissionError("limits", f"the initial thrust {problem.f_desired[0]:.4g} N needs more than the limits")
+    rho = _residual_scaling(plant, sc.x, sc.u_lim, N, float(np.mean(dur)), npx, chain)
+    # desired thrust at the collocation points, at the same normalised time of each desired phase
+    taus = ((np.arange(N)[:, None] + col.TAU[None, 1:]) / N).ravel()  # (N*DEGREE,)
+    fd = np.array([np.interp(problem.phases.bounds[j] + taus * dur[j], problem.t_desired, problem.f_desired)
+                   for j in range(P)]) / sc.f  # (P, N*DEGREE)
+    p = np.concatenate([fd.ravel(), problem.phases.signs, dur, sc.x, [sc.u], rho, [sc.f], WEIGHTS[m.objective]])
+
+    lay = col.layout(P, N, npx + chain)
+    lbx, ubx = np.full(lay.n, -np.inf), np.full(lay.n, np.inf)
+    _path_bounds(problem, lay, sc, backoff, lbx, ubx)
+    start = np.array([*x_start, u0, 0.0][: npx + chain])
+    _boundary_conditions(problem, lay, sc, start, lbx, ubx)
+    x0 = np.zeros(lay.n)
+    x0[lay.stretch] = 1.0
+    x0[lay.x0] = start / sc.x
+    x0 = _initial_guess(problem, lay, x0, fd * sc.f, sc.x, sc.u, chain, lbx, ubx)
+    return {"p": p, "lbx": lbx, "ubx": ubx, "x0": x0, "xscale": sc.x, "uscale": np.array([sc.u]),
+            "f_scale": np.array([sc.f])}
 
 
 def _residual_scaling(plant: Plant, xscale: np.ndarray, u_nom: float, N: int, d_nom: float, npx: int,

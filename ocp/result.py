@@ -74,20 +74,21 @@ class OptimizeResult:
         out: dict[str, Any] = {
             "name": self.name, "source": self.source, "status": self.status, "reason": self.reason,
             "solve_time_s": self.solve_time_s, "total_time_s": self.total_time_s,
-            "iterations": self.solver.get("iterations"), "solver": _clean(self.solver),
-            "verification": _clean(self.verification), "crossings": _clean(self.crossings),
-            "stretch": _clean(self.stretch),
+            "iterations": self.solver.get("iterations"), "solver": json_ready(self.solver),
+            "verification": json_ready(self.verification), "crossings": json_ready(self.crossings),
+            "stretch": json_ready(self.stretch),
         }
         for k, v in self.arrays.items():
-            out[k] = _clean(np.asarray(v, float).tolist())
+            out[k] = json_ready(np.asarray(v, float).tolist())
         return out
 
 
-def _clean(obj: Any) -> Any:
+def json_ready(obj: Any) -> Any:
+    """``obj`` with numpy scalars made plain and non-finite floats made ``None`` (strict JSON)."""
     if isinstance(obj, dict):
-        return {k: _clean(v) for k, v in obj.items()}
+        return {k: json_ready(v) for k, v in obj.items()}
     if isinstance(obj, list | tuple):
-        return [_clean(v) for v in obj]
+        return [json_ready(v) for v in obj]
     if isinstance(obj, float | np.floating):
         return float(obj) if math.isfinite(obj) else None
     if isinstance(obj, np.integer):
