@@ -4,6 +4,7 @@ server's errors reach the user naming the field."""
 
 from __future__ import annotations
 
+import asyncio
 import json
 import math
 from collections.abc import Iterator
@@ -12,6 +13,7 @@ from typing import Any
 
 import pytest
 
+from clients import AsyncClient, InvalidInput
 from clients.cli import main
 from ocp.effects import load_plant
 from ocp.logs import write_log_csv
@@ -160,3 +162,22 @@ def test_server_errors_name_the_field(server: Server, rig_csv: Path, monkeypatch
     code, _, err = run(["check", str(rig_csv), "--params", "paper-rig", "--columns", '{"thrust": "force"}',
                         "--server", server.url], capsys)
     assert code == 1 and "422" in err and "force: missing column" in err
+
+
+def test_async_client_model_check(server: Server, rig_csv: Path, rig: MotorParams) -> None:
+    async def scenario() -> None:
+        async with AsyncClient(server.url, api_key=KEY) as c:
+            checked = await c.check(rig_csv, "paper-rig")
+            assert checked["free_run"]["rms"]["omega"] > 5 * checked["noise"]["omega"]
+            page = await c.check_report(("rig.csv", rig_csv.read_bytes()), "paper-rig")
+            assert page.startswith("<!DOCTYPE html>")
+            found = await c.diagnose(rig_csv, rig.model_dump(), max_effects=1, corrections=False)
+            assert found["verdict"] == ["brush_drop"]
+            fitted = await c.fit(rig_csv, rig.model_dump(), found["verdict"], refine=False)
+            assert fitted["stage"] == "equation-error"
+            assert fitted["calibrated_params"]["effects"]["brush_drop"]["v_b"] == pytest.approx(0.3, rel=0.05)
+            with pytest.raises(InvalidInput) as bad:
+                await c.fit(rig_csv, "paper-rig", "warp_drive")
+            assert bad.value.field == "effects"
+
+    asyncio.run(scenario())

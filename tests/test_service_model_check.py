@@ -137,6 +137,7 @@ def test_log_problems_name_the_column_or_the_log(http: httpx.Client, rig_csv: by
     renamed = header.replace(b"thrust", b"force") + b"\n" + rest
     p = problem(post(http, CHECK, ("rig.csv", renamed)), 422)
     assert p["field"] == "thrust" and "missing column" in str(p["reason"])
+    assert p["form_field"] == "log"  # where a page shows it
     # ... and the column map fixes it
     ok = post(http, CHECK, ("rig.csv", renamed), columns=json.dumps({"thrust": {"column": "force", "unit": "N"}}))
     assert ok.status_code == 200, ok.text[:500]
@@ -144,7 +145,7 @@ def test_log_problems_name_the_column_or_the_log(http: httpx.Client, rig_csv: by
                 422)
     assert p["field"] == "columns" and "furlong" in str(p["reason"])
     p = problem(post(http, CHECK, ("rig.csv", rig_csv), columns="[1, 2"), 422)
-    assert p["field"] == "columns"
+    assert p["field"] == p["form_field"] == "columns"
     p = problem(post(http, CHECK, None), 422)
     assert p["field"] == "log"
     p = problem(post(http, CHECK, ("rig.csv", b"\xff\xfe\x00 not a log")), 422)
@@ -166,7 +167,7 @@ def test_params_problems(http: httpx.Client, rig_csv: bytes) -> None:
 
 def test_fit_effects_problems(http: httpx.Client, rig_csv: bytes) -> None:
     p = problem(post(http, "/v1/model-check/fit", ("rig.csv", rig_csv), effects="coulomb_friction,warp_drive"), 422)
-    assert p["field"] == "effects" and "warp_drive" in str(p["reason"])
+    assert p["field"] == p["form_field"] == "effects" and "warp_drive" in str(p["reason"])
     p = problem(post(http, "/v1/model-check/fit", ("rig.csv", rig_csv), effects=" , "), 422)
     assert p["field"] == "effects"
     p = problem(post(http, "/v1/model-check/fit", ("rig.csv", rig_csv)), 422)

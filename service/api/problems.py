@@ -86,7 +86,9 @@ async def _core(request: Request, exc: Exception) -> JSONResponse:
     if not isinstance(exc, ThrustshapeError):
         raise exc
     title = "Solver failed" if isinstance(exc, SolverError) else "Invalid input"
-    return problem(422, title, str(exc), exc.field, exc.reason, error_type=type(exc).__name__)
+    form = getattr(exc, "form_field", None)  # model-check uploads: the form input the field belongs to
+    extra: dict[str, Any] = {"form_field": form} if isinstance(form, str) else {}
+    return problem(422, title, str(exc), exc.field, exc.reason, error_type=type(exc).__name__, **extra)
 
 
 async def _http(request: Request, exc: Exception) -> JSONResponse:

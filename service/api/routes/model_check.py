@@ -6,16 +6,21 @@ never a server path), optional ``columns`` (JSON column map, see :mod:`ocp.logs`
 ``steady_state`` (``true``/``false``); ``/fit`` also ``effects`` (comma-separated names). The
 answer is the core result's ``to_dict()``; ``/check?report=html`` answers the self-contained HTML
 report. The work runs in a worker process under the hard ``task_timeout_s``.
+
+Problems (problem+json) name the ``field`` -- a form field, or the log column a :class:`LogError`
+names -- and ``form_field``, the form input to show them next to (``log`` for a column).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import Annotated, Any, Literal
 
 from fastapi import APIRouter, File, Form, Query, UploadFile
 from fastapi.responses import HTMLResponse
 
-from ocp.errors import MissionError
+from ocp.errors import MissionError, ThrustshapeError
 from service.api.deps import PoolDep, SettingsDep, TasksDep
 from service.api.problems import TooLarge, error_responses
 from service.modelcheck import PARAMS_HELP, Op, parse_columns, parse_effects, parse_params
@@ -36,8 +41,28 @@ ColumnsField = Annotated[str | None, Form(max_length=20_000, description='column
 SteadyField = Annotated[bool, Form(description="the log is a steady-state sweep (one row per operating point)")]
 
 
+FORM_FIELDS = ("log", "params", "effects", "columns")
+
+
+@contextmanager
+def _form_field() -> Iterator[None]:
+    """Tag errors with ``form_field``, the form input they belong to: ``field`` itself, or ``log`` when
+    ``field`` names a column of the log (the problem+json then carries both)."""
+    try:
+        yield
+    except ThrustshapeError as exc:
+        exc.form_field = exc.field if exc.field in FORM_FIELDS else "log"  # type: ignore[attr-defined]
+        raise
+
+
 async def _run(op: Op, log: UploadFile, params: str, columns: str | None, steady_state: bool, settings: Settings,
                pool: WorkerPool, tasks: TaskSet, **extra: Any) -> dict[str, Any]:
+    with _form_field():
+        return await _checked(op, log, params, columns, steady_state, settings, pool, tasks, **extra)
+
+
+async def _checked(op: Op, log: UploadFile, params: str, columns: str | None, steady_state: bool,
+                   settings: Settings, pool: WorkerPool, tasks: TaskSet, **extra: Any) -> dict[str, Any]:
     if tasks.model_check is None:  # the routes are only registered when the backend exists
         raise MissionError("route", "model checks are not available on this server")
     source = parse_params(params)
@@ -87,6 +112,7 @@ async def fit(log: LogFile, params: ParamsField,
               steady_state: SteadyField = False,
               refine: Annotated[bool, Form(description="free-run refinement after the equation-error fit")] = True,
               ) -> Any:
-    names = parse_effects(effects)
+    with _form_field():
+        names = parse_effects(effects)
     return await _run("fit", log, params, columns, steady_state, settings, pool, tasks, effects=names,
                       options={"refine": refine})
