@@ -54,15 +54,18 @@ class CompareResult:
         return [{"label": c.label, **c.figures} for c in self.candidates]
 
     def to_dict(self) -> dict[str, Any]:
-        return {"mission": self.mission, "table": json_ready(self.table()),
+        """JSON-ready: the table and every candidate's arrays (unbounded samples are ``null``)."""
+        curves = [{"label": c.label, **{k: np.asarray(getattr(c, k), float).tolist()
+                                         for k in ("t", "thrust", "omega", "current", "voltage")}}
+                  for c in self.candidates]
+        return {"mission": self.mission, "table": json_ready(self.table()), "candidates": json_ready(curves),
                 "optimized_source": self.optimized.source, "optimized_reason": self.optimized.reason}
 
 
 def _figures(m: Mission, c: Candidate, t_des: np.ndarray, f_des: np.ndarray, exponents: list[float],
              unbounded: bool) -> dict[str, Any]:
     plant = make_plant(m)
-    power = c.voltage * c.current
-    energy = math.inf if unbounded else float(trapezoid(power, c.t))
+    energy = math.inf if unbounded else float(trapezoid(c.voltage * c.current, c.t))
     figures: dict[str, Any] = {
         "duration_s": float(c.t[-1] - c.t[0]),
         "peak_current_a": math.inf if unbounded else float(np.max(np.abs(c.current))),
@@ -144,9 +147,8 @@ def compare(m: Mission, qs: tuple[int, ...] = (0, 1, 2, 3)) -> CompareResult:
                                 tuple(float(e) for e in reversal_edges(t_des, windows)))
         ref = reference(prof, params, t)
         unbounded = ref.unbounded["current"] or ref.unbounded["voltage"]
-        cur = np.where(np.isfinite(ref.current), ref.current, np.sign(ref.current) * 1e9)
-        volt = np.where(np.isfinite(ref.voltage), ref.voltage, np.sign(ref.voltage) * 1e9)
-        c = Candidate(f"sin^{2 * q + 1}" + (" (mission q)" if q == q_min else ""), t, ref.thrust, ref.omega, cur, volt)
+        c = Candidate(f"sin^{2 * q + 1}" + (" (mission q)" if q == q_min else ""), t, ref.thrust, ref.omega,
+                      ref.current, ref.voltage)
         c.figures = _figures(m, c, t_des, f_des, [float(2 * q + 1)] * len(ref.crossing_times), unbounded)
         cands.append(c)
     return CompareResult(mission=m.name, candidates=cands, optimized=opt)

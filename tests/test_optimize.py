@@ -197,3 +197,16 @@ def test_untrusted_missions_cannot_name_files(tmp_path):
         mission_from_mapping({**EXAMPLE, "params": str(f)}, allow_files=False)
     assert ei.value.field == "params" and "files are not read" in ei.value.reason
     assert mission_from_mapping({**EXAMPLE, "params": "paper-rig"}, allow_files=False).motor().R == 5.0
+
+
+def test_compare_sends_every_shape_and_keeps_unbounded_samples_out_of_json():
+    from ocp.compare import compare
+
+    d = compare(mission_from_mapping(EXAMPLE)).to_dict()
+    json.dumps(d, allow_nan=False)  # strict JSON
+    labels = [c["label"] for c in d["candidates"]]
+    assert labels[0] == "optimized" and len(labels) == 5
+    sin1 = d["candidates"][1]
+    assert None in sin1["current"] and None in sin1["voltage"]  # the linear crossing's ideal command
+    sin5 = d["candidates"][3]
+    assert None not in sin5["voltage"] and len(sin5["t"]) == len(sin5["thrust"])
