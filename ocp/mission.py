@@ -218,7 +218,11 @@ def sample_segments(segments: list[Segment], rate: float = SEGMENT_RATE) -> tupl
 
 
 def _location(err: Any) -> str:
-    return ".".join(str(p) for p in err["loc"]) or "mission"
+    """Dotted path of the offending field as the user wrote it (without pydantic's union tags)."""
+    loc = [str(p) for p in err["loc"]]
+    if len(loc) >= 3 and loc[0] == "segments" and loc[2] in ("hold", "ramp", "reversal", "sine"):
+        del loc[2]
+    return ".".join(loc) or "mission"
 
 
 def mission_from_mapping(data: Any, allow_files: bool = True) -> Mission:

@@ -116,7 +116,7 @@ def test_solver_time_limit_gives_fallback():
         ({"collocation": {"intervals": 10**6}}, "collocation.intervals"),
         ({"surprise": 1}, "surprise"),
         ({"params": {"J": 1.0}}, "params.B"),
-        ({"segments": [{"kind": "hold", "duration": -1.0, "thrust": 0.1}]}, "segments.0.hold.duration"),
+        ({"segments": [{"kind": "hold", "duration": -1.0, "thrust": 0.1}]}, "segments.0.duration"),
     ],
 )
 def test_bad_missions_name_the_field(patch, field):

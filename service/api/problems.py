@@ -55,8 +55,10 @@ def _field(err: dict[str, Any]) -> tuple[str, str]:
     loc = [str(p) for p in err.get("loc", ())]
     if loc and loc[0] in ("body", "query", "path", "header"):
         loc = loc[1:]
-    # tagged unions put the tag in the location: drop it (body.sin.amplitude -> amplitude)
-    loc = [p for p in loc if p not in ("sin", "design", "function-after[_no_paths(), str]")]
+    # tagged unions put the tag in the location: drop it (body.sin.amplitude -> amplitude,
+    # segments.1.reversal.duration -> segments.1.duration)
+    loc = [p for p in loc if p not in ("sin", "design", "hold", "ramp", "reversal", "sine",
+                                       "function-after[_no_paths(), str]")]
     reason = {"extra_forbidden": "unknown field", "missing": "missing field"}.get(err.get("type", ""),
                                                                                    str(err.get("msg", "invalid")))
     reason = reason.removeprefix("Value error, ")

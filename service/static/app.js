@@ -68,13 +68,7 @@ function fieldElement(scope, field) {
   return null;
 }
 
-function normalField(field) {
-  /* pydantic puts the tag of a tagged union in the location: segments.1.reversal.duration -> segments.1.duration */
-  return field ? String(field).replace(/^((?:missions\.\d+\.)?segments\.\d+)\.(hold|ramp|reversal|sine)(?=\.|$)/, "$1") : field;
-}
-
 function showFieldError(scope, field, reason) {
-  field = normalField(field);
   // a field with no input of its own (a log column such as "voltage") goes next to the scope's fallback input
   const target = fieldElement(scope, field) || (field ? $("[data-field-fallback]", scope) : null);
   if (!target) {
