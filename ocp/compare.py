@@ -154,27 +154,27 @@ def compare(m: Mission, qs: tuple[int, ...] = (0, 1, 2, 3)) -> CompareResult:
     return CompareResult(mission=m.name, candidates=cands, optimized=opt)
 
 
-def plot(result: CompareResult, path: str | Path) -> None:
-    """Thrust, speed, current and voltage of every candidate (PNG or SVG by suffix)."""
-    import matplotlib
+def plot(data: dict[str, Any], path: str | Path) -> None:
+    """Thrust, speed, current and voltage of every candidate of a :meth:`CompareResult.to_dict`
+    answer (local or from the service), PNG or SVG by suffix; unbounded samples are left out."""
+    from matplotlib.figure import Figure  # object API, no global pyplot state
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, axes = plt.subplots(4, 1, figsize=(9, 10), sharex=True)
-    for c in result.candidates:
-        for ax, y in zip(axes, (c.thrust, c.omega, c.current, c.voltage), strict=True):
-            ax.plot(c.t, np.clip(y, -1e3, 1e3), label=c.label, lw=1.2)
+    fig = Figure(figsize=(9, 10))
+    axes = fig.subplots(4, 1, sharex=True)
+    channels = ("thrust", "omega", "current", "voltage")
+    for c in data["candidates"]:
+        for ax, ch in zip(axes, channels, strict=True):
+            y = np.array([np.nan if v is None else v for v in c[ch]], dtype=float)
+            ax.plot(c["t"], y, label=c["label"], lw=1.2)
     for ax, lab in zip(axes, ("thrust [N]", "speed [rad/s]", "current [A]", "voltage [V]"), strict=True):
         ax.set_ylabel(lab)
         ax.grid(alpha=0.3)
-    opt = result.optimized
-    lim_i, lim_v = np.max(np.abs(opt.arrays["current"])), np.max(np.abs(opt.arrays["voltage"]))
-    axes[2].set_ylim(-3 * lim_i, 3 * lim_i)
-    axes[3].set_ylim(-3 * lim_v, 3 * lim_v)
+    first = data["candidates"][0]  # the optimised answer sets the current/voltage zoom
+    for ax, ch in zip(axes[2:], ("current", "voltage"), strict=True):
+        peak = max(abs(v) for v in first[ch] if v is not None)
+        ax.set_ylim(-3 * peak, 3 * peak)
     axes[0].legend(fontsize=8, ncol=3)
     axes[-1].set_xlabel("t [s]")
-    fig.suptitle(f"{result.mission}: optimised vs A sin^(2q+1)")
+    fig.suptitle(f"{data['mission']}: optimised vs sin^(2q+1) reversals")
     fig.tight_layout()
     fig.savefig(path)
-    plt.close(fig)

@@ -141,14 +141,17 @@ def test_optimize_sends_the_local_parameter_file(server: Server, mission_file: P
     assert lines[0] == "t,thrust,thrust_desired,omega,theta,current,voltage" and len(lines) == len(a["t"]) + 1
 
 
-def test_compare_table_matches_and_plot_is_local_only(server: Server, mission_file: Path, tmp_path: Path,
-                                                      capsys: pytest.CaptureFixture[str]) -> None:
+def test_compare_table_and_plot_match(server: Server, mission_file: Path, tmp_path: Path,
+                                      capsys: pytest.CaptureFixture[str]) -> None:
     local, remote = both(["compare", str(mission_file), "--qs", "0,2"], server, capsys)
     assert remote == local
     assert [ln.split()[0] for ln in remote.splitlines()[1:]] == ["optimized", "sin^1", "sin^5"]
-    code, _, err = run(["compare", str(mission_file), "--plot", str(tmp_path / "p.png"), "--server", server.url,
-                        "--api-key", KEY], capsys)
-    assert code == 1 and "--plot" in err
+    # the server's answer carries the curves, so the plot is drawn from it as from a local run
+    code, _, err = run(["compare", str(mission_file), "--qs", "0,2", "--plot", str(tmp_path / "p.png"),
+                        "--server", server.url, "--api-key", KEY], capsys)
+    assert code == 0, err
+    assert (tmp_path / "p.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert (tmp_path / "p.png").stat().st_size > 10_000
 
 
 def test_server_errors_name_the_field(server: Server, rig_csv: Path, monkeypatch: pytest.MonkeyPatch,

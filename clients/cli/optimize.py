@@ -92,18 +92,17 @@ def cmd_compare(args: argparse.Namespace) -> int:
         raise MissionError("--qs", "must be comma-separated integers") from None
     mission = load_mission(args.mission)
     if args.server:
-        if args.plot:
-            raise MissionError("--plot", "runs here only: the server answers the table, not the curves")
         with client(args) as c:
             d = c.compare(_for_server(mission), qs=qs)
-        rows = d["table"]
     else:
-        from ocp.compare import compare, plot
+        from ocp.compare import compare
 
-        result = compare(mission, qs)
-        if args.plot:
-            plot(result, args.plot)
-        d, rows = result.to_dict(), result.table()
+        d = compare(mission, qs).to_dict()
+    rows = d["table"]
+    if args.plot:
+        from ocp.compare import plot
+
+        plot(d, args.plot)
     if args.json:
         print_json(d)
         return 0
