@@ -4,6 +4,7 @@ types, public even when the API needs a key, and nothing outside ``service/stati
 from __future__ import annotations
 
 import asyncio
+import re
 
 import httpx
 import pytest
@@ -52,8 +53,29 @@ def test_nothing_else_is_reachable(client: Client, name: str) -> None:
     assert client.get(f"/static/{name}").status_code == 404
 
 
-def test_every_script_and_style_the_page_loads_is_packaged() -> None:
+def _scripts() -> dict[str, str]:
+    """The page's scripts: those ``index.html`` loads and, from the ``app.js`` module, every module it imports
+    (``import ... from "./name.js"``, transitively), each by name with its text."""
     html = (STATIC / "index.html").read_text(encoding="utf-8")
-    for name in ("app.js", "plot.js", "app.css", "example-mission.json", "example-log.csv"):
+    todo = re.findall(r'<script[^>]*\bsrc="/static/([^"]+)"', html)
+    seen: dict[str, str] = {}
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        assert (STATIC / name).is_file(), f"{name} is loaded but not packaged"
+        seen[name] = (STATIC / name).read_text(encoding="utf-8")
+        todo += re.findall(r'\bfrom\s+"\./([^"/]+\.js)"', seen[name])
+    return seen
+
+
+def test_every_script_and_style_the_page_loads_is_packaged(client: Client) -> None:
+    html = (STATIC / "index.html").read_text(encoding="utf-8")
+    scripts = _scripts()
+    assert {"plot.js", "app.js", "common.js", "design.js", "compare.js", "model.js", "batch.js"} <= set(scripts)
+    assert set(scripts) == {p.name for p in STATIC.glob("*.js")}, "a script in static/ that the page never loads"
+    for name in scripts:  # served as JavaScript: module scripts are refused under any other type
+        assert client.get(f"/static/{name}").headers["content-type"].startswith("text/javascript"), name
+    for name in ("app.css", "example-mission.json", "example-log.csv"):
         assert (STATIC / name).is_file(), name
-        assert name in html or name in (STATIC / "app.js").read_text(encoding="utf-8"), name
+        assert name in html or any(name in text for text in scripts.values()), name

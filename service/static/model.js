@@ -1,0 +1,222 @@
+/* thrustshape page, Model check tab: a measured log and a parameter file through /v1/model-check (check:
+   where the model fails; diagnose: which effect is missing; fit: refit with the ticked effects), and the
+   calibrated parameters handed to the Design tab or downloaded. */
+
+import {
+  $, $$, FieldError, api, downloadJson, emptied, fetchStatic, fillPresets, fmt, guarded, on, parseJsonField,
+  plotBox, readParams, row, selectTab, syncCustom, td, withUnit,
+} from "./common.js";
+import { useParams } from "./design.js";
+
+const state = { modelLog: null, fit: null };
+const CHANNEL_UNITS = { omega: "rad/s", current: "A", thrust: "N" };
+
+/* ------------------------------------------------------------------ the request */
+
+function modelForm(extra) {
+  if (!state.modelLog) throw new FieldError("log", "choose a log file or use the bundled example");
+  const fd = new FormData();
+  fd.append("log", state.modelLog.blob, state.modelLog.name);
+  const p = readParams($("#m-preset"), $("#m-params"), "params");
+  if (typeof p === "string") fd.append("params", p);
+  else fd.append("params", JSON.stringify(p));
+  const cols = $("#m-columns").value.trim();
+  if (cols) { parseJsonField(cols, "columns"); fd.append("columns", cols); }
+  for (const [k, v] of Object.entries(extra || {})) fd.append(k, v);
+  return fd;
+}
+
+function setLog(blob, name, note) {
+  state.modelLog = { blob, name };
+  $("#m-log-info").textContent = `${name} (${Math.round(blob.size / 1024)} kB)${note ? " — " + note : ""}`;
+}
+
+const syncParamInputs = () => syncCustom($("#m-preset"), $("#m-params"), $("#m-params-file-label"));
+
+/** the parameter presets the server offers; a note when it does not report the model-check routes */
+export function setModelChoices(presets, features) {
+  fillPresets($("#m-preset"), presets, "parameter file / JSON…");
+  if (features && features.model_check === false) {
+    $("#m-route-note").textContent = "This server does not report the model-check routes; requests may fail.";
+  }
+}
+
+/* ------------------------------------------------------------------ results */
+
+const scale = (v, k) => (v === null || v === undefined ? null : v * k);
+
+function showReportFigures(reportHtml) {
+  // measured vs simulated: the figures of the server's HTML report
+  const figs = emptied("#m-figures");
+  $("#m-report-link").innerHTML = "";
+  if (!reportHtml) return;
+  const doc = new DOMParser().parseFromString(reportHtml, "text/html");
+  for (const alt of ["free_run", "one_step"]) {
+    const img = doc.querySelector(`img[alt="${alt}"]`);
+    if (!img) continue;
+    const fig = document.createElement("figure");
+    const cap = document.createElement("figcaption");
+    cap.textContent = alt === "free_run" ? "measured vs simulated (free run under the measured voltage)" : "one-step equation residuals";
+    const im = document.createElement("img");
+    im.src = img.getAttribute("src"); im.alt = alt;
+    fig.appendChild(cap); fig.appendChild(im);
+    figs.appendChild(fig);
+  }
+  const a = document.createElement("a");
+  a.href = URL.createObjectURL(new Blob([reportHtml], { type: "text/html" }));
+  a.download = "model-check.html"; a.textContent = "Download the full HTML report";
+  $("#m-report-link").appendChild(a);
+}
+
+function showCheck(res, reportHtml) {
+  $("#m-check-results").hidden = false;
+  const fr = res.free_run || {}, os_ = res.one_step || {}, noise = res.noise || {};
+  const units = fr.units || CHANNEL_UNITS;
+  const eb = emptied("#m-errors tbody");
+  for (const ch of Object.keys(fr.rms || {})) {
+    const rms = fr.rms[ch], n = noise[ch];
+    const ratio = rms != null && n ? rms / n : null;
+    const r = row([withUnit(ch, units), td(fmt(rms), "num"), td(fmt((fr.max || {})[ch]), "num"), td(fmt(n), "num"),
+                   td(ratio == null ? "—" : `${fmt(ratio, 3)}×`, ratio != null && ratio > 2 ? "num bad" : "num good")]);
+    r.dataset.channel = ch;
+    eb.appendChild(r);
+  }
+  const ob = emptied("#m-onestep tbody");
+  const ou = os_.units || {};
+  for (const eq of Object.keys(os_.rms || {})) {
+    ob.appendChild(row([withUnit(eq, ou), td(fmt(os_.rms[eq]), "num"), td(fmt((os_.mean || {})[eq]), "num")]));
+  }
+  // breakdowns: mean torque residual and free-run speed error per bin, for every grouping
+  const box = emptied("#m-breakdown");
+  for (const [group, bins] of Object.entries(res.breakdown || {})) {
+    const labels = Object.keys(bins);
+    Plot.bars(plotBox(box, group), { title: `by ${group}`, groups: labels, ylabel: "residual",
+      series: [{ label: "mean torque residual [mN m]", values: labels.map((l) => scale(bins[l]["one_step_mean.mechanical"], 1e3)) },
+               { label: "free-run speed RMS [rad/s]", values: labels.map((l) => bins[l]["free_run_rms.omega"]) }] });
+  }
+  showReportFigures(reportHtml);
+}
+
+function showDiagnose(res) {
+  $("#m-diag-results").hidden = false;
+  const verdict = res.verdict || [];
+  const vd = emptied("#m-verdict");
+  if (!verdict.length) vd.textContent = "Nothing missing: no candidate effect reduces the held-out error significantly.";
+  else {
+    vd.append("Missing: ");
+    const s = document.createElement("strong");
+    s.textContent = verdict.join(", ");
+    vd.appendChild(s);
+    const p = document.createElement("div");
+    p.className = "muted";
+    p.textContent = res.message || (res.explanations || []).join("; ") || res.explanation || "";
+    vd.appendChild(p);
+  }
+  vd.dataset.verdict = verdict.join(",");
+  const tb = emptied("#m-ranking tbody");
+  for (const e of res.ranking || []) {
+    const cb = document.createElement("input");
+    cb.type = "checkbox"; cb.value = e.effect; cb.checked = verdict.includes(e.effect);
+    cb.setAttribute("aria-label", `add ${e.effect}`);
+    const c0 = document.createElement("td"); c0.appendChild(cb);
+    const units = e.units || {};
+    const params = Object.entries(e.parameters || {}).map(([k, v]) => `${k} = ${fmt(v)}${units[k] ? " " + units[k] : ""}`).join(", ");
+    const imp = e.improvement == null ? "—" : `${fmt(100 * e.improvement, 3)} %`;
+    const r = row([c0, td(e.effect), td(imp, "num"), td(e.significant ? "yes" : "no", e.significant ? "good" : ""),
+                   td(params), td(e.explanation || "")]);
+    r.dataset.effect = e.effect;
+    tb.appendChild(r);
+  }
+}
+
+function showFit(res) {
+  state.fit = res;
+  $("#m-fit-results").hidden = false;
+  const before = res.rms_before || {}, after = res.rms_after || {};
+  const units = res.units || CHANNEL_UNITS;
+  const tb = emptied("#m-beforeafter tbody");
+  const chans = Object.keys(before);
+  for (const ch of chans) {
+    const b = before[ch], a = after[ch];
+    const ratio = b && a != null ? a / b : null;
+    const r = row([withUnit(ch, units), td(fmt(b), "num before"), td(fmt(a), "num after"),
+                   td(ratio == null ? "—" : `${fmt(ratio, 3)}`, ratio != null && ratio < 1 ? "num good" : "num bad")]);
+    r.dataset.channel = ch; r.dataset.before = b; r.dataset.after = a;
+    tb.appendChild(r);
+  }
+  const fb = emptied("#m-fitted tbody");
+  for (const [k, v] of Object.entries(res.parameters || {})) {
+    fb.appendChild(row([k, td(fmt(v && typeof v === "object" ? v.value : v), "num"),
+                        td(fmt(v && typeof v === "object" ? v.stderr : null), "num")]));
+  }
+  Plot.bars($("#m-plot-beforeafter"), { title: "free-run RMS error, relative to before", groups: chans, ylabel: "after / before",
+    series: [{ label: "before", values: chans.map(() => 1), color: "#8c959f" },
+             { label: "after", values: chans.map((c) => (before[c] ? after[c] / before[c] : null)), color: "#1a7f37" }] });
+}
+
+function calibratedParams() {
+  const r = state.fit || {};
+  return r.calibrated_params || r.calibrated || null;
+}
+
+/* ------------------------------------------------------------------ actions */
+
+async function checkReport() {
+  try {
+    return await api("POST", "/v1/model-check/check?report=html", modelForm(), { form: true, accept: "text" });
+  } catch (e) {
+    return null;  // the figures are a bonus: the numbers above are the check
+  }
+}
+
+async function runCheck() {
+  await guarded($("#tab-model"), $("#m-busy"), async () => {
+    const res = await api("POST", "/v1/model-check/check", modelForm(), { form: true });
+    showCheck(res, null);
+    showCheck(res, await checkReport());
+  });
+}
+
+async function runDiagnose() {
+  await guarded($("#tab-model"), $("#m-busy"), async () => {
+    const diag = await api("POST", "/v1/model-check/diagnose", modelForm(), { form: true });
+    showDiagnose(diag);
+    try {  // where it fails, too (requests one after the other: solves share the server's few workers)
+      const res = await api("POST", "/v1/model-check/check", modelForm(), { form: true });
+      showCheck(res, await checkReport());
+    } catch (e) { /* the diagnosis stands on its own */ }
+  });
+}
+
+async function runFit() {
+  await guarded($("#tab-model"), $("#m-fit-busy"), async () => {
+    const effects = $$("#m-ranking input[type=checkbox]:checked").map((c) => c.value);
+    if (!effects.length) throw new FieldError("effects", "tick at least one effect to add");
+    showFit(await api("POST", "/v1/model-check/fit", modelForm({ effects: effects.join(",") }), { form: true }));
+  });
+}
+
+/* ------------------------------------------------------------------ wiring */
+
+export function initModel() {
+  on("#m-log", "change", (e) => { const f = e.target.files[0]; if (f) setLog(f, f.name); });
+  on("#m-example", "click", () => guarded($("#tab-model"), null, async () => {
+    const resp = await fetchStatic("example-log.csv", "log", "the bundled example log is missing");
+    setLog(await resp.blob(), "example-log.csv", "bundled synthetic rig log, paper-rig plant with one hidden effect");
+    $("#m-preset").value = "paper-rig";
+    syncParamInputs();
+  }));
+  on("#m-preset", "change", syncParamInputs);
+  on("#m-params-file", "change", async (e) => { const f = e.target.files[0]; if (f) $("#m-params").value = await f.text(); });
+  on("#m-check", "click", runCheck);
+  on("#m-diagnose", "click", runDiagnose);
+  on("#m-fit", "click", runFit);
+  on("#m-dl-params", "click", () => downloadJson("calibrated-params.json", calibratedParams(), 2, "\n"));
+  on("#m-use-params", "click", () => {
+    const p = calibratedParams();
+    if (!p) return;
+    const { notes, ...clean } = p;  // provenance notes are not plant parameters
+    useParams(clean);
+    selectTab("design");
+  });
+}
