@@ -14,7 +14,7 @@ import httpx
 import pytest
 
 from service.tasks import available_tasks
-from tests.test_service_support import Server, mission, start_server
+from tests.test_service_support import Server, mission, problem, start_server
 
 pytestmark = pytest.mark.integration
 
@@ -30,20 +30,6 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     srv = start_server(tmp, env)
     yield srv
     srv.stop()
-
-
-@pytest.fixture()
-def http(server: Server) -> Iterator[httpx.Client]:
-    with httpx.Client(base_url=server.url, timeout=60.0) as c:
-        yield c
-
-
-def problem(r: httpx.Response, status: int) -> dict[str, object]:
-    assert r.status_code == status, r.text[:500]
-    assert r.headers["content-type"].startswith("application/problem+json")
-    body = r.json()
-    assert body["status"] == status
-    return body  # type: ignore[no-any-return]
 
 
 def test_healthz_and_info(http: httpx.Client) -> None:

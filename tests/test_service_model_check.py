@@ -18,7 +18,7 @@ from ocp.effects import CATALOGUE, load_plant
 from ocp.logs import Log, write_log_csv
 from ocp.params import MotorParams
 from tests.synthetic_rig import RigSpec, generate
-from tests.test_service_support import Server, start_server
+from tests.test_service_support import Server, problem, start_server
 
 pytestmark = pytest.mark.integration
 
@@ -38,12 +38,6 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     srv.stop()
 
 
-@pytest.fixture()
-def http(server: Server) -> Iterator[httpx.Client]:
-    with httpx.Client(base_url=server.url, timeout=60.0) as c:
-        yield c
-
-
 @pytest.fixture(scope="module")
 def rig_log(rig: MotorParams) -> Log:
     """3 s at 1 kHz (sine, sin^5, chirp; 1 s each) from a rig with a friction the model lacks."""
@@ -57,14 +51,6 @@ def rig_csv(rig_log: Log, tmp_path_factory: pytest.TempPathFactory) -> bytes:
     data = path.read_bytes()
     assert len(data) < UPLOAD_LIMIT
     return data
-
-
-def problem(r: httpx.Response, status: int) -> dict[str, object]:
-    assert r.status_code == status, r.text[:500]
-    assert r.headers["content-type"].startswith("application/problem+json")
-    body = r.json()
-    assert body["status"] == status
-    return body
 
 
 def post(http: httpx.Client, path: str, log: tuple[str, bytes] | None, **form: str) -> httpx.Response:

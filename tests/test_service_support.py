@@ -151,3 +151,12 @@ def mission(name: str, amplitude: float = 0.3, duration: float = 1.0, **extra: A
     return {"name": name, "segments": [{"kind": "hold", "duration": 0.2, "thrust": amplitude},
                                        {"kind": "reversal", "duration": duration, "to": -amplitude},
                                        {"kind": "hold", "duration": 0.2, "thrust": -amplitude}], **extra}
+
+
+def problem(r: httpx.Response, status: int) -> dict[str, Any]:
+    """The problem+json body of ``r``, asserting its status and media type."""
+    assert r.status_code == status, r.text[:500]
+    assert r.headers["content-type"].startswith("application/problem+json")
+    body: dict[str, Any] = r.json()
+    assert body["status"] == status
+    return body
