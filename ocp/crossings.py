@@ -55,23 +55,15 @@ def find_zeros(t: np.ndarray, f: np.ndarray, zero_tol: float = 0.0) -> list[tupl
     boundary conditions, not crossings, and are not reported.
     """
     small = np.abs(f) <= zero_tol
-    out: list[tuple[int, bool]] = []
-    k, n = 0, f.size
-    while k < n:
-        if small[k]:
-            j = k
-            while j + 1 < n and small[j + 1]:
-                j += 1
-            left = np.sign(f[k - 1]) if k > 0 else 0.0
-            right = np.sign(f[j + 1]) if j + 1 < n else 0.0
-            if k > 0 and j + 1 < n:  # a zero at a grid end is a boundary condition, not a crossing
-                out.append(((k + j) // 2, bool(left * right < 0)))
-            k = j + 1
-            continue
-        if k + 1 < n and not small[k + 1] and f[k] * f[k + 1] < 0:
-            out.append((k, True))
-        k += 1
-    return out
+    n = f.size
+    # a sign change between two consecutive samples that are not zero
+    out = [(int(k), True) for k in np.flatnonzero(~small[:-1] & ~small[1:] & (f[:-1] * f[1:] < 0))]
+    # runs of zero samples (a zero at a grid end is a boundary condition, not a crossing)
+    edges = np.diff(np.concatenate([[0], small.astype(np.int8), [0]]))
+    for a, b in zip(np.flatnonzero(edges == 1), np.flatnonzero(edges == -1) - 1, strict=True):
+        if a > 0 and b + 1 < n:
+            out.append((int(a + b) // 2, bool(np.sign(f[a - 1]) * np.sign(f[b + 1]) < 0)))
+    return sorted(out)
 
 
 def _window(t: np.ndarray, f: np.ndarray, k: int) -> float:

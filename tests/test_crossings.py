@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from ocp.analytic import LocalReversal, SinProfile, time_grid
-from ocp.crossings import ORDER_TOLERANCE, classify_profile, estimate_crossings
+from ocp.crossings import ORDER_TOLERANCE, classify_profile, estimate_crossings, find_zeros
 from ocp.theory import CONTINUOUS, UNBOUNDED
 
 
@@ -46,3 +46,31 @@ def test_classify_profile_theorem1():
     fast = classify_profile(t, SinProfile(0.5, 0.05, 2, 0.2).thrust(t)[0], c_f=1.4e-4, k=0.08, u_low=50.0,
                             u_high=50.0)
     assert fast.feasible_fraction < 1.0 and not fast.reproducible_bounded
+
+
+def _zeros_by_scan(f, tol):
+    """Sample-by-sample scan: the definition find_zeros vectorises (the oracle)."""
+    out, k, n = [], 0, f.size
+    while k < n:
+        if abs(f[k]) <= tol:
+            j = k
+            while j + 1 < n and abs(f[j + 1]) <= tol:
+                j += 1
+            if k > 0 and j + 1 < n:
+                out.append(((k + j) // 2, bool(np.sign(f[k - 1]) * np.sign(f[j + 1]) < 0)))
+            k = j + 1
+            continue
+        if k + 1 < n and abs(f[k + 1]) > tol and f[k] * f[k + 1] < 0:
+            out.append((k, True))
+        k += 1
+    return out
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_find_zeros_matches_a_sample_scan(seed):
+    rng = np.random.default_rng(seed)
+    f = rng.choice([-1.0, 0.0, 1.0], size=200, p=[0.4, 0.2, 0.4]) * rng.uniform(0.5, 1.0, 200)
+    tol = 0.0 if seed % 2 else 0.6  # exact zeros only, or small samples counted as zero too
+    found = find_zeros(np.arange(f.size, dtype=float), f, tol)
+    assert found == _zeros_by_scan(f, tol)
+    assert any(sign for _, sign in found) and any(not sign for _, sign in found)
