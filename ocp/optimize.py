@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from ocp import collocation as col
+from ocp.analytic import SinProfile, reference
 from ocp.crossings import find_zeros
 from ocp.effects import load_plant
 from ocp.equilibrium import equilibrium, speed_for_thrust
@@ -153,8 +154,10 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
         if not exc.field.startswith("limits"):
             raise
         return analytic_fallback(mission, f"limits cannot be met: {exc}")
+    setup = time.perf_counter() - started
     result = solve_problem(problem, data, warm)
-    build, time_sum, iter_sum = (result.solver.get(k, 0) for k in ("build_time_s", "solve_time_s", "iterations"))
+    build = result.solver.get("build_time_s", 0)
+    totals = {k: result.solver.get(k, 0) for k in ("solve_time_s", "verify_time_s", "iterations")}
     backoff, rounds = 1.0, 0
     for _ in range(MAX_REFINEMENTS):
         if result.source != "optimized" or result.path_ok:
@@ -165,11 +168,10 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
         data = problem_data(problem, backoff)
         result = solve_problem(problem, data, warm=True)
         rounds += 1
-        time_sum += result.solver.get("solve_time_s", 0)
-        iter_sum += result.solver.get("iterations", 0)
-    # the report covers every round: solve time and iterations add up, the build happened in the first
-    result.solver.update(build_time_s=build, solve_time_s=time_sum, iterations=iter_sum, backoff_rounds=rounds,
-                         limit_backoff=backoff)
+        for k in totals:
+            totals[k] += result.solver.get(k, 0)
+    # the report covers every round: times and iterations add up, the build happened in the first
+    result.solver.update(totals, build_time_s=build, setup_time_s=setup, backoff_rounds=rounds, limit_backoff=backoff)
     if result.source == "optimized" and not result.path_ok:
         result = analytic_fallback(mission, "the optimised response exceeds a limit between nodes after "
                                             f"{MAX_REFINEMENTS} back-off rounds", result.solver)
@@ -180,17 +182,23 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
 
 
 def _min_time_summary(mission: Mission, result: OptimizeResult) -> dict[str, float | None]:
-    """Minimum transition time beside the fastest analytic sin^(2q+1) reversal within the same limits
-    (half a period of :func:`ocp.fallback.design_sin` at the larger of the two levels)."""
+    """Minimum transition time beside the fastest analytic sin^(2q+1) reversal within the same limits."""
+    fastest = fastest_analytic(mission)
+    return {"min_time_s": float(result.arrays["t"][-1]),
+            "analytic_min_time_s": None if fastest is None else 0.5 * fastest.period}
+
+
+def fastest_analytic(mission: Mission) -> SinProfile | None:
+    """The fastest ``A sin^(2q+1)`` within the mission's limits and regularity (:func:`ocp.fallback.design_sin`)
+    at the larger of the first and last thrust levels, phase 0; half its period is the analytic reversal
+    time. None when no period meets the limits."""
     _, f = mission.desired()
     amp = max(abs(float(f[0])), abs(float(f[-1])))
     try:
-        design = design_sin(mission.motor(), mission.limits.current, mission.limits.voltage, mission.regularity,
-                            amplitude=amp, voltage_driven=mission.plant == "dc-motor")
-        analytic: float | None = 0.5 * design.profile.period
+        return design_sin(mission.motor(), mission.limits.current, mission.limits.voltage, mission.regularity,
+                          amplitude=amp, voltage_driven=mission.plant == "dc-motor").profile
     except MissionError:
-        analytic = None
-    return {"min_time_s": float(result.arrays["t"][-1]), "analytic_min_time_s": analytic}
+        return None
 
 
 # ---------------------------------------------------------------------------------------------
@@ -288,10 +296,12 @@ def _boundary_conditions(problem: Problem, lay: col.Layout, sc: Scales, start: n
         _fix(lbx, ubx, lay.xc[-1, -1, -1, rest], end[rest])
 
 
-def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray]:
+def problem_data(problem: Problem, backoff: float = 1.0, analytic_start: bool = True) -> dict[str, np.ndarray]:
     """Parameter vector, bounds and initial guess for the cached program of ``problem``.
 
-    ``backoff`` (<= 1) shrinks the current and voltage bounds relative to the limits.
+    ``backoff`` (<= 1) shrinks the current and voltage bounds relative to the limits. The initial guess is
+    the static inverse of the desired thrust at stretch 1, except for a min-time mission with reversals
+    and ``analytic_start``: then it is the fastest analytic reversal (:func:`_analytic_guess`).
     """
     m, st, plant = problem.mission, problem.structure, problem.plant
     params, lim, dur = m.motor(), m.limits, problem.phases.durations
@@ -318,6 +328,8 @@ def problem_data(problem: Problem, backoff: float = 1.0) -> dict[str, np.ndarray
     x0[lay.stretch] = 1.0
     x0[lay.x0] = start / sc.x
     x0 = _initial_guess(problem, lay, x0, fd * sc.f, sc.x, sc.u, chain, lbx, ubx)
+    if analytic_start and m.objective == "min-time" and P > 1:
+        x0 = _analytic_guess(problem, lay, x0, sc, lbx, ubx)
     return {"p": p, "lbx": lbx, "ubx": ubx, "x0": x0, "xscale": sc.x, "uscale": np.array([sc.u]),
             "f_scale": np.array([sc.f])}
 
@@ -365,6 +377,46 @@ def _initial_guess(problem: Problem, lay: col.Layout, x0: np.ndarray, fd: np.nda
     return np.clip(guess, lbx, ubx)
 
 
+def _analytic_guess(problem: Problem, lay: col.Layout, guess: np.ndarray, sc: Scales, lbx: np.ndarray,
+                    ubx: np.ndarray) -> np.ndarray:
+    """Min-time initial guess from the analytic fallback: the fastest ``A sin^(2q+1)`` within the limits
+    (:func:`fastest_analytic`), started at its peak of the first phase's sign, so phase j lasts a quarter
+    period at either end and half a period in between; states and input are its exact feedforward
+    (nominal plant) at the retimed collocation points. Unchanged when no sine meets the limits."""
+    m, st = problem.mission, problem.structure
+    fastest = fastest_analytic(m)
+    if fastest is None:
+        return guess
+    P, N, chain = st.n_phases, st.intervals, st.chain
+    npx = len(problem.plant.state_names)
+    quarter = 0.25 * fastest.period
+    h = np.full(P, 2.0 * quarter)
+    h[0] = h[-1] = quarter
+    edges = np.concatenate([[0.0], np.cumsum(h)])
+    taus = ((np.arange(N)[:, None] + col.TAU[None, 1:]) / N).ravel()  # (N*DEGREE,)
+    t = (edges[:-1, None] + taus[None, :] * h[:, None]).ravel()  # (P*N*DEGREE,) strictly increasing
+    prof = SinProfile(fastest.amplitude, fastest.period, fastest.q, phase=0.5 * math.pi * problem.phases.signs[0])
+    ref = reference(prof, m.motor(), t)
+    if isinstance(problem.plant, TorquePlant):
+        # eq:omega_dyn  u = w' + k w|w|
+        chain_0, current = ref.omega_dot + problem.plant.k * ref.omega * np.abs(ref.omega), None
+    else:
+        chain_0, current = ref.voltage, ref.current
+    inputs = [chain_0]  # input, its slew, its second derivative at the points
+    for _ in range(chain):
+        inputs.append(np.gradient(inputs[-1], t))
+    out = guess.copy()
+    out[lay.stretch] = h / problem.phases.durations
+    shape = (P, N, col.DEGREE)
+    out[lay.xc[:, :, :, 0]] = ref.omega.reshape(shape) / sc.x[0]
+    if current is not None:
+        out[lay.xc[:, :, :, 1]] = current.reshape(shape) / sc.x[1]
+    for c in range(chain):
+        out[lay.xc[:, :, :, npx + c]] = inputs[c].reshape(shape) / sc.x[npx + c]
+    out[lay.u[:, :, 0]] = inputs[chain].reshape(shape)[:, :, -1] / sc.u
+    return np.clip(out, lbx, ubx)
+
+
 def solve_problem(problem: Problem, data: dict[str, np.ndarray], warm: bool) -> OptimizeResult:
     m = problem.mission
     build_start = time.perf_counter()
@@ -390,4 +442,7 @@ def solve_problem(problem: Problem, data: dict[str, np.ndarray], warm: bool) -> 
     if not ok:
         reason = ("solver time limit reached" if "Wall" in status or "CPU" in status else f"IPOPT: {status}")
         return analytic_fallback(m, reason, solver_info)
-    return finish_result(problem, prog, x, data, solver_info)
+    t0 = time.perf_counter()
+    result = finish_result(problem, prog, x, data, solver_info)
+    result.solver["verify_time_s"] = time.perf_counter() - t0
+    return result

@@ -47,7 +47,9 @@ class OptimizeResult:
         stretch: per phase, achieved duration / desired duration
         verification: thrust_rms_error, thrust_max_error [N] (simulation vs returned), tracking_rms_error
             [N] (returned vs desired), max_abs_current [A], max_abs_voltage [V], margins, path_ok
-        solver: status, iterations, solve_time_s, build_time_s, objective, constraint_violation
+        solver: status, iterations, objective, constraint_violation, and times [s]: setup_time_s (mission
+            -> problem data), build_time_s (0 when the structure's solver is cached), solve_time_s (IPOPT),
+            verify_time_s (simulation and packaging); solve and verify add up over back-off rounds
     """
 
     name: str
