@@ -164,6 +164,8 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
             break
         v = result.verification
         excess = max(v["max_abs_current"] / mission.limits.current, v["max_abs_voltage"] / mission.limits.voltage)
+        if not math.isfinite(excess):  # a diverged simulation says nothing about how far to back off
+            break
         backoff *= 1.0 / (1.0 + 1.2 * (excess - 1.0))
         data = problem_data(problem, backoff)
         result = solve_problem(problem, data, warm=True)
@@ -173,8 +175,10 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
     # the report covers every round: times and iterations add up, the build happened in the first
     result.solver.update(totals, build_time_s=build, setup_time_s=setup, backoff_rounds=rounds, limit_backoff=backoff)
     if result.source == "optimized" and not result.path_ok:
-        result = analytic_fallback(mission, "the optimised response exceeds a limit between nodes after "
-                                            f"{MAX_REFINEMENTS} back-off rounds", result.solver)
+        diverged = not math.isfinite(result.verification["max_abs_current"] + result.verification["max_abs_voltage"])
+        reason = ("the simulated response to the optimised command is not finite" if diverged else
+                  f"the optimised response exceeds a limit between nodes after {rounds} back-off rounds")
+        result = analytic_fallback(mission, reason, result.solver)
     if mission.objective == "min-time":
         result.verification.update(_min_time_summary(mission, result))
     result.total_time_s = time.perf_counter() - started
