@@ -143,8 +143,9 @@ def ipopt_options(time_limit: float) -> dict[str, object]:
 def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
     """Optimised reference for ``mission`` (or the analytic fallback with the reason).
 
-    When the simulated response exceeds a limit between collocation nodes, the limit is backed off
-    by the excess (plus 20 %) and the same cached program is solved again, warm-started.
+    When the simulated response exceeds a limit between collocation nodes, the current and voltage
+    bounds of the intervals where it does (and of their neighbours) are backed off by the excess (plus
+    20 %) and the same cached program is solved again, warm-started.
     """
     started = time.perf_counter()
     problem = problem_for(mission)
@@ -158,22 +159,23 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
     result = solve_problem(problem, data, warm)
     build = result.solver.get("build_time_s", 0)
     totals = {k: result.solver.get(k, 0) for k in ("solve_time_s", "verify_time_s", "iterations")}
-    backoff, rounds = 1.0, 0
+    backoff, rounds = np.ones((problem.structure.n_phases, problem.structure.intervals)), 0
     for _ in range(MAX_REFINEMENTS):
         if result.source != "optimized" or result.path_ok:
             break
-        v = result.verification
-        excess = max(v["max_abs_current"] / mission.limits.current, v["max_abs_voltage"] / mission.limits.voltage)
-        if not math.isfinite(excess):  # a diverged simulation says nothing about how far to back off
+        excess = _interval_excess(problem, result)
+        if not np.all(np.isfinite(excess)):  # a diverged simulation says nothing about how far to back off
             break
-        backoff *= 1.0 / (1.0 + 1.2 * (excess - 1.0))
+        over = excess > 1.0
+        backoff[over] /= 1.0 + 1.2 * (excess[over] - 1.0)
         data = problem_data(problem, backoff)
         result = solve_problem(problem, data, warm=True)
         rounds += 1
         for k in totals:
             totals[k] += result.solver.get(k, 0)
     # the report covers every round: times and iterations add up, the build happened in the first
-    result.solver.update(totals, build_time_s=build, setup_time_s=setup, backoff_rounds=rounds, limit_backoff=backoff)
+    result.solver.update(totals, build_time_s=build, setup_time_s=setup, backoff_rounds=rounds,
+                         limit_backoff=float(np.min(backoff)), backoff_intervals=int(np.sum(backoff < 1.0)))
     if result.source == "optimized" and not result.path_ok:
         diverged = not math.isfinite(result.verification["max_abs_current"] + result.verification["max_abs_voltage"])
         reason = ("the simulated response to the optimised command is not finite" if diverged else
@@ -183,6 +185,23 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
         result.verification.update(_min_time_summary(mission, result))
     result.total_time_s = time.perf_counter() - started
     return result
+
+
+def _interval_excess(problem: Problem, result: OptimizeResult) -> np.ndarray:
+    """Largest of |current|/limit and |voltage|/limit of the simulated response on each collocation
+    interval and its two neighbours (a node bounds the polynomials on both sides), shape (P, N); 0 where
+    the output grid has no sample."""
+    P, N = problem.structure.n_phases, problem.structure.intervals
+    lim, arr = problem.mission.limits, result.arrays
+    phase_edges = np.concatenate([[0.0], np.cumsum(np.asarray(result.stretch) * problem.phases.durations)])
+    t = arr["t"]
+    j = np.clip(np.searchsorted(phase_edges, t, side="right") - 1, 0, P - 1)
+    k = np.clip(((t - phase_edges[j]) / np.diff(phase_edges)[j] * N).astype(int), 0, N - 1)
+    ratio = np.maximum(np.abs(arr["current"]) / lim.current, np.abs(arr["voltage"]) / lim.voltage)
+    per = np.zeros(P * N)
+    np.maximum.at(per, j * N + k, ratio)
+    padded = np.concatenate([[0.0], per, [0.0]])
+    return np.maximum(np.maximum(padded[:-2], padded[1:-1]), padded[2:]).reshape(P, N)
 
 
 def _min_time_summary(mission: Mission, result: OptimizeResult) -> dict[str, float | None]:
@@ -251,9 +270,10 @@ def _scales(problem: Problem, x_full_speed: np.ndarray) -> Scales:
     return Scales(x=x, u=[u_lim, rate, rate / t_int][st.chain], u_lim=u_lim, f=f_scale)
 
 
-def _path_bounds(problem: Problem, lay: col.Layout, sc: Scales, backoff: float,
+def _path_bounds(problem: Problem, lay: col.Layout, sc: Scales, backoff: np.ndarray,
                  lbx: np.ndarray, ubx: np.ndarray) -> None:
-    """Retiming, speed sign and limit, current, input (chain) bounds, in place (scaled)."""
+    """Retiming, speed sign and limit, current, input (chain) bounds, in place (scaled); ``backoff`` (P, N)
+    scales the current and input bounds per interval."""
     m, chain = problem.mission, problem.structure.chain
     npx = len(problem.plant.state_names)
     lim = m.limits
@@ -265,14 +285,15 @@ def _path_bounds(problem: Problem, lay: col.Layout, sc: Scales, backoff: float,
     for j, sign in enumerate(problem.phases.signs):
         w = lay.xc[j, :, :, 0]
         lbx[w], ubx[w] = (0.0, w_max) if sign > 0 else (-w_max, 0.0)
+        b = backoff[j][:, None]  # (N, 1) over the interval's points
         if isinstance(problem.plant, DCMotorPlant):
-            lbx[lay.xc[j, :, :, 1]], ubx[lay.xc[j, :, :, 1]] = -backoff, backoff
+            lbx[lay.xc[j, :, :, 1]], ubx[lay.xc[j, :, :, 1]] = -b, b
         if chain >= 1:
-            lbx[lay.xc[j, :, :, npx]], ubx[lay.xc[j, :, :, npx]] = -backoff, backoff
+            lbx[lay.xc[j, :, :, npx]], ubx[lay.xc[j, :, :, npx]] = -b, b
         if chain >= 2 and lim.voltage_rate is not None:
             lbx[lay.xc[j, :, :, npx + 1]], ubx[lay.xc[j, :, :, npx + 1]] = -1.0, 1.0
     if chain == 0:
-        lbx[lay.u], ubx[lay.u] = -backoff, backoff
+        lbx[lay.u], ubx[lay.u] = -backoff[:, :, None], backoff[:, :, None]
     elif chain == 1 and lim.voltage_rate is not None:
         lbx[lay.u], ubx[lay.u] = -1.0, 1.0
 
@@ -300,10 +321,12 @@ def _boundary_conditions(problem: Problem, lay: col.Layout, sc: Scales, start: n
         _fix(lbx, ubx, lay.xc[-1, -1, -1, rest], end[rest])
 
 
-def problem_data(problem: Problem, backoff: float = 1.0, analytic_start: bool = True) -> dict[str, np.ndarray]:
+def problem_data(problem: Problem, backoff: float | np.ndarray = 1.0,
+                 analytic_start: bool = True) -> dict[str, np.ndarray]:
     """Parameter vector, bounds and initial guess for the cached program of ``problem``.
 
-    ``backoff`` (<= 1) shrinks the current and voltage bounds relative to the limits. The initial guess is
+    ``backoff`` (<= 1; a number or one per interval, (P, N)) shrinks the current and voltage bounds relative
+    to the limits. The initial guess is
     the static inverse of the desired thrust at stretch 1, except for a min-time mission with reversals
     and ``analytic_start``: then it is the fastest analytic reversal (:func:`_analytic_guess`).
     """
@@ -325,7 +348,7 @@ def problem_data(problem: Problem, backoff: float = 1.0, analytic_start: bool = 
 
     lay = col.layout(P, N, npx + chain)
     lbx, ubx = np.full(lay.n, -np.inf), np.full(lay.n, np.inf)
-    _path_bounds(problem, lay, sc, backoff, lbx, ubx)
+    _path_bounds(problem, lay, sc, np.broadcast_to(np.asarray(backoff, float), (P, N)), lbx, ubx)
     start = np.array([*x_start, u0, 0.0][: npx + chain])
     _boundary_conditions(problem, lay, sc, start, lbx, ubx)
     x0 = np.zeros(lay.n)
