@@ -326,9 +326,9 @@ def problem_data(problem: Problem, backoff: float | np.ndarray = 1.0,
     """Parameter vector, bounds and initial guess for the cached program of ``problem``.
 
     ``backoff`` (<= 1; a number or one per interval, (P, N)) shrinks the current and voltage bounds relative
-    to the limits. The initial guess is
-    the static inverse of the desired thrust at stretch 1, except for a min-time mission with reversals
-    and ``analytic_start``: then it is the fastest analytic reversal (:func:`_analytic_guess`).
+    to the limits. The initial guess is the static inverse of the desired thrust at stretch 1, except for a
+    min-time mission with reversals and ``analytic_start``: then it is the fastest analytic reversal
+    (:func:`_analytic_guess`).
     """
     m, st, plant = problem.mission, problem.structure, problem.plant
     params, lim, dur = m.motor(), m.limits, problem.phases.durations
