@@ -204,6 +204,12 @@ def test_optimize_route(http: httpx.Client) -> None:
     assert p["field"] == "limits.voltage"
     p = problem(http.post("/v1/references/optimize", json=mission("big", collocation={"intervals": 301})), 422)
     assert p["field"] == "collocation.intervals"
+    # a 10 nH winding cannot be verified within the step budget: a clear 422, the worker lives on
+    stiff = {"J": 2.71e-5, "B": 5.31e-5, "c_tau": 2.2e-6, "c_f": 1.4e-4, "k_t": 0.0573, "k_e": 0.0573, "R": 5.0,
+             "L": 1e-8}
+    p = problem(http.post("/v1/references/optimize", json=mission("stiff", params=stiff)), 422)
+    assert p["field"] == "params" and "too stiff" in p["detail"]
+    assert http.post("/v1/references/optimize", json=mission("again", collocation={"intervals": 60})).status_code == 200
 
 
 @needs_compare
