@@ -17,6 +17,10 @@ JSON/YAML form::
 
 Units: voltage [V], current [A], voltage_rate [V/s], speed [rad/s], torque [N m], thrust [N], time [s].
 
+``plant: "torque"`` is the normalised torque channel (paper eq. omega_dyn) for drives that control torque:
+its one limit is ``limits.torque`` (default: four times the drag torque at the peak desired thrust,
+:meth:`Mission.torque_limit`); the current and voltage it reports are the DC motor's equivalent, not limits.
+
 ``min_crossing_order`` is the local exponent ``g`` of the thrust at each reversal, ``|F| ~ |t - t_s|^g``.
 The speed must change sign, so ``omega ~ s^(2n+1)`` and ``g = 2(2n+1)``: ``2`` (``omega ~ s``: bounded
 current and voltage, the default) or ``6`` (``omega ~ s^3``: current and voltage both zero at the reversal,
@@ -183,6 +187,14 @@ class Mission(_Strict):
 
     def motor(self) -> MotorParams:
         return load_params(self.params)
+
+    def torque_limit(self) -> float:
+        """Torque bound [N m] of the torque channel: ``limits.torque``, else four times the drag torque at
+        the peak desired thrust, ``4 c_tau F_peak / c_f``."""
+        if self.limits.torque is not None:
+            return float(self.limits.torque)
+        p = self.motor()
+        return 4.0 * p.c_tau * max(float(np.max(np.abs(self.desired()[1]))), 1e-6) / p.c_f
 
     def desired(self) -> tuple[np.ndarray, np.ndarray]:
         """Desired thrust samples ``(t [s], thrust [N])``, shapes (N,), t[0] = 0 for segments."""

@@ -188,16 +188,19 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
 
 
 def _interval_excess(problem: Problem, result: OptimizeResult) -> np.ndarray:
-    """Largest of |current|/limit and |voltage|/limit of the simulated response on each collocation
-    interval and its two neighbours (a node bounds the polynomials on both sides), shape (P, N); 0 where
-    the output grid has no sample."""
+    """Largest of |current|/limit and |voltage|/limit (for the torque channel |torque|/limit) of the
+    simulated response on each collocation interval and its two neighbours (a node bounds the polynomials
+    on both sides), shape (P, N); 0 where the output grid has no sample."""
     P, N = problem.structure.n_phases, problem.structure.intervals
     lim, arr = problem.mission.limits, result.arrays
     phase_edges = np.concatenate([[0.0], np.cumsum(np.asarray(result.stretch) * problem.phases.durations)])
     t = arr["t"]
     j = np.clip(np.searchsorted(phase_edges, t, side="right") - 1, 0, P - 1)
     k = np.clip(((t - phase_edges[j]) / np.diff(phase_edges)[j] * N).astype(int), 0, N - 1)
-    ratio = np.maximum(np.abs(arr["current"]) / lim.current, np.abs(arr["voltage"]) / lim.voltage)
+    if "torque" in arr:  # the torque channel: its bound is the only one the program keeps
+        ratio = np.abs(arr["torque"]) * problem.mission.motor().J / problem.mission.torque_limit()
+    else:
+        ratio = np.maximum(np.abs(arr["current"]) / lim.current, np.abs(arr["voltage"]) / lim.voltage)
     per = np.zeros(P * N)
     np.maximum.at(per, j * N + k, ratio)
     padded = np.concatenate([[0.0], per, [0.0]])
@@ -211,6 +214,11 @@ def _min_time_summary(mission: Mission, result: OptimizeResult) -> dict[str, flo
             "analytic_min_time_s": None if fastest is None else 0.5 * fastest.period}
 
 
+def _torque_channel_limit(mission: Mission) -> float | None:
+    """The torque bound [N m] of a torque-plant mission, None for the DC motor (its limits are i and V)."""
+    return None if mission.plant == "dc-motor" else mission.torque_limit()
+
+
 def fastest_analytic(mission: Mission) -> SinProfile | None:
     """The fastest ``A sin^(2q+1)`` within the mission's limits and regularity (:func:`ocp.fallback.design_sin`)
     at the larger of the first and last thrust levels, phase 0; half its period is the analytic reversal
@@ -219,7 +227,7 @@ def fastest_analytic(mission: Mission) -> SinProfile | None:
     amp = max(abs(float(f[0])), abs(float(f[-1])))
     try:
         return design_sin(mission.motor(), mission.limits.current, mission.limits.voltage, mission.regularity,
-                          amplitude=amp, voltage_driven=mission.plant == "dc-motor").profile
+                          amplitude=amp, torque_limit=_torque_channel_limit(mission)).profile
     except MissionError:
         return None
 
@@ -256,10 +264,8 @@ def _scales(problem: Problem, x_full_speed: np.ndarray) -> Scales:
     dc = isinstance(plant, DCMotorPlant)
     if dc:
         u_lim = lim.voltage
-    elif lim.torque is not None:
-        u_lim = lim.torque / params.J
     else:
-        u_lim = 4.0 * params.k * w_scale**2
+        u_lim = m.torque_limit() / params.J
     t_int = float(np.sum(dur)) / (st.n_phases * st.intervals)
     rate = lim.voltage_rate if lim.voltage_rate is not None else u_lim / t_int
     # effect states: their size at full speed; an angle grows with time, scaled by the angle travelled

@@ -21,9 +21,9 @@ from ocp.analytic import reference
 from ocp.effects import load_plant
 from ocp.equilibrium import equilibrium
 from ocp.errors import MissionError
-from ocp.fallback import design_reversals, design_sin
+from ocp.fallback import channel_torque, design_reversals, design_sin
 from ocp.mission import Mission
-from ocp.plant import CASADI, DCMotorPlant, Plant
+from ocp.plant import CASADI, DCMotorPlant, Plant, TorquePlant
 
 if TYPE_CHECKING:
     from ocp.optimize import Problem
@@ -293,17 +293,23 @@ def _verification(m: Mission, arrays: dict[str, np.ndarray], f_plan: np.ndarray)
     w_max = float(np.max(np.abs(arrays["omega"])))
     lim = m.limits
     tol = 1.0 + PATH_TOLERANCE
-    path_ok = i_max <= lim.current * tol and v_max <= lim.voltage * tol
-    if lim.speed is not None:
-        path_ok = path_ok and w_max <= lim.speed * tol
-    return {
+    out: dict[str, Any] = {
         "thrust_rms_error": float(np.sqrt(np.mean(err**2))),
         "thrust_max_error": float(np.max(np.abs(err))),
         "tracking_rms_error": float(np.sqrt(np.mean((arrays["thrust"] - arrays["thrust_desired"]) ** 2))),
         "max_abs_current": i_max, "max_abs_voltage": v_max, "max_abs_speed": w_max,
         "current_margin": lim.current - i_max, "voltage_margin": lim.voltage - v_max,
-        "path_ok": bool(path_ok),
     }
+    if "torque" in arrays:  # the torque channel: its drive owns i and V (reported as the DC equivalent)
+        tau_max = float(np.max(np.abs(arrays["torque"]))) * m.motor().J
+        out.update(max_abs_torque=tau_max, torque_margin=m.torque_limit() - tau_max)
+        path_ok = tau_max <= m.torque_limit() * tol
+    else:
+        path_ok = i_max <= lim.current * tol and v_max <= lim.voltage * tol
+    if lim.speed is not None:
+        path_ok = path_ok and w_max <= lim.speed * tol
+    out["path_ok"] = bool(path_ok)
+    return out
 
 
 def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[str, Any]]:
@@ -341,31 +347,42 @@ def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[st
 def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | None = None) -> OptimizeResult:
     """Analytic reference within the mission's limits: hold levels joined by local polynomial reversals
     of the order the regularity needs (``alpha (t - t_s)^p chi``), or, for a profile that never
-    reverses, the ``A sin^(2q+1)`` design at the mission's peak thrust."""
+    reverses, the ``A sin^(2q+1)`` design at the mission's peak thrust. For the torque channel the
+    reversals are sized to its torque bound and the plant is driven by the torque."""
     params = m.motor()
     t_d, f_d = m.desired()
     t_d = t_d - t_d[0]
-    voltage_driven = m.plant == "dc-motor"
+    dc = m.plant == "dc-motor"
+    torque_limit = None if dc else m.torque_limit()
     t = _output_grid(float(t_d[-1]))
-    prof: Any = design_reversals(params, t_d, f_d, m.limits.current, m.limits.voltage, m.regularity,
-                                 voltage_driven)
+    lim = (params, m.limits.current, m.limits.voltage, m.regularity)
+    prof: Any = design_reversals(params, t_d, f_d, m.limits.current, m.limits.voltage, m.regularity, dc,
+                                 torque_limit)
     if prof is None:
         amp = max(float(np.max(np.abs(f_d))), 1e-6)
         try:
-            prof = design_sin(params, m.limits.current, m.limits.voltage, m.regularity, amplitude=amp,
-                              voltage_driven=voltage_driven).profile
+            prof = design_sin(*lim, amplitude=amp, voltage_driven=dc, torque_limit=torque_limit).profile
         except MissionError:
-            prof = design_sin(params, m.limits.current, m.limits.voltage, m.regularity, period=2.0 * float(t_d[-1]),
-                              voltage_driven=voltage_driven).profile
+            prof = design_sin(*lim, period=2.0 * float(t_d[-1]), voltage_driven=dc, torque_limit=torque_limit).profile
             reason += f"; amplitude reduced to {prof.amplitude:.4g} N to meet the limits"
     ref = reference(prof, params, t)
     arrays = {"t": t, "thrust": ref.thrust, "thrust_desired": np.interp(t, t_d, f_d), "omega": ref.omega,
-              "theta": ref.theta, "current": ref.current, "voltage": ref.voltage}
+              "theta": ref.theta}
     # the closed forms are the nominal model's; the check runs the mission's plant, effects included
-    plant = load_plant(m.params) if m.plant == "dc-motor" else DCMotorPlant(params)
-    x0 = equilibrium(plant, float(ref.omega[0]))[0]
-    x0[1] = ref.current[0]
-    u_knots = 0.5 * (ref.voltage[:-1] + ref.voltage[1:])
+    plant: Plant
+    if dc:
+        plant = load_plant(m.params)
+        x0 = equilibrium(plant, float(ref.omega[0]))[0]
+        x0[1] = ref.current[0]
+        command = ref.voltage
+        arrays["current"], arrays["voltage"] = ref.current, ref.voltage
+    else:
+        plant = TorquePlant.from_params(params)
+        x0 = np.array([ref.omega[0]])
+        command = channel_torque(params, ref) / params.J  # normalised input u [rad/s^2]
+        arrays["torque"] = command
+        arrays["current"], arrays["voltage"] = _torque_plant_commands(m, ref.omega, command)
+    u_knots = 0.5 * (command[:-1] + command[1:])
     sim = verify_simulation(plant, t, u_knots, x0, t)
     arrays["command_t"], arrays["command"] = t, np.append(u_knots, u_knots[-1])
     f_sim = np.asarray(plant.thrust([sim[k] for k in range(sim.shape[0])]), float)

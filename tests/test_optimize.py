@@ -17,6 +17,7 @@ from ocp.fallback import design_sin
 from ocp.mission import mission_from_mapping
 from ocp.optimize import ipopt_options, optimize, problem_data, problem_for, solve_problem
 from ocp.plant import DCMotorPlant
+from ocp.result import analytic_fallback
 from ocp.simulate import simulate
 from ocp.theory import UNBOUNDED, ReversalRegularity
 
@@ -153,6 +154,34 @@ def test_torque_plant_respects_torque_bound(rig):
     assert r.source == "optimized", r.reason
     assert np.max(np.abs(r.arrays["torque"])) * rig.J <= 0.02 * 1.001
     assert r.verification["thrust_rms_error"] <= 1e-3 * 0.4
+
+
+def test_torque_channel_fallback_and_min_time_respect_the_torque_bound(rig):
+    """The torque channel's analytic answers are sized to its torque bound, not to the DC motor's current and
+    voltage: the fallback's torque, recomputed from its speed by finite differences (J w' + c_tau w|w|), reaches
+    the bound and stays within it; min-time reports the fastest torque-bounded sin^(2q+1) and beats it."""
+    m = mission_from_mapping({**EXAMPLE, "plant": "torque", "limits": {"torque": 0.02}})
+    fb = analytic_fallback(m, "test")
+    t, w = fb.arrays["t"], fb.arrays["omega"]
+    torque = rig.J * np.gradient(w, t) + rig.c_tau * w * np.abs(w)
+    assert 0.02 * 0.99 <= np.max(np.abs(torque)) <= 0.02 * 1.002
+    smooth = np.abs(t - fb.crossings[0]["t"]) > 2e-3  # w ~ |s|^1.5 there: a difference quotient is no oracle
+    np.testing.assert_allclose(fb.arrays["torque"][smooth] * rig.J, torque[smooth], atol=2e-4)
+    assert fb.verification["path_ok"] and fb.verification["max_abs_torque"] <= 0.02 * 1.001
+    assert np.isfinite(fb.verification["thrust_rms_error"]) and fb.verification["thrust_rms_error"] < 1e-3 * 0.4
+
+    r = optimize(mission_from_mapping({**EXAMPLE, "plant": "torque", "limits": {"torque": 0.02},
+                                       "objective": "min-time"}))
+    v = r.verification
+    assert r.source == "optimized" and v["max_abs_torque"] <= 0.02 * 1.001
+    assert v["analytic_min_time_s"] is not None and v["min_time_s"] <= v["analytic_min_time_s"]
+    sine = design_sin(rig, 1.0, 12.0, ReversalRegularity.BOUNDED, amplitude=0.4, voltage_driven=False,
+                      torque_limit=0.02).profile
+    assert v["analytic_min_time_s"] == pytest.approx(0.5 * sine.period)
+    ts = np.linspace(0.0, sine.period, 20001)
+    ws = np.sign(f := sine.thrust(ts)[0]) * np.sqrt(np.abs(f) / rig.c_f)
+    peak = np.max(np.abs(rig.J * np.gradient(ws, ts) + rig.c_tau * ws * np.abs(ws)))
+    assert 0.02 * 0.995 <= peak <= 0.02 * 1.002  # the shortest period whose torque meets the bound
 
 
 def test_min_time_is_no_slower_than_the_fastest_analytic_reversal():
