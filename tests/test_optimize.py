@@ -3,6 +3,7 @@ exact returned command, the closed-form analytic family, Theorem 1 on the desire
 
 import json
 import math
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -267,6 +268,13 @@ def test_cli_optimize_and_compare(tmp_path):
     run = subprocess.run([sys.executable, "-m", "clients.cli", "optimize", str(bad)], capture_output=True, text=True)
     assert run.returncode == 1 and "limits.voltage" in run.stderr
     assert math.isfinite(payload["solve_time_s"])
+    torque = tmp_path / "torque.json"
+    torque.write_text(json.dumps({**EXAMPLE, "plant": "torque", "limits": {"torque": 0.02}, "objective": "min-time"}))
+    text = subprocess.run([sys.executable, "-m", "clients.cli", "optimize", str(torque)], capture_output=True,
+                          text=True, check=True).stdout
+    times = re.search(r"minimum transition ([\d.]+) ms; fastest analytic .* limits ([\d.]+) ms", text)
+    assert times is not None and float(times[1]) < float(times[2]), text
+    assert re.search(r"\|torque\| 0\.02 N m", text) and "IPOPT iterations" in text
 
 
 def test_untrusted_missions_cannot_name_files(tmp_path):

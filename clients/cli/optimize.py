@@ -64,10 +64,19 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         return 0
     v = d["verification"]
     print(f"mission {d['name']}: {d['source']} ({d['status']}){' - ' + d['reason'] if d['reason'] else ''}")
-    print(f"  solve {_g(d['solve_time_s'], '.1f', 1e3)} ms, total {_g(d['total_time_s'], '.1f', 1e3)} ms, "
-          f"stretch {', '.join(_g(s, '.3f') for s in d['stretch']) or '-'}")
-    print(f"  peaks |i| {_g(v['max_abs_current'], '.4g')} A, |V| {_g(v['max_abs_voltage'], '.4g')} V; reproduction "
-          f"rms {_g(v['thrust_rms_error'], '.3g')} N; tracking rms {_g(v['tracking_rms_error'], '.3g')} N")
+    s = d.get("solver") or {}
+    parts = [f"{name} {_g(s[key], '.1f', 1e3)} ms" for name, key in
+             (("build", "build_time_s"), ("verify", "verify_time_s")) if s.get(key)]
+    print(f"  solve {_g(d['solve_time_s'], '.1f', 1e3)} ms ({s.get('iterations', '?')} IPOPT iterations), "
+          + "".join(f"{p}, " for p in parts) + f"total {_g(d['total_time_s'], '.1f', 1e3)} ms, "
+          f"stretch {', '.join(_g(x, '.3f') for x in d['stretch']) or '-'}")
+    torque = f", |torque| {_g(v['max_abs_torque'], '.4g')} N m" if "max_abs_torque" in v else ""
+    print(f"  peaks |i| {_g(v['max_abs_current'], '.4g')} A, |V| {_g(v['max_abs_voltage'], '.4g')} V{torque}; "
+          f"reproduction rms {_g(v['thrust_rms_error'], '.3g')} N; tracking rms {_g(v['tracking_rms_error'], '.3g')} N")
+    if "min_time_s" in v:
+        analytic = v.get("analytic_min_time_s")
+        print(f"  minimum transition {_g(v['min_time_s'], '.1f', 1e3)} ms; fastest analytic sin^(2q+1) within the "
+              + ("same limits: none" if analytic is None else f"same limits {_g(analytic, '.1f', 1e3)} ms"))
     for c in d["crossings"]:
         print(f"  reversal at {_g(c['t'], '.4f')} s, local exponent {_g(c['exponent'], '.2f')}")
     if not args.out:
