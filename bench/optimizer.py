@@ -50,7 +50,7 @@ from ocp import collocation as col
 from ocp.mission import Mission, mission_from_mapping
 from ocp.optimize import Problem, ipopt_options, optimize, problem_data, problem_for
 from ocp.plant import CASADI
-from ocp.result import OptimizeResult, extract, verify_simulation
+from ocp.result import OptimizeResult, extract, simulate_response
 
 # targets of issue 3 (2 s single-reversal mission for the absolute times; suite medians for ratios)
 TARGET_WARM_S = 0.030
@@ -211,16 +211,16 @@ class Evaluator:
 
 
 def replay_peak(problem: Problem, prog: col.Program, data: dict[str, np.ndarray], x: np.ndarray) -> float:
-    """max |current| / current limit of the plant's response to the command of decision vector ``x``,
-    integrated between the nodes (the same check thrustshape applies to its own answers)."""
+    """max |current| / current limit of the plant's response to the command of decision vector ``x`` on
+    the integration grid, between the nodes (the same check thrustshape applies to its own answers)."""
     sol = extract(problem, prog, x, data)
     t = np.linspace(0.0, float(sol.phase_edges[-1]), 4001)
     if sol.chain:
         knots, u = t, sol.states(0.5 * (t[:-1] + t[1:]))[1]
     else:
         knots, u = sol.edges, sol.controls
-    sim = verify_simulation(problem.plant, knots, u, sol.points[0, 0, :prog.n_plant_states], t)
-    return float(np.max(np.abs(sim[1]))) / problem.mission.limits.current
+    sim = simulate_response(problem.plant, knots, u, sol.points[0, 0, :prog.n_plant_states], t)
+    return float(np.max(np.abs(sim.x[1]))) / problem.mission.limits.current
 
 
 def _nested_options(plugin_extra: dict[str, Any]) -> dict[str, Any]:

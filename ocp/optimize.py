@@ -189,10 +189,10 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
 
 def _interval_excess(problem: Problem, result: OptimizeResult) -> np.ndarray:
     """Largest of |current|/limit and |voltage|/limit (for the torque channel |torque|/limit) of the
-    simulated response on each collocation interval and its two neighbours (a node bounds the polynomials
-    on both sides), shape (P, N); 0 where the output grid has no sample."""
+    simulated response (on its integration grid) on each collocation interval and its two neighbours (a
+    node bounds the polynomials on both sides), shape (P, N)."""
     P, N = problem.structure.n_phases, problem.structure.intervals
-    lim, arr = problem.mission.limits, result.arrays
+    lim, arr = problem.mission.limits, result.fine
     phase_edges = np.concatenate([[0.0], np.cumsum(np.asarray(result.stretch) * problem.phases.durations)])
     t = arr["t"]
     j = np.clip(np.searchsorted(phase_edges, t, side="right") - 1, 0, P - 1)

@@ -64,6 +64,9 @@ class OptimizeResult:
     verification: dict[str, Any]
     solver: dict[str, Any] = field(default_factory=dict)
     total_time_s: float = 0.0
+    #: the simulated response on the integration grid (t, omega, current, voltage[, torque]), shapes (K,):
+    #: what the limits are checked on between the output samples; not serialised
+    fine: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
 
     @property
     def path_ok(self) -> bool:
@@ -203,10 +206,23 @@ def sim_step(plant: Plant, x0: np.ndarray, u0: float) -> float:
     return min(SIM_STEP, 2.0 * RK4_STIFFNESS / lam) if lam > 0 else SIM_STEP
 
 
-def verify_simulation(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarray, x0: np.ndarray,
-                      t_out: np.ndarray) -> np.ndarray:
+@dataclass(frozen=True)
+class Response:
+    """A simulated response. Attributes: ``at_out`` states (nx, M) at the requested times; ``t`` the
+    integration grid [s] (K,), ``x`` the states on it (nx, K), ``u`` the input held from each grid point
+    on (K,; the last one repeated)."""
+
+    at_out: np.ndarray
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+
+
+def simulate_response(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarray, x0: np.ndarray,
+                      t_out: np.ndarray) -> Response:
     """Integrate ``plant`` from ``x0`` under the input held at ``u_of_interval[k]`` on
-    ``[t_knots[k], t_knots[k+1])``; return states (nx, M) at ``t_out`` (M,).
+    ``[t_knots[k], t_knots[k+1])``, on a grid through the knots and ``t_out`` (M,) with steps of at most
+    :func:`sim_step`.
 
     Raises :class:`MissionError` (``params``) when the plant is too stiff to verify within ``MAX_SIM_STEPS``.
     """
@@ -222,11 +238,30 @@ def verify_simulation(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarr
     fine = np.append(np.repeat(grid[:-1], n_sub) + (np.arange(n_sub.sum()) - first) * np.repeat(np.diff(grid) / n_sub,
                                                                                                   n_sub), grid[-1])
     k = np.clip(np.searchsorted(t_knots, fine[:-1], side="right") - 1, 0, u_of_interval.size - 1)
+    u = u_of_interval[k]
     step = _rk4_accumulator(cast(Hashable, plant), fine.size - 1)
-    xs = np.asarray(step(x0, u_of_interval[k][None, :], np.diff(fine)[None, :]))
+    xs = np.asarray(step(x0, u[None, :], np.diff(fine)[None, :]))
     states = np.concatenate([np.asarray(x0, float)[:, None], xs], axis=1)
-    idx = np.searchsorted(fine, t_out)
-    return states[:, np.clip(idx, 0, fine.size - 1)]
+    idx = np.clip(np.searchsorted(fine, t_out), 0, fine.size - 1)
+    return Response(at_out=states[:, idx], t=fine, x=states, u=np.append(u, u[-1]))
+
+
+def verify_simulation(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarray, x0: np.ndarray,
+                      t_out: np.ndarray) -> np.ndarray:
+    """States (nx, M) at ``t_out`` of :func:`simulate_response`."""
+    return simulate_response(plant, t_knots, u_of_interval, x0, t_out).at_out
+
+
+def _channels(m: Mission, resp: Response) -> dict[str, np.ndarray]:
+    """The simulated response on the integration grid as the result's channels (t, omega, current,
+    voltage, and for the torque plant its normalised torque with the DC equivalent current and voltage)."""
+    out = {"t": resp.t, "omega": resp.x[0]}
+    if m.plant == "dc-motor":
+        out["current"], out["voltage"] = resp.x[1], resp.u
+    else:
+        out["torque"] = resp.u
+        out["current"], out["voltage"] = _torque_plant_commands(m, resp.x[0], resp.u)
+    return out
 
 
 def _output_grid(total: float) -> np.ndarray:
@@ -259,7 +294,8 @@ def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: d
         u_knots = sol.states(0.5 * (t[:-1] + t[1:]))[1]
     else:
         knots, u_knots = sol.edges, sol.controls
-    x = verify_simulation(plant, knots, u_knots, sol.points[0, 0, :npx], t)
+    resp = simulate_response(plant, knots, u_knots, sol.points[0, 0, :npx], t)
+    x = resp.at_out
     thrust = np.asarray(plant.thrust([x[i] for i in range(npx)]), float)
     arrays = {"t": t, "thrust": thrust, "thrust_desired": f_des, "omega": x[0],
               "theta": cumulative_trapezoid(x[0], t, initial=0.0)}
@@ -270,12 +306,13 @@ def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: d
         arrays["torque"] = u
         arrays["current"], arrays["voltage"] = _torque_plant_commands(m, x[0], u)
     arrays["command_t"], arrays["command"] = knots, np.append(u_knots, u_knots[-1])
-    verification = _verification(m, arrays, f_plan)
+    fine = _channels(m, resp)
+    verification = _verification(m, arrays, f_plan, fine)
     crossings = _crossings(sol, data["xscale"], float(data["uscale"][0]))
     stretch = (np.diff(sol.phase_edges) / problem.phases.durations).tolist()
     return OptimizeResult(name=m.name, source="optimized", status=solver_info["status"], reason="",
                           arrays=arrays, crossings=crossings, stretch=stretch, verification=verification,
-                          solver=solver_info)
+                          solver=solver_info, fine=fine)
 
 
 def _torque_plant_commands(m: Mission, w: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -285,12 +322,16 @@ def _torque_plant_commands(m: Mission, w: np.ndarray, u: np.ndarray) -> tuple[np
     return i, p.R * i + p.k_e * w
 
 
-def _verification(m: Mission, arrays: dict[str, np.ndarray], f_plan: np.ndarray) -> dict[str, Any]:
-    """Reproduction error (simulated vs planned thrust), peaks and margins of the simulated response."""
+def _verification(m: Mission, arrays: dict[str, np.ndarray], f_plan: np.ndarray,
+                  fine: dict[str, np.ndarray]) -> dict[str, Any]:
+    """Reproduction error (simulated vs planned thrust) on the output grid; peaks and margins of the
+    simulated response on the integration grid ``fine`` (between the output samples too)."""
     err = arrays["thrust"] - f_plan
-    i_max = float(np.max(np.abs(arrays["current"])))
-    v_max = float(np.max(np.abs(arrays["voltage"])))
-    w_max = float(np.max(np.abs(arrays["omega"])))
+
+    def peak(name: str) -> float:
+        return max(float(np.max(np.abs(arrays[name]))), float(np.max(np.abs(fine[name]))))
+
+    i_max, v_max, w_max = peak("current"), peak("voltage"), peak("omega")
     lim = m.limits
     tol = 1.0 + PATH_TOLERANCE
     out: dict[str, Any] = {
@@ -301,7 +342,7 @@ def _verification(m: Mission, arrays: dict[str, np.ndarray], f_plan: np.ndarray)
         "current_margin": lim.current - i_max, "voltage_margin": lim.voltage - v_max,
     }
     if "torque" in arrays:  # the torque channel: its drive owns i and V (reported as the DC equivalent)
-        tau_max = float(np.max(np.abs(arrays["torque"]))) * m.motor().J
+        tau_max = peak("torque") * m.motor().J
         out.update(max_abs_torque=tau_max, torque_margin=m.torque_limit() - tau_max)
         path_ok = tau_max <= m.torque_limit() * tol
     else:
@@ -383,14 +424,16 @@ def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | Non
         arrays["torque"] = command
         arrays["current"], arrays["voltage"] = _torque_plant_commands(m, ref.omega, command)
     u_knots = 0.5 * (command[:-1] + command[1:])
-    sim = verify_simulation(plant, t, u_knots, x0, t)
+    resp = simulate_response(plant, t, u_knots, x0, t)
     arrays["command_t"], arrays["command"] = t, np.append(u_knots, u_knots[-1])
-    f_sim = np.asarray(plant.thrust([sim[k] for k in range(sim.shape[0])]), float)
-    verification = _verification(m, {**arrays, "thrust": f_sim}, ref.thrust)
+    f_sim = np.asarray(plant.thrust([resp.at_out[k] for k in range(resp.at_out.shape[0])]), float)
+    fine = _channels(m, resp)
+    verification = _verification(m, {**arrays, "thrust": f_sim}, ref.thrust, fine)
     crossings = [{"t": float(ts), "exponent": float(p or 0), "sign_change": True}
                  for ts, p in zip(ref.crossing_times, ref.crossing_orders, strict=True) if 0.0 < ts < t[-1]]
     return OptimizeResult(name=m.name, source="analytic-fallback", status="fallback", reason=reason, arrays=arrays,
-                          crossings=crossings, stretch=[], verification=verification, solver=solver_info or {})
+                          crossings=crossings, stretch=[], verification=verification, solver=solver_info or {},
+                          fine=fine)
 
 
 def _sign_changes(f: np.ndarray) -> list[tuple[int, bool]]:
