@@ -640,6 +640,8 @@ def report(rows: list[MissionBench], print_: Callable[[str], None] = print) -> d
         (f"suite median Opti per call / thrustshape cold sol >= {TARGET_RATIO_OPTI:.0f}x",
          summary["median_ratio_opti"] >= TARGET_RATIO_OPTI, f"{summary['median_ratio_opti']:.1f}x "
          f"(/ cold e2e: {summary['median_ratio_opti_e2e']:.1f}x)"),
+        (f"suite median Opti per call / thrustshape warm sol (solve many) >= {TARGET_RATIO_OPTI:.0f}x",
+         summary["median_ratio_opti_warm"] >= TARGET_RATIO_OPTI, f"{summary['median_ratio_opti_warm']:.1f}x"),
     ]
     # an answer whose simulated current leaves the limit between nodes is not a valid competitor
     worse = [r.name for r in rows for other in ("opti", "rockit")
@@ -662,8 +664,7 @@ def report(rows: list[MissionBench], print_: Callable[[str], None] = print) -> d
     for label, ok, shown in checks:
         print_(f"  [{'PASS' if ok else 'FAIL'}] {label}: {shown}")
     of_medians = summary["median_opti_wall_s"] / summary["median_cold_solution_s"]
-    print_(f"  [info] suite median Opti per call / thrustshape warm sol (solve many): "
-           f"{summary['median_ratio_opti_warm']:.1f}x; ratio of the suite medians Opti / cold sol: {of_medians:.1f}x")
+    print_(f"  [info] ratio of the suite medians Opti / thrustshape cold sol: {of_medians:.1f}x")
     print_(f"  [info] suite median rockit solve() call alone / thrustshape cold sol: "
            f"{summary['median_ratio_rockit_solve']:.1f}x; rockit IPOPT / thrustshape IPOPT: "
            f"{summary['median_ratio_rockit_ipopt']:.1f}x")
