@@ -246,12 +246,6 @@ def simulate_response(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarr
     return Response(at_out=states[:, idx], t=fine, x=states, u=np.append(u, u[-1]))
 
 
-def verify_simulation(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarray, x0: np.ndarray,
-                      t_out: np.ndarray) -> np.ndarray:
-    """States (nx, M) at ``t_out`` of :func:`simulate_response`."""
-    return simulate_response(plant, t_knots, u_of_interval, x0, t_out).at_out
-
-
 def _channels(m: Mission, resp: Response) -> dict[str, np.ndarray]:
     """The simulated response on the integration grid as the result's channels (t, omega, current,
     voltage, and for the torque plant its normalised torque with the DC equivalent current and voltage)."""

@@ -1,4 +1,4 @@
-"""The a-posteriori verification simulation (ocp.result.verify_simulation) against scipy's stiff solver."""
+"""The a-posteriori verification simulation (ocp.result.simulate_response) against scipy's stiff solver."""
 
 import json
 import math
@@ -12,7 +12,7 @@ from ocp.errors import MissionError
 from ocp.mission import mission_from_mapping
 from ocp.optimize import optimize
 from ocp.plant import DCMotorPlant
-from ocp.result import sim_step, verify_simulation
+from ocp.result import sim_step, simulate_response
 
 EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
 
@@ -41,7 +41,7 @@ def test_verification_matches_a_stiff_solver(rig, inductance):
     u = rng.uniform(-12.0, 12.0, 20)
     t_out = np.linspace(0.0, 0.2, 201)
     x0 = np.array([20.0, 0.1])
-    sim = verify_simulation(plant, knots, u, x0, t_out)
+    sim = simulate_response(plant, knots, u, x0, t_out).at_out
     ref = _radau_reference(plant, knots, u, x0, t_out)
     assert np.all(np.isfinite(sim))
     assert np.min(ref[0]) < 0 < np.max(ref[0])  # the speed reverses
@@ -63,7 +63,7 @@ def test_a_stiff_winding_is_optimised_and_verified(rig):
 def test_a_winding_too_stiff_to_verify_is_a_clear_error(rig):
     plant = DCMotorPlant(rig.model_copy(update={"L": 1e-8}))
     with pytest.raises(MissionError) as err:
-        verify_simulation(plant, np.array([0.0, 2.0]), np.array([1.0]), np.zeros(2), np.linspace(0, 2, 3))
+        simulate_response(plant, np.array([0.0, 2.0]), np.array([1.0]), np.zeros(2), np.linspace(0, 2, 3))
     assert err.value.field == "params" and "too stiff" in str(err.value)
 
 
