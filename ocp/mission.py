@@ -42,14 +42,17 @@ from pydantic import (
     BaseModel,
     ConfigDict,
     Field,
+    PrivateAttr,
     ValidationError,
     ValidationInfo,
     field_validator,
     model_validator,
 )
 
+from ocp.effects import load_plant
 from ocp.errors import MissionError, ParameterError
 from ocp.params import PRESETS, MotorParams, load_params
+from ocp.plant import DCMotorPlant
 from ocp.theory import ReversalRegularity
 
 MAX_PROFILE_SAMPLES = 100_000
@@ -160,6 +163,10 @@ class Mission(_Strict):
     time_limit_s: Annotated[float, Field(gt=0, le=600, allow_inf_nan=False)] = 10.0
     profile: Profile | None = None
     segments: list[Segment] | None = Field(default=None, min_length=1, max_length=1000)
+    # parsed once per source object (see motor() and desired())
+    _motor: tuple[object, MotorParams] | None = PrivateAttr(default=None)
+    _plant: tuple[object, DCMotorPlant] | None = PrivateAttr(default=None)
+    _desired: tuple[object, np.ndarray, np.ndarray] | None = PrivateAttr(default=None)
 
     @field_validator("min_crossing_order")
     @classmethod
@@ -186,7 +193,10 @@ class Mission(_Strict):
         return self
 
     def motor(self) -> MotorParams:
-        return load_params(self.params)
+        """The motor parameters (parsed once: a mapping is validated, a file read, on the first call)."""
+        if self._motor is None or self._motor[0] is not self.params:  # a model_copy may change params
+            self._motor = (self.params, load_params(self.params))
+        return self._motor[1]
 
     def torque_limit(self) -> float:
         """Torque bound [N m] of the torque channel: ``limits.torque``, else four times the drag torque at
@@ -196,11 +206,24 @@ class Mission(_Strict):
         p = self.motor()
         return 4.0 * p.c_tau * max(float(np.max(np.abs(self.desired()[1]))), 1e-6) / p.c_f
 
+    def dc_plant(self) -> DCMotorPlant:
+        """The DC-motor plant of ``params`` with its effects (:func:`ocp.effects.load_plant`), built once."""
+        if self._plant is None or self._plant[0] is not self.params:
+            self._plant = (self.params, load_plant(self.params))
+        return self._plant[1]
+
     def desired(self) -> tuple[np.ndarray, np.ndarray]:
-        """Desired thrust samples ``(t [s], thrust [N])``, shapes (N,), t[0] = 0 for segments."""
-        if self.profile is not None:
-            return np.asarray(self.profile.t, float), np.asarray(self.profile.thrust, float)
-        return sample_segments(self.segments or [])
+        """Desired thrust samples ``(t [s], thrust [N])``, shapes (N,), t[0] = 0 for segments (sampled once;
+        read-only arrays)."""
+        source = self.profile if self.profile is not None else self.segments
+        if self._desired is None or self._desired[0] is not source:  # a model_copy may change the profile
+            if self.profile is not None:
+                t, f = np.array(self.profile.t, float), np.array(self.profile.thrust, float)
+            else:
+                t, f = sample_segments(self.segments or [])
+            t.flags.writeable = f.flags.writeable = False
+            self._desired = (source, t, f)
+        return self._desired[1], self._desired[2]
 
 
 def sample_segments(segments: list[Segment], rate: float = SEGMENT_RATE) -> tuple[np.ndarray, np.ndarray]:

@@ -18,7 +18,6 @@ import numpy as np
 from ocp import collocation as col
 from ocp.analytic import SinProfile, reference
 from ocp.crossings import find_zeros
-from ocp.effects import load_plant
 from ocp.equilibrium import equilibrium, speed_for_thrust
 from ocp.errors import MissionError
 from ocp.fallback import design_sin
@@ -75,7 +74,7 @@ def make_plant(mission: Mission) -> Plant:
     """The mission's plant: the DC motor with the effects of its parameter file (a calibrated plant
     from ``thrustshape fit``), or the normalised torque channel (which takes no effects)."""
     if mission.plant == "dc-motor":
-        return load_plant(mission.params)
+        return mission.dc_plant()
     if isinstance(mission.params, dict) and mission.params.get("effects"):
         raise MissionError("params.effects", "effects act on the dc-motor plant, not on the torque channel")
     return TorquePlant.from_params(mission.motor())

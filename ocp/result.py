@@ -18,7 +18,6 @@ from scipy.integrate import cumulative_trapezoid
 
 from ocp import collocation as col
 from ocp.analytic import reference
-from ocp.effects import load_plant
 from ocp.equilibrium import equilibrium
 from ocp.errors import MissionError
 from ocp.fallback import channel_torque, design_reversals, design_sin
@@ -406,7 +405,7 @@ def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | Non
     # the closed forms are the nominal model's; the check runs the mission's plant, effects included
     plant: Plant
     if dc:
-        plant = load_plant(m.params)
+        plant = m.dc_plant()
         x0 = equilibrium(plant, float(ref.omega[0]))[0]
         x0[1] = ref.current[0]
         command = ref.voltage
