@@ -29,7 +29,7 @@ from enum import StrEnum
 
 import numpy as np
 
-from ocp.crossings import find_zeros
+from ocp.crossings import sign_change_times
 from ocp.errors import MissionError
 from ocp.plant import DCMotorPlant
 from ocp.simulate import rk4_step
@@ -178,16 +178,7 @@ class ClosedLoopResult:
 
 def reversal_times(t: np.ndarray, thrust_ref: np.ndarray) -> tuple[float, ...]:
     """Sign changes [s] of ``thrust_ref`` (N,) strictly inside the grid (linear interpolation)."""
-    out = []
-    for k, sign_change in find_zeros(t, thrust_ref):
-        if not sign_change:
-            continue
-        f0, f1 = thrust_ref[k], thrust_ref[min(k + 1, t.size - 1)]
-        if f0 == 0.0 or f0 * f1 >= 0:
-            out.append(float(t[k]))
-        else:
-            out.append(float(t[k] + (t[k + 1] - t[k]) * f0 / (f0 - f1)))
-    return tuple(out)
+    return tuple(sign_change_times(t, thrust_ref))
 
 
 def tracking_metrics(t: np.ndarray, thrust_ref: np.ndarray, omega_ref: np.ndarray, thrust: np.ndarray,

@@ -23,6 +23,7 @@ from scipy.integrate import trapezoid
 
 from ocp.analytic import PiecewiseProfile, SinReversal, reference
 from ocp.closed_loop import track
+from ocp.crossings import sign_change_times
 from ocp.errors import MissionError
 from ocp.mission import Mission
 from ocp.optimize import make_plant, optimize
@@ -102,10 +103,9 @@ def mission_reversals(t: np.ndarray, f: np.ndarray) -> list[Window]:
     """The reversals of a desired thrust ``f`` (N,) on ``t`` (N,): each between the peaks of |f| in the
     phases around it (a phase's peak is its signed largest value; the last sample within 0.1 % of it
     before the crossing, the first after)."""
-    cuts = [k for k in range(f.size - 1) if f[k] * f[k + 1] < 0]
-    if not cuts:
+    ts = sign_change_times(t, f)
+    if not ts:
         raise MissionError("profile", "compare needs at least one thrust reversal (a sign change)")
-    ts = [float(t[k] + (t[k + 1] - t[k]) * f[k] / (f[k] - f[k + 1])) for k in cuts]
     bounds = [float(t[0]), *ts, float(t[-1])]
     out = []
     for k, tk in enumerate(ts):

@@ -66,6 +66,22 @@ def find_zeros(t: np.ndarray, f: np.ndarray, zero_tol: float = 0.0) -> list[tupl
     return sorted(out)
 
 
+def sign_change_times(t: np.ndarray, f: np.ndarray, zero_tol: float = 0.0) -> list[float]:
+    """Times [s] where ``f`` (N,) on ``t`` (N,) changes sign strictly inside the grid: linear interpolation
+    between two samples of opposite sign, the sample itself where the change passes through zero samples
+    (:func:`find_zeros`)."""
+    out = []
+    for k, sign_change in find_zeros(t, f, zero_tol):
+        if not sign_change:
+            continue
+        f0, f1 = f[k], f[min(k + 1, t.size - 1)]
+        if abs(f0) <= zero_tol or f0 * f1 >= 0:
+            out.append(float(t[k]))
+        else:
+            out.append(float(t[k] + (t[k + 1] - t[k]) * f0 / (f0 - f1)))
+    return out
+
+
 def _window(t: np.ndarray, f: np.ndarray, k: int) -> float:
     """0.15 x distance from t[k] to the nearest local maximum of |f| (or the grid end)."""
     a = np.abs(f)

@@ -16,6 +16,7 @@ from functools import lru_cache
 import numpy as np
 
 from ocp.analytic import LocalReversal, PiecewiseProfile, SinProfile, reference
+from ocp.crossings import sign_change_times
 from ocp.errors import MissionError
 from ocp.params import MotorParams
 from ocp.reference import Reference
@@ -159,12 +160,11 @@ def design_reversals(params: MotorParams, t: np.ndarray, f: np.ndarray, current_
     ``torque_limit`` [N m]: the torque channel's torque) stay within the limits. ``None`` when ``f``
     never changes sign.
     """
-    cuts = [k for k in range(f.size - 1) if f[k] * f[k + 1] < 0]
-    if not cuts:
+    ts = sign_change_times(t, f)
+    if not ts:
         return None
     limits = DriveLimits(current_limit, voltage_limit, torque_limit)
     p = 2 * min_sin_q(regularity, voltage_driven and torque_limit is None) + 1
-    ts = [float(t[k] + (t[k + 1] - t[k]) * f[k] / (f[k] - f[k + 1])) for k in cuts]
     bounds = [float(t[0]), *ts, float(t[-1])]
     levels = []
     for a, b in itertools.pairwise(bounds):

@@ -17,7 +17,7 @@ import numpy as np
 
 from ocp import collocation as col
 from ocp.analytic import SinProfile, reference
-from ocp.crossings import find_zeros
+from ocp.crossings import sign_change_times
 from ocp.equilibrium import equilibrium, speed_for_thrust
 from ocp.errors import MissionError
 from ocp.fallback import design_sin
@@ -51,14 +51,7 @@ class Phases:
 
 def split_phases(t: np.ndarray, f: np.ndarray) -> Phases:
     """Phases between sign changes of the desired thrust ``f`` (N,) on ``t`` (N,)."""
-    cuts = []
-    for k, sign_change in find_zeros(t, f, 1e-12 * float(np.max(np.abs(f)))):
-        if not sign_change:
-            continue
-        if f[k] == 0.0:
-            cuts.append(float(t[k]))
-        else:
-            cuts.append(float(t[k] + (t[k + 1] - t[k]) * f[k] / (f[k] - f[k + 1])))
+    cuts = sign_change_times(t, f, 1e-12 * float(np.max(np.abs(f))))
     bounds = np.array([t[0], *cuts, t[-1]])
     signs = []
     for a, b in itertools.pairwise(bounds):

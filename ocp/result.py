@@ -427,10 +427,3 @@ def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | Non
     return OptimizeResult(name=m.name, source="analytic-fallback", status="fallback", reason=reason, arrays=arrays,
                           crossings=crossings, stretch=[], verification=verification, solver=solver_info or {},
                           fine=fine)
-
-
-def _sign_changes(f: np.ndarray) -> list[tuple[int, bool]]:
-    from ocp.crossings import find_zeros
-
-    return find_zeros(np.arange(f.size, dtype=float), f, 0.0)
-

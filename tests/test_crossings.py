@@ -74,3 +74,23 @@ def test_find_zeros_matches_a_sample_scan(seed):
     found = find_zeros(np.arange(f.size, dtype=float), f, tol)
     assert found == _zeros_by_scan(f, tol)
     assert any(sign for _, sign in found) and any(not sign for _, sign in found)
+
+
+def test_a_reversal_through_an_exact_zero_sample_is_found_everywhere(rig):
+    """A ramp from +0.4 N to -0.4 N sampled exactly at its zero: the phase split, the fallback design and the
+    comparison all see the one reversal at 0.6 s (the last two once looked for opposite-sign neighbours only)."""
+    from ocp.compare import mission_reversals
+    from ocp.fallback import design_reversals
+    from ocp.mission import mission_from_mapping
+    from ocp.optimize import split_phases
+    from ocp.theory import ReversalRegularity
+
+    m = mission_from_mapping({"name": "zero", "segments": [
+        {"kind": "hold", "duration": 0.5, "thrust": 0.4}, {"kind": "ramp", "duration": 0.2, "to": -0.4},
+        {"kind": "hold", "duration": 0.5, "thrust": -0.4}]})
+    t, f = m.desired()
+    assert np.count_nonzero(f == 0.0) == 1
+    assert split_phases(t, f).bounds[1] == pytest.approx(0.6)
+    assert [w.t_s for w in mission_reversals(t, f)] == pytest.approx([0.6])
+    fb = design_reversals(rig, t, f, 1.0, 12.0, ReversalRegularity.BOUNDED)
+    assert fb is not None and [p.t_s for p in fb.pieces] == pytest.approx([0.6])
