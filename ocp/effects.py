@@ -480,9 +480,9 @@ def make_effect(name: str, values: Mapping[str, Any] | None = None) -> EffectBas
         raise ParameterError(f"effects.{name}", f"unknown effect; the catalogue has {sorted(CATALOGUE)}")
     cls = CATALOGUE[name]
     allowed = [f.name for f in fields(cls)]
-    values = dict(values or {})
-    if not isinstance(values, dict):
+    if values is not None and not isinstance(values, Mapping):
         raise ParameterError(f"effects.{name}", "must be a mapping of parameter names to numbers")
+    values = dict(values or {})
     kwargs: dict[str, float] = {}
     for key, val in values.items():
         if key not in allowed:

@@ -89,6 +89,8 @@ def test_parameter_file_round_trip(tmp_path: Path, rig: MotorParams) -> None:
     ({"coulomb_friction": {"tau_c": "big"}}, "effects.coulomb_friction.tau_c"),
     ({"thrust_lag": {"tau": -1.0}}, "thrust_lag.tau"),
     ([1, 2], "effects"),
+    ({"coulomb_friction": 3}, "effects.coulomb_friction"),
+    ({"coulomb_friction": "ab"}, "effects.coulomb_friction"),
 ])
 def test_bad_effect_blocks_name_the_key(block: object, key: str, rig: MotorParams) -> None:
     with pytest.raises(ParameterError) as err:
