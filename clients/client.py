@@ -22,11 +22,12 @@ Errors form a tree, so callers catch as broadly or as narrowly as they need::
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import email.utils
 import json
 import os
 import time
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -178,6 +179,17 @@ class _Spec:
             self.headers["Authorization"] = f"Bearer {api_key}"
         self.retries, self.max_retry_wait = retries, max_retry_wait
 
+    @staticmethod
+    @contextlib.contextmanager
+    def transport_errors(method: str, path: str) -> Iterator[None]:
+        """httpx's timeout and transport failures as this client's :class:`Timeout` / :class:`TransportError`."""
+        try:
+            yield
+        except httpx.TimeoutException as exc:
+            raise Timeout(f"{method} {path}: {exc}") from exc
+        except httpx.TransportError as exc:
+            raise TransportError(f"{method} {path}: {exc}") from exc
+
     def wait(self, resp: httpx.Response, attempt: int) -> float | None:
         """Seconds to wait before retrying ``resp``, or None when it is final."""
         if resp.status_code != 503 or attempt >= self.retries:
@@ -222,12 +234,8 @@ class Client:
     def _request(self, method: str, path: str, **kw: Any) -> httpx.Response:
         attempt = 0
         while True:
-            try:
+            with self._spec.transport_errors(method, path):
                 resp = self._http.request(method, path, **kw)
-            except httpx.TimeoutException as exc:
-                raise Timeout(f"{method} {path}: {exc}") from exc
-            except httpx.TransportError as exc:
-                raise TransportError(f"{method} {path}: {exc}") from exc
             delay = self._spec.wait(resp, attempt)
             if delay is None:
                 return self._spec.result(resp)
@@ -333,12 +341,8 @@ class AsyncClient:
     async def _request(self, method: str, path: str, **kw: Any) -> httpx.Response:
         attempt = 0
         while True:
-            try:
+            with self._spec.transport_errors(method, path):
                 resp = await self._http.request(method, path, **kw)
-            except httpx.TimeoutException as exc:
-                raise Timeout(f"{method} {path}: {exc}") from exc
-            except httpx.TransportError as exc:
-                raise TransportError(f"{method} {path}: {exc}") from exc
             delay = self._spec.wait(resp, attempt)
             if delay is None:
                 return self._spec.result(resp)
