@@ -64,6 +64,7 @@ class BatchRunner:
 
     async def _run_item(self, item: Item) -> None:
         error: dict[str, Any]
+        assert item.mission is not None, "claimed items carry their mission"
         try:
             result = await self._runner.run(self._task, item.mission, self._timeout, wait=True)
         except ThrustshapeError as exc:

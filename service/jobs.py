@@ -98,7 +98,7 @@ class Item:
     name: str
     state: ItemState
     attempts: int
-    mission: dict[str, Any]
+    mission: dict[str, Any] | None  # loaded by claim() only (the runner needs it; status reads do not)
     result: dict[str, Any] | None
     error: dict[str, Any] | None
 
@@ -170,9 +170,10 @@ class JobStore:
                            n.get("failed", 0))
 
     def items(self, batch_id: str) -> list[Item]:
+        """A batch's items for status and result reads (``mission`` not loaded: it can be large)."""
         with self._lock:
             rows = self._db.execute(
-                "SELECT batch_id, idx, name, state, attempts, mission, result, error FROM items "
+                "SELECT batch_id, idx, name, state, attempts, NULL, result, error FROM items "
                 "WHERE batch_id = ? ORDER BY idx", (batch_id,)).fetchall()
         return [_item(r) for r in rows]
 
@@ -214,12 +215,10 @@ class JobStore:
             cur = db.execute("UPDATE items SET state = 'queued' WHERE state = 'running'")
         return cur.rowcount
 
-    def has_queued(self) -> bool:
-        with self._lock:
-            return self._db.execute("SELECT 1 FROM items WHERE state = 'queued' LIMIT 1").fetchone() is not None
-
 
 def _item(r: tuple[Any, ...]) -> Item:
-    return Item(batch_id=r[0], index=r[1], name=r[2], state=r[3], attempts=r[4], mission=json.loads(r[5]),
-                result=json.loads(r[6]) if r[6] is not None else None,
-                error=json.loads(r[7]) if r[7] is not None else None)
+    def loads(text: str | None) -> Any:
+        return json.loads(text) if text is not None else None
+
+    return Item(batch_id=r[0], index=r[1], name=r[2], state=r[3], attempts=r[4], mission=loads(r[5]),
+                result=loads(r[6]), error=loads(r[7]))
