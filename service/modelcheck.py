@@ -159,7 +159,6 @@ def model_check(payload: Payload) -> Payload:
 
 def _run(op: Op, plant: Any, log: Any, payload: Payload, options: dict[str, Any]) -> Payload:
     from ocp.identify import CheckOptions, DiagnoseOptions, FitOptions, check, diagnose, fit
-    from service.tasks import json_safe
 
     if op == "check":
         res = check(plant, log, CheckOptions(**options))
@@ -167,10 +166,10 @@ def _run(op: Op, plant: Any, log: Any, payload: Payload, options: dict[str, Any]
             from ocp.identify.report import html_report
 
             return {"html": html_report(res, log)}
-        return json_safe(res.to_dict())
+        return res.to_dict()
     if op == "diagnose":
-        return json_safe(diagnose(plant, log, DiagnoseOptions(**options)).to_dict())
+        return diagnose(plant, log, DiagnoseOptions(**options)).to_dict()
     fitted = fit(plant, log, list(payload["effects"]), FitOptions(**options))
     out = fitted.to_dict()
     out.setdefault("calibrated_params", fitted.calibrated())
-    return json_safe(out)
+    return out

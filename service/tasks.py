@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -22,25 +21,6 @@ from ocp.errors import MissionError
 from service.workers import TaskFn
 
 Payload = dict[str, Any]
-
-
-def json_safe(obj: Any) -> Any:
-    """Recursively: numpy scalars/arrays -> Python, non-finite floats -> "inf"/"-inf"/None."""
-    if isinstance(obj, dict):
-        return {str(k): json_safe(v) for k, v in obj.items()}
-    if isinstance(obj, list | tuple):
-        return [json_safe(v) for v in obj]
-    if hasattr(obj, "tolist") and not isinstance(obj, str):
-        return json_safe(obj.tolist())
-    if isinstance(obj, bool) or obj is None or isinstance(obj, int | str):
-        return obj
-    if isinstance(obj, float):
-        if math.isfinite(obj):
-            return obj
-        return None if math.isnan(obj) else ("inf" if obj > 0 else "-inf")
-    if hasattr(obj, "value") and isinstance(obj.value, str):  # enums
-        return obj.value
-    return str(obj)
 
 
 def analytic_reference(payload: Payload) -> Payload:
@@ -58,8 +38,8 @@ def analytic_reference(payload: Payload) -> Payload:
         d = design_sin(params, req.limits.current, req.limits.voltage, req.regularity,
                        amplitude=req.amplitude, period=req.period)
         prof = d.profile
-        design = {"q": prof.q, "amplitude": prof.amplitude, "period": prof.period,
-                  "peak_current": d.peak_current, "peak_voltage": d.peak_voltage}
+        design = {"q": int(prof.q), "amplitude": float(prof.amplitude), "period": float(prof.period),
+                  "peak_current": float(d.peak_current), "peak_voltage": float(d.peak_voltage)}
     else:
         from ocp.analytic import SinProfile
 
@@ -72,7 +52,7 @@ def analytic_reference(payload: Payload) -> Payload:
     out = reference(prof, params, time_grid(duration, req.rate)).to_dict()
     if design is not None:
         out["design"] = design
-    return json_safe(out)
+    return out
 
 
 def optimize_mission(payload: Payload) -> Payload:
@@ -80,7 +60,7 @@ def optimize_mission(payload: Payload) -> Payload:
     from ocp.mission import Mission
 
     optimize = importlib.import_module("ocp.optimize").optimize
-    return json_safe(optimize(Mission.model_validate(payload)).to_dict())
+    return optimize(Mission.model_validate(payload)).to_dict()
 
 
 def fallback_mission(payload: Payload) -> Payload:
@@ -89,7 +69,7 @@ def fallback_mission(payload: Payload) -> Payload:
 
     analytic_fallback = importlib.import_module("ocp.optimize").analytic_fallback
     mission = Mission.model_validate(payload["mission"])
-    return json_safe(analytic_fallback(mission, str(payload["reason"])).to_dict())
+    return analytic_fallback(mission, str(payload["reason"])).to_dict()
 
 
 def compare_mission(payload: Payload) -> Payload:
@@ -100,7 +80,7 @@ def compare_mission(payload: Payload) -> Payload:
     qs = payload.get("qs")
     mission = Mission.model_validate(payload["mission"])
     result = compare(mission) if not qs else compare(mission, tuple(int(q) for q in qs))
-    return json_safe(result.to_dict())
+    return result.to_dict()
 
 
 def _has(module: str, *names: str) -> bool:

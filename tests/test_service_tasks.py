@@ -1,0 +1,52 @@
+"""The worker tasks answer plain JSON: only dict/list/str/int/float/bool/None, finite floats.
+
+The core's ``to_dict()`` methods promise this; the tasks return them as they are (no second walk per
+request), so this is the contract that keeps every route's answer serialisable.
+"""
+
+import json
+import math
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from service.modelcheck import model_check
+from service.tasks import analytic_reference, compare_mission, fallback_mission, optimize_mission
+
+EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
+UPLOAD = {"log": Path("service/static/example-log.csv").read_bytes(), "filename": "example-log.csv",
+          "params": "paper-rig", "max_samples": 100_000}
+
+
+def _plain(obj: Any, where: str = "$") -> None:
+    if isinstance(obj, dict):
+        for k, v in obj.items():
+            assert type(k) is str, f"{where}: key {k!r}"
+            _plain(v, f"{where}.{k}")
+    elif isinstance(obj, list):
+        for i, v in enumerate(obj):
+            _plain(v, f"{where}[{i}]")
+    elif type(obj) is float:
+        assert math.isfinite(obj), f"{where}: {obj}"
+    else:
+        assert obj is None or type(obj) in (str, int, bool), f"{where}: {type(obj).__name__}"
+
+
+@pytest.mark.parametrize("task, payload", [
+    (analytic_reference, {"request": {"amplitude": 0.4, "period": 1.0, "q": 0}, "max_samples": 10_000}),
+    (analytic_reference, {"request": {"amplitude": 0.4, "limits": {"voltage": 12.0, "current": 1.0},
+                                      "regularity": "continuous-voltage"}, "max_samples": 10_000}),
+    (optimize_mission, EXAMPLE),
+    (optimize_mission, {**EXAMPLE, "plant": "torque", "limits": {"torque": 0.02}, "objective": "min-time"}),
+    (fallback_mission, {"mission": EXAMPLE, "reason": "test"}),
+    (compare_mission, {"mission": {**EXAMPLE, "collocation": {"intervals": 60}}, "qs": [0, 2]}),
+    (model_check, {"op": "check", **UPLOAD}),
+    (model_check, {"op": "diagnose", **UPLOAD}),
+    (model_check, {"op": "fit", **UPLOAD,
+                   "effects": ["coulomb_friction"]}),
+])
+def test_task_answers_are_plain_json(task, payload):
+    out = task(payload)
+    _plain(out)
+    json.dumps(out, allow_nan=False)
