@@ -36,13 +36,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.func(args) or 0)
-    except ThrustshapeError as exc:
-        print(f"thrustshape {args.command}: error: {exc}", file=sys.stderr)
-        return 1
-    except OSError as exc:
-        print(f"thrustshape {args.command}: error: {exc}", file=sys.stderr)
-        return 1
-    except ClientError as exc:  # --server: the server's problem+json names the field and the reason
+    except (ThrustshapeError, OSError, ClientError) as exc:  # a ClientError carries the server's field and reason
         print(f"thrustshape {args.command}: error: {exc}", file=sys.stderr)
         return 1
 

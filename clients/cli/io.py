@@ -53,6 +53,11 @@ def write_csv(columns: dict[str, np.ndarray], out: str | None) -> None:
             fh.close()
 
 
+def fmt_number(v: Any, fmt: str, scale: float = 1.0) -> str:
+    """``v * scale`` formatted, or ``nan`` where a JSON answer holds null (a non-finite value)."""
+    return format(v * scale, fmt) if isinstance(v, int | float) else "nan"
+
+
 def print_json(obj: Any) -> None:
     json.dump(obj, sys.stdout, indent=None, allow_nan=False)
     sys.stdout.write("\n")

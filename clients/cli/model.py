@@ -7,6 +7,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+from clients.cli.io import fmt_number as _g
 from clients.cli.io import print_json
 from clients.cli.remote import add_server_args, client, params_for_server
 from ocp.effects import load_plant
@@ -69,11 +70,6 @@ def _upload(args: argparse.Namespace) -> dict[str, Any]:
         raise LogError(str(args.log), "no such file")
     return {"log": args.log, "params": params_for_server(args.params), "columns": _columns(args),
             "steady_state": args.steady_state}
-
-
-def _g(v: Any, fmt: str) -> str:
-    """``v`` formatted, or ``nan`` where the JSON answer holds null (a non-finite value)."""
-    return format(v, fmt) if isinstance(v, int | float) else "nan"
 
 
 def cmd_check(args: argparse.Namespace) -> int:

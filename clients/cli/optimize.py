@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from clients.cli.io import fmt_number as _g
 from clients.cli.io import print_json, write_csv
 from clients.cli.remote import add_server_args, client, params_for_server
 from ocp.errors import MissionError
@@ -38,11 +39,6 @@ def _for_server(mission: Mission) -> dict[str, Any]:
     body = mission.model_dump(mode="json")
     body["params"] = params_for_server(mission.params)
     return body
-
-
-def _g(v: Any, fmt: str, scale: float = 1.0) -> str:
-    """``v * scale`` formatted, or ``nan`` where a JSON answer holds null (a non-finite value)."""
-    return format(v * scale, fmt) if isinstance(v, int | float) else "nan"
 
 
 def cmd_optimize(args: argparse.Namespace) -> int:

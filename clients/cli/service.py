@@ -22,7 +22,7 @@ from typing import Any
 
 import yaml
 
-from clients.client import ClientError
+from clients.cli.io import print_json
 from ocp.errors import MissionError, ThrustshapeError
 from ocp.mission import Mission, mission_from_mapping
 
@@ -220,18 +220,14 @@ def cmd_batch(args: argparse.Namespace) -> int:
     try:
         items = (_run_server(missions, args, bar) if args.server
                  else _run_local(missions, args.workers or 2, args.dask, bar))
-    except ClientError as exc:
+    finally:
         bar.close()
-        print(f"thrustshape batch: error: {exc}", file=sys.stderr)
-        return 1
-    bar.close()
     rows = [_summary_row(it) for it in items]
     if args.out:
         _write_out(Path(args.out), items, rows)
     failed = sum(r["status"] != "done" for r in rows)
     if args.json:
-        json.dump({"summary": rows, "failed": failed, "elapsed_s": time.monotonic() - t0}, sys.stdout)
-        sys.stdout.write("\n")
+        print_json({"summary": rows, "failed": failed, "elapsed_s": time.monotonic() - t0})
     else:
         widths = {c: max(len(c), *(len(_fmt(r[c])) for r in rows)) for c in SUMMARY_COLUMNS}
         print("  ".join(c.ljust(widths[c]) for c in SUMMARY_COLUMNS).rstrip())
