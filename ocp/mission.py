@@ -50,7 +50,7 @@ from pydantic import (
 )
 
 from ocp.effects import load_plant
-from ocp.errors import MissionError, ParameterError
+from ocp.errors import MissionError, ParameterError, validation_location
 from ocp.params import PRESETS, MotorParams, load_params
 from ocp.plant import DCMotorPlant
 from ocp.theory import ReversalRegularity
@@ -252,14 +252,6 @@ def sample_segments(segments: list[Segment], rate: float = SEGMENT_RATE) -> tupl
     return np.concatenate(ts), np.concatenate(fs)
 
 
-def _location(err: Any) -> str:
-    """Dotted path of the offending field as the user wrote it (without pydantic's union tags)."""
-    loc = [str(p) for p in err["loc"]]
-    if len(loc) >= 3 and loc[0] == "segments" and loc[2] in ("hold", "ramp", "reversal", "sine"):
-        del loc[2]
-    return ".".join(loc) or "mission"
-
-
 def mission_from_mapping(data: Any, allow_files: bool = True) -> Mission:
     """Validate a mapping into a :class:`Mission`; errors name the field path and the reason.
 
@@ -271,13 +263,8 @@ def mission_from_mapping(data: Any, allow_files: bool = True) -> Mission:
     try:
         return Mission.model_validate(data, context={"allow_files": allow_files})
     except ValidationError as exc:
-        err = exc.errors()[0]
-        reason = {"extra_forbidden": "unknown field", "missing": "missing field"}.get(err["type"], err["msg"])
-        ctx_err = (err.get("ctx") or {}).get("error")
-        if ctx_err is not None and hasattr(ctx_err, "field"):
-            raise MissionError(f"params.{ctx_err.field}" if ctx_err.field != "params" else "params",
-                               ctx_err.reason) from None
-        raise MissionError(_location(err), reason.removeprefix("Value error, ")) from None
+        field, reason = validation_location(exc.errors()[0])
+        raise MissionError(field or "mission", reason) from None
 
 
 def load_mission(path: str | Path) -> Mission:

@@ -9,7 +9,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException
 
-from ocp.errors import SolverError, ThrustshapeError
+from ocp.errors import SEGMENT_TAGS, SolverError, ThrustshapeError, validation_location
 from service.jobs import IdempotencyConflict
 from service.workers import QueueFull, TaskFailed, TaskTimeout
 
@@ -51,28 +51,19 @@ class TooLarge(Exception):
         super().__init__(f"{field}: {reason}")
 
 
+#: union tags of the request models (analytic sin/design requests, mission segments) and the validator that
+#: refuses parameter file paths
+_TAGS = SEGMENT_TAGS | {"sin", "design", "function-after[_no_paths(), str]"}
+
+
 def _field(err: dict[str, Any]) -> tuple[str, str]:
-    loc = [str(p) for p in err.get("loc", ())]
+    if err.get("type") == "json_invalid":
+        return "body", f"invalid JSON: {str(err.get('msg', 'invalid')).removeprefix('Value error, ')}"
+    loc = tuple(err.get("loc", ()))
     if loc and loc[0] in ("body", "query", "path", "header"):
         loc = loc[1:]
-    # tagged unions put the tag in the location: drop it (body.sin.amplitude -> amplitude,
-    # segments.1.reversal.duration -> segments.1.duration)
-    loc = [p for p in loc if p not in ("sin", "design", "hold", "ramp", "reversal", "sine",
-                                       "function-after[_no_paths(), str]")]
-    reason = {"extra_forbidden": "unknown field", "missing": "missing field"}.get(err.get("type", ""),
-                                                                                   str(err.get("msg", "invalid")))
-    reason = reason.removeprefix("Value error, ")
-    ctx_err = (err.get("ctx") or {}).get("error")
-    if isinstance(ctx_err, ThrustshapeError):
-        base = [p for p in loc if not p.startswith(("str", "dict[", "function-"))]
-        head = ".".join(base)
-        if ctx_err.field == "params" or head.endswith(ctx_err.field):
-            return head or ctx_err.field, ctx_err.reason
-        return f"{head}.{ctx_err.field}" if head else ctx_err.field, ctx_err.reason
-    loc = [p for p in loc if not p.startswith(("str", "dict[", "function-", "float", "int", "literal["))]
-    if err.get("type") == "json_invalid":
-        return "body", f"invalid JSON: {reason}"
-    return ".".join(loc) or "body", reason
+    field, reason = validation_location({**err, "loc": loc}, _TAGS)
+    return field or "body", reason
 
 
 async def _validation(request: Request, exc: Exception) -> JSONResponse:
