@@ -23,6 +23,7 @@ from ocp.errors import MissionError
 from ocp.fallback import channel_torque, design_reversals, design_sin
 from ocp.mission import Mission
 from ocp.plant import CASADI, DCMotorPlant, Plant, TorquePlant
+from ocp.simulate import rk4
 
 if TYPE_CHECKING:
     from ocp.optimize import Problem
@@ -164,18 +165,7 @@ def _rk4_function(plant: Any) -> ca.Function:
     """CasADi RK4 step ``(x, u, dt) -> x+`` with 2 sub-steps, built once per plant."""
     nx = len(plant.state_names)
     x, u, dt = ca.SX.sym("x", nx), ca.SX.sym("u"), ca.SX.sym("dt")
-
-    def f(z: ca.SX) -> ca.SX:
-        return ca.vertcat(*plant.rhs([z[i] for i in range(nx)], u, CASADI))
-
-    z, h = x, dt / 2
-    for _ in range(2):
-        k1 = f(z)
-        k2 = f(z + h / 2 * k1)
-        k3 = f(z + h / 2 * k2)
-        k4 = f(z + h * k3)
-        z = z + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return ca.Function("rk4", [x, u, dt], [z])
+    return ca.Function("rk4", [x, u, dt], [ca.vertcat(*rk4(plant, [x[i] for i in range(nx)], u, dt, 2, CASADI))])
 
 
 @lru_cache(maxsize=64)

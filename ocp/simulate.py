@@ -13,12 +13,13 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid, solve_ivp
 
 from ocp.errors import MissionError, SolverError
-from ocp.plant import Plant
+from ocp.plant import NUMPY, Ops, Plant
 
 InputSignal = Callable[[float], float] | np.ndarray
 
@@ -95,16 +96,22 @@ def simulate(
     return _finish(plant, t, u_samples, sol.y)
 
 
+def rk4(plant: Plant, x: list[Any], u: Any, dt: Any, n: int, ops: Ops = NUMPY) -> list[Any]:
+    """``n`` classic RK4 sub-steps of ``dt / n`` [s] under the held input ``u``: the one RK4 of the
+    project, for numbers (``NUMPY``, arrays broadcast) and for CasADi expressions (``CASADI``)."""
+    h = dt / n
+    for _ in range(n):
+        k1 = plant.rhs(x, u, ops)
+        k2 = plant.rhs([a + 0.5 * h * b for a, b in zip(x, k1, strict=True)], u, ops)
+        k3 = plant.rhs([a + 0.5 * h * b for a, b in zip(x, k2, strict=True)], u, ops)
+        k4 = plant.rhs([a + h * b for a, b in zip(x, k3, strict=True)], u, ops)
+        x = [a + h / 6.0 * (b1 + 2 * b2 + 2 * b3 + b4) for a, b1, b2, b3, b4 in zip(x, k1, k2, k3, k4, strict=True)]
+    return x
+
+
 def rk4_step(plant: Plant, x: np.ndarray, u: float, dt: float, substeps: int) -> np.ndarray:
     """Advance state ``x`` (n_states,) by ``dt`` [s] under constant input ``u`` with RK4 sub-steps."""
-    h = dt / substeps
-    for _ in range(substeps):
-        k1 = np.array(plant.rhs(list(x), u))
-        k2 = np.array(plant.rhs(list(x + 0.5 * h * k1), u))
-        k3 = np.array(plant.rhs(list(x + 0.5 * h * k2), u))
-        k4 = np.array(plant.rhs(list(x + h * k3), u))
-        x = x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-    return x
+    return np.array(rk4(plant, list(x), u, dt, substeps), dtype=float)
 
 
 def simulate_zoh(

@@ -22,10 +22,10 @@ import casadi as ca
 import numpy as np
 
 from ocp.effects import effects_from_mapping, measured_current
-from ocp.identify.predict import _rk4
 from ocp.logs import Log, log_from_arrays
 from ocp.params import MotorParams
 from ocp.plant import CASADI, DCMotorPlant
+from ocp.simulate import rk4
 
 
 @dataclass(frozen=True)
@@ -69,7 +69,7 @@ def generate(params: MotorParams, spec: RigSpec = RigSpec()) -> Log:
     nx = len(plant.state_names)
     xs = ca.SX.sym("x", nx)
     us = ca.SX.sym("u")
-    step = ca.Function("step", [xs, us], [ca.vertcat(*_rk4(plant, [xs[m] for m in range(nx)], us, dt, 20, CASADI))])
+    step = ca.Function("step", [xs, us], [ca.vertcat(*rk4(plant, [xs[m] for m in range(nx)], us, dt, 20, CASADI))])
     n_seg = round(spec.seconds * spec.rate)
     tt = np.arange(n_seg) * dt
     x = np.zeros(nx)

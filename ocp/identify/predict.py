@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
@@ -29,7 +30,8 @@ import numpy as np
 from ocp.effects import measured_current, stateful, time_scale
 from ocp.errors import LogError, SolverError
 from ocp.logs import Log, LogKind
-from ocp.plant import CASADI, NUMPY, DCMotorPlant, Expr
+from ocp.plant import CASADI, NUMPY, DCMotorPlant
+from ocp.simulate import rk4
 
 CHANNELS: tuple[str, ...] = ("omega", "current", "thrust")
 EQUATIONS: tuple[str, ...] = ("mechanical", "electrical", "thrust")
@@ -77,17 +79,6 @@ def substeps(plant: DCMotorPlant, dt: float) -> int:
     return max(1, math.ceil(dt / (0.5 * time_scale(plant))))
 
 
-def _rk4(plant: DCMotorPlant, x: list[Expr], u: Expr, dt: float, n: int, ops: object) -> list[Expr]:
-    h = dt / n
-    for _ in range(n):
-        k1 = plant.rhs(x, u, ops)  # type: ignore[arg-type]
-        k2 = plant.rhs([a + 0.5 * h * b for a, b in zip(x, k1, strict=True)], u, ops)  # type: ignore[arg-type]
-        k3 = plant.rhs([a + 0.5 * h * b for a, b in zip(x, k2, strict=True)], u, ops)  # type: ignore[arg-type]
-        k4 = plant.rhs([a + h * b for a, b in zip(x, k3, strict=True)], u, ops)  # type: ignore[arg-type]
-        x = [a + h / 6.0 * (b1 + 2 * b2 + 2 * b3 + b4) for a, b1, b2, b3, b4 in zip(x, k1, k2, k3, k4, strict=True)]
-    return x
-
-
 def current_offset(plant: DCMotorPlant) -> float:
     """Sensor offset [A]: measured minus true current (current-sensor effects are affine, slope 1)."""
     return float(measured_current(plant, 0.0))
@@ -114,6 +105,17 @@ def segments(log: Log, segment_s: float) -> np.ndarray:
     return np.arange(0, log.n - length + 1, length)
 
 
+@lru_cache(maxsize=8)
+def _segment_simulator(plant: DCMotorPlant, dt: float, length: int, n_segments: int) -> ca.Function:
+    """``(x0 (nx, B), u (1, B*(length-1))) -> states`` of ``n_segments`` free runs of ``length`` samples,
+    built once per plant and shape (a check, its report and a fit's final plants are simulated again)."""
+    nx = len(plant.state_names)
+    x, u = ca.SX.sym("x", nx), ca.SX.sym("u")
+    step = ca.Function("step", [x, u], [ca.vertcat(*rk4(plant, [x[m] for m in range(nx)], u, dt,
+                                                          substeps(plant, dt), CASADI))])
+    return step.mapaccum(length - 1).map(n_segments)
+
+
 def free_run(plant: DCMotorPlant, log: Log, segment_s: float = 0.5) -> FreeRun:
     """Free-run prediction of a time-series log (see module doc); steady-state sweeps: equilibria."""
     if log.kind is LogKind.STEADY_STATE:
@@ -121,12 +123,7 @@ def free_run(plant: DCMotorPlant, log: Log, segment_s: float = 0.5) -> FreeRun:
     starts = segments(log, segment_s)
     length = max(2, round(segment_s / log.dt))
     nx = len(plant.state_names)
-    x = ca.SX.sym("x", nx)
-    u = ca.SX.sym("u")
-    xs = [x[m] for m in range(nx)]
-    nxt = _rk4(plant, xs, u, log.dt, substeps(plant, log.dt), CASADI)
-    step = ca.Function("step", [x, u], [ca.vertcat(*nxt)])
-    sim = step.mapaccum(length - 1).map(starts.size)
+    sim = _segment_simulator(plant, log.dt, length, starts.size)
     x_obs = observed_states(plant, log)
     u_blocks = np.concatenate([log.voltage[s:s + length - 1] for s in starts])
     traj = np.asarray(sim(x_obs[:, starts], u_blocks.reshape(1, -1)))
@@ -149,7 +146,7 @@ def one_step(plant: DCMotorPlant, log: Log) -> Residuals:
         return Residuals(np.arange(log.n), -p.J * d[0], -p.L * d[1], f)
     dt = log.dt
     xk = [row[:-1] for row in x]
-    pred = _rk4(plant, xk, log.voltage[:-1], dt, substeps(plant, dt), NUMPY)
+    pred = rk4(plant, xk, log.voltage[:-1], dt, substeps(plant, dt), NUMPY)
     a = math.exp(-p.R * dt / p.L)
     mech = p.J * (log.omega[1:] - pred[0]) / dt
     elec = p.R / (1.0 - a) * (log.current[1:] - measured_current(plant, pred[1]))
