@@ -226,6 +226,11 @@ class Mission(_Strict):
         return self._desired[1], self._desired[2]
 
 
+def segment_samples(segments: list[Segment], rate: float = SEGMENT_RATE) -> int:
+    """How many samples :func:`sample_segments` makes of ``segments`` (without making them)."""
+    return 1 + sum(max(2, math.ceil(seg.duration * rate)) for seg in segments)
+
+
 def sample_segments(segments: list[Segment], rate: float = SEGMENT_RATE) -> tuple[np.ndarray, np.ndarray]:
     """Concatenate segments into samples at ``rate`` [Hz]; each starts from the previous level."""
     ts: list[np.ndarray] = []

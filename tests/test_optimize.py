@@ -15,7 +15,7 @@ from ocp import collocation as col
 from ocp.crossings import classify_profile
 from ocp.errors import MissionError
 from ocp.fallback import design_sin
-from ocp.mission import mission_from_mapping
+from ocp.mission import mission_from_mapping, sample_segments, segment_samples
 from ocp.optimize import ipopt_options, optimize, problem_data, problem_for, solve_problem
 from ocp.plant import DCMotorPlant
 from ocp.result import analytic_fallback
@@ -275,6 +275,12 @@ def test_cli_optimize_and_compare(tmp_path):
     times = re.search(r"minimum transition ([\d.]+) ms; fastest analytic .* limits ([\d.]+) ms", text)
     assert times is not None and float(times[1]) < float(times[2]), text
     assert re.search(r"\|torque\| 0\.02 N m", text) and "IPOPT iterations" in text
+
+
+@pytest.mark.parametrize("durations", [(0.5, 0.2, 0.5), (0.0004, 1.2345, 0.001), (3.0,)])
+def test_segment_samples_counts_what_sample_segments_makes(durations):
+    segs = mission_from_mapping({"segments": [{"kind": "hold", "duration": d, "thrust": 0.1} for d in durations]})
+    assert segment_samples(segs.segments) == sample_segments(segs.segments)[0].size
 
 
 def test_untrusted_missions_cannot_name_files(tmp_path):

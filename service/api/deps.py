@@ -13,7 +13,7 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from starlette.exceptions import HTTPException
 
 from ocp.errors import MissionError
-from ocp.mission import Mission
+from ocp.mission import Mission, segment_samples
 from service.batches import BatchRunner
 from service.jobs import JobStore
 from service.settings import Settings
@@ -65,16 +65,13 @@ def check_mission_limits(mission: Mission, settings: Settings, prefix: str = "")
     """Server caps beyond the core's: profile samples and collocation intervals (422 naming the field)."""
     n = len(mission.profile.t) if mission.profile is not None else 0
     if n > settings.max_profile_samples:
-        raise _limit(f"{prefix}profile.t", f"{n} samples; this server accepts at most {settings.max_profile_samples}")
+        raise MissionError(f"{prefix}profile.t",
+                           f"{n} samples; this server accepts at most {settings.max_profile_samples}")
     if mission.segments is not None:
-        t, _ = mission.desired()
-        if t.size > settings.max_profile_samples:
-            raise _limit(f"{prefix}segments", f"sample to {t.size} points; this server accepts at most "
-                                              f"{settings.max_profile_samples}")
+        n = segment_samples(mission.segments)  # counted, not sampled: this runs on the event loop
+        if n > settings.max_profile_samples:
+            raise MissionError(f"{prefix}segments", f"sample to {n} points; this server accepts at most "
+                                                    f"{settings.max_profile_samples}")
     if mission.collocation.intervals > settings.max_intervals:
-        raise _limit(f"{prefix}collocation.intervals",
-                     f"{mission.collocation.intervals} intervals; this server accepts at most {settings.max_intervals}")
-
-
-def _limit(field: str, reason: str) -> MissionError:
-    return MissionError(field, reason)
+        raise MissionError(f"{prefix}collocation.intervals", f"{mission.collocation.intervals} intervals; this "
+                                                             f"server accepts at most {settings.max_intervals}")
