@@ -34,7 +34,7 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 import numpy as np
 import yaml
@@ -164,6 +164,8 @@ class Mission(_Strict):
     profile: Profile | None = None
     segments: list[Segment] | None = Field(default=None, min_length=1, max_length=1000)
     # parsed once per source object (see motor() and desired())
+    #: whether ``params`` may name a parameter file; a validation context ``{"allow_files": ...}`` overrides
+    allow_files: ClassVar[bool] = True
     _motor: tuple[object, MotorParams] | None = PrivateAttr(default=None)
     _plant: tuple[object, DCMotorPlant] | None = PrivateAttr(default=None)
     _desired: tuple[object, np.ndarray, np.ndarray] | None = PrivateAttr(default=None)
@@ -179,7 +181,7 @@ class Mission(_Strict):
     @field_validator("params")
     @classmethod
     def _params_ok(cls, v: str | dict[str, Any], info: ValidationInfo) -> str | dict[str, Any]:
-        if isinstance(v, str) and v not in PRESETS and not (info.context or {}).get("allow_files", True):
+        if isinstance(v, str) and v not in PRESETS and not (info.context or {}).get("allow_files", cls.allow_files):
             raise ParameterError("params", f"must be a preset {list(PRESETS)} or a mapping; files are not read here")
         load_params(v)  # raises ParameterError naming the key
         return v

@@ -8,7 +8,7 @@ allow extra ones the core may add.
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
 
@@ -39,20 +39,11 @@ def preset_or_mapping(v: Any) -> Any:
 
 
 class MissionRequest(Mission):
-    """A :class:`ocp.mission.Mission`; ``params`` is a preset name or a parameter mapping.
-
-    The one place the service refuses parameter file paths in missions. (The core's
-    ``mission_from_mapping(data, allow_files=False)`` applies the same rule through a validation
-    context, which FastAPI's body validation cannot pass; this subclass keeps the typed, documented
-    body and reports every error at once.)
-    """
+    """A :class:`ocp.mission.Mission`; ``params`` is a preset name or a parameter mapping, never a file
+    path (the core's rule, switched on for the class since FastAPI cannot pass a validation context)."""
 
     model_config = ConfigDict(title="Mission")
-
-    @field_validator("params", mode="before")
-    @classmethod
-    def _no_paths(cls, v: Any) -> Any:
-        return preset_or_mapping(v)
+    allow_files: ClassVar[bool] = False
 
 
 class _ParamsMixin(_Strict):

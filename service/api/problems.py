@@ -51,9 +51,8 @@ class TooLarge(Exception):
         super().__init__(f"{field}: {reason}")
 
 
-#: union tags of the request models (analytic sin/design requests, mission segments) and the validator that
-#: refuses parameter file paths
-_TAGS = SEGMENT_TAGS | {"sin", "design", "function-after[_no_paths(), str]"}
+#: union tags of the request models (analytic sin/design requests, mission segments)
+_TAGS = SEGMENT_TAGS | {"sin", "design"}
 
 
 def _field(err: dict[str, Any]) -> tuple[str, str]:
