@@ -150,9 +150,21 @@ def test_gallery_command_writes_png_svg_and_index(tmp_path: Path, capsys: pytest
     assert report["table"][0]["paper"]["thrust_rms"] == 0.100
     table = json.loads((out / "closed_loop_table.json").read_text(encoding="utf-8"))
     assert table == report["table"]
-    if "Optimised + ff" in labels:  # the optimised reference with its bounded feedforward beats Case 1
-        opt = report["table"][labels.index("Optimised + ff")]["simulated"]
-        assert opt["thrust_rms"] < 0.1 * report["table"][0]["simulated"]["thrust_rms"]
+    # the paper rows carry paper, simulated and their ratio per figure
+    for row in report["table"][:3]:
+        for key, value in row["ratio"].items():
+            sim, paper = row["simulated"][key], row["paper"][key]
+            assert value == (None if sim is None or not paper else pytest.approx(sim / paper))
+    assert report["table"][0]["simulated"]["local_voltage"] is None  # no reversal-local V peak in Case 1's run
+    for name in ("trend", "fit", "table_one"):
+        assert (out / f"{name}.json").is_file() and f"href=\"{name}.json\"" in index
+    assert "Table I" in index and json.loads((out / "table_one.json").read_text())[0]["current"] == "unbounded"
+    if "Optimised + ff" in labels:  # like for like: Case 1's time base, scored against Case 1's desired thrust
+        case1, opt = report["table"][0], report["table"][labels.index("Optimised + ff")]
+        assert opt["period_s"] == case1["period_s"] and "desired" in opt["note"]
+        assert opt["simulated"]["thrust_rms"] < case1["simulated"]["thrust_rms"]
+        plain = report["table"][labels.index("Optimised")]["simulated"]
+        assert plain["local_speed_error"] < case1["simulated"]["local_speed_error"]
         assert not report["optimised_note"]
     else:  # the optimiser fell back or is missing: the report must say why
         assert report["optimised_note"]
