@@ -1,8 +1,9 @@
 """Minimum-time answers that converge with the mesh: solve, double the intervals, warm-start, repeat.
 
-A min-time solve (``objective: "min-time"``) minimises the duration alone: no smoothness or effort
-term is added to it (:data:`ocp.optimize.WEIGHTS`), so the optimum is the discretised minimum time and
-nothing else. That value still depends on the mesh: a jump of the optimal voltage (at the start, onto
+A min-time solve (``objective: "min-time"``) minimises the duration: no effort term, and a smoothness
+term of weight :data:`ocp.optimize.MIN_TIME_SMOOTHING` = 1e-10 that only conditions IPOPT (it moves the
+duration by less than 1e-5 of it, within IPOPT's own precision, tested against the same solve without it),
+so the optimum is the discretised minimum time. That value still depends on the mesh: a jump of the optimal voltage (at the start, onto
 and off the current limit, at a reversal) takes about one collocation interval, so the discrete
 minimum time falls roughly like ``c / N`` with the intervals per phase ``N`` (measured on the 2 s
 reversal of ``examples/reversal.json`` at 1 A / 12 V, ``continuous-voltage``: 53.08, 51.72, 51.41,

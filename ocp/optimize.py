@@ -27,9 +27,12 @@ from ocp.plant import DCMotorPlant, Plant, TorquePlant, speed_from_thrust
 from ocp.result import OptimizeResult, analytic_fallback, finish_result
 from ocp.theory import ReversalRegularity
 
-#: weights of (track, time, stretch, smooth, effort) per objective; min-time minimises the duration alone
-#: (a smoothness term there moved the optimum: weight 1e-4 added about 0.6 ms to a 51 ms reversal)
-WEIGHTS = {"track": (1.0, 0.0, 1e-3, 1e-6, 1e-9), "min-time": (0.0, 1.0, 0.0, 0.0, 0.0)}
+#: smoothness weight of a min-time solve: conditioning only. Weight 1e-4 moved the optimum (about +0.6 ms on a
+#: 51 ms reversal); 1e-10 moves it by < 1e-5 relative (tests/test_min_time.py) while keeping IPOPT's Hessian
+#: regular in the slew of a continuous voltage (with 0, a solve from the static inverse stalled)
+MIN_TIME_SMOOTHING = 1e-10
+#: weights of (track, time, stretch, smooth, effort) per objective
+WEIGHTS = {"track": (1.0, 0.0, 1e-3, 1e-6, 1e-9), "min-time": (0.0, 1.0, 0.0, MIN_TIME_SMOOTHING, 0.0)}
 MIN_INTERVALS_PER_PHASE = (8, 30)  # piecewise-constant input, input as a state
 MAX_REFINEMENTS = 3  # back-off rounds when the simulated response exceeds a limit between nodes
 

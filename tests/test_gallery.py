@@ -161,7 +161,7 @@ def test_gallery_command_writes_png_svg_and_index(tmp_path: Path, capsys: pytest
     assert "Table I" in index and json.loads((out / "table_one.json").read_text())[0]["current"] == "unbounded"
     if "Optimised + ff" in labels:  # like for like: Case 1's time base, scored against Case 1's desired thrust
         case1, opt = report["table"][0], report["table"][labels.index("Optimised + ff")]
-        assert opt["period_s"] == case1["period_s"] and "desired" in opt["note"]
+        assert opt["period_s"] == pytest.approx(case1["period_s"], rel=1e-12) and "desired" in opt["note"]
         assert opt["simulated"]["thrust_rms"] < case1["simulated"]["thrust_rms"]
         plain = report["table"][labels.index("Optimised")]["simulated"]
         assert plain["local_speed_error"] < case1["simulated"]["local_speed_error"]
