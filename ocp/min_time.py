@@ -5,8 +5,8 @@ term of weight :data:`ocp.optimize.MIN_TIME_SMOOTHING` = 1e-10 that only conditi
 duration by less than 1e-5 of it, within IPOPT's own precision, tested against the same solve without it),
 so the optimum is the discretised minimum time. That value still depends on the mesh: a jump of the
 optimal voltage (at the start, onto and off the current limit, at a reversal) takes about one collocation
-interval, so the discrete minimum time falls roughly like ``c / N`` with the intervals per phase ``N`` (measured on the 2 s
-reversal of ``examples/reversal.json`` at 1 A / 12 V, ``continuous-voltage``: 53.08, 51.72, 51.41,
+interval, so the discrete minimum time falls roughly like ``c / N`` with the intervals per phase ``N``
+(measured on the 2 s reversal of ``examples/reversal.json`` at 1 A / 12 V, ``continuous-voltage``: 53.08, 51.72, 51.41,
 51.29 ms at 60, 120, 240, 480 intervals per phase, against 51.17 ms from an independent shooting
 solve, see ``tests/test_min_time.py``).
 
