@@ -150,7 +150,9 @@ def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Prog
     xc = [[ca.SX.sym(f"xc_{j}_{k}", nx, DEGREE) for k in range(N)] for j in range(P)]
     u = [[ca.SX.sym(f"u_{j}_{k}", 1) for k in range(N)] for j in range(P)]
 
-    g, f_track, u_all = [], 0, []
+    g: list[ca.SX] = []
+    u_all: list[ca.SX] = []
+    f_track = ca.SX(0.0)
     total = ca.sum1(dur)
     x_start = x0
     interval = _interval_function(plant, st, nx, npx)  # one interval's equations, inlined below (fast build)
@@ -190,7 +192,8 @@ def _interval_function(plant: Plant, st: Structure, nx: int, npx: int) -> ca.Fun
     pts, uk, sig = ca.SX.sym("pts", nx, DEGREE + 1), ca.SX.sym("u"), ca.SX.sym("sigma")
     xs, us, rho, hn = ca.SX.sym("xs", nx), ca.SX.sym("us"), ca.SX.sym("rho", nx), ca.SX.sym("hn")
     fscale, fd = ca.SX.sym("fscale"), ca.SX.sym("fd", DEGREE)
-    res, err2 = [], 0
+    res: list[ca.SX] = []
+    err2 = ca.SX(0.0)
     for r in range(1, DEGREE + 1):
         xr = pts[:, r] * xs
         plant_u = xr[npx] if st.chain else uk * us
