@@ -157,7 +157,7 @@ def optimize_mesh(mission: Mission, warm: bool = False, previous: OptimizeResult
 
     When the simulated response exceeds a limit between collocation nodes, the current and voltage
     bounds of the intervals where it does (and of their neighbours) are backed off by the excess (plus
-    20 %) and the same cached program is solved again, warm-started.
+    20 %) and the same cached program is solved again, warm-started (min-time: from the analytic guess).
     """
     started = time.perf_counter()
     problem = problem_for(mission)
