@@ -237,4 +237,12 @@ def summary_lines(g: GalleryOutput) -> list[str]:
                 lines.append(f"{row['label']:<16}{src:<11}{cells}")
     if g.optimised_note:
         lines.append(f"optimised rows: {g.optimised_note}")
+    if g.trend:
+        for eq in [g.trend["paper_periods"], *g.trend["equal_periods"]]:
+            where = f"T = {eq['period_s']:.3g} s" if "period_s" in eq else "paper's periods"
+            lines.append(f"Case 1 / Case 4, {where}: " + ", ".join(
+                f"{k} x{_fmt(v)}" for k, v in eq["case1_over_case4"].items()))
+    if g.fit:
+        lines.append(f"fitted to the paper: k_t = k_e = {g.fit['k_t']:.4g} N m/A, R = {g.fit['R']:.4g} Ohm "
+                     "(table with residuals in fit.json / index.html)")
     return lines
