@@ -98,7 +98,7 @@ def build_gallery(out: Path | str, interaction: InteractionSetup | None = None,
 def section_v(params: MotorParams, exp: ExperimentSetup, paper_rows: list[CaseRun]) -> dict[str, Any]:
     """The trend at the paper's and at equal periods (Case 1's and Case 4's), the electrical fit with its
     table, and Table I: ``{"trend", "fit", "table_one"}``, JSON-ready."""
-    equal = [equal_period_trend(params, exp, r.period) for r in paper_rows[:2]]
+    equal = [equal_period_trend(params, exp, r.period, tuple(paper_rows)) for r in paper_rows[:2]]
     fit = fit_electrical(params, exp)
     return {
         "trend": {"paper_periods": paper_trend(paper_rows), "equal_periods": equal},

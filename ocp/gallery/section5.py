@@ -46,10 +46,12 @@ TREND_KEYS: tuple[str, ...] = ("thrust_rms", "speed_rms", "local_speed_error")
 FIT_ROUNDS = 2  # closed-loop corrections of k_t after the closed-form fit
 
 
-def equal_period_trend(params: MotorParams, setup: ExperimentSetup, period: float) -> dict[str, Any]:
+def equal_period_trend(params: MotorParams, setup: ExperimentSetup, period: float,
+                       done: tuple[CaseRun, ...] = ()) -> dict[str, Any]:
     """Cases 1, 4, 5 all at ``period`` [s] (amplitudes as in ``setup``): their figures and Case 1 over
-    Case 4 and over Case 5 for :data:`TREND_KEYS`."""
-    rows = [sine_case(params, label, q, amp, period, setup)
+    Case 4 and over Case 5 for :data:`TREND_KEYS`. Rows of ``done`` with the same label and period are reused."""
+    known = {r.label: r for r in done if abs(r.period - period) <= 1e-12 * period}
+    rows = [known.get(label) or sine_case(params, label, q, amp, period, setup)
             for (label, q), amp in zip(CASES, setup.amplitudes, strict=True)]
     figs = {r.label: r.figures() for r in rows}
     return {"period_s": period, "figures": figs,
