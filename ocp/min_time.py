@@ -45,17 +45,20 @@ COST_GROWTH = 2.5
 MeshSolve = Callable[[Mission, "OptimizeResult | None"], OptimizeResult]
 
 
-def refine(mission: Mission, solve: MeshSolve, analytic_min_time: float | None) -> OptimizeResult:
+def refine(mission: Mission, solve: MeshSolve, analytic_min_time: float | None,
+           mesh_size: Callable[[Mission], int]) -> OptimizeResult:
     """The min-time answer of ``mission`` refined until it converges (see module doc).
 
     ``analytic_min_time`` [s] is half the period of the fastest ``A sin^(2q+1)`` within the limits (or
-    None), reported beside it. Returns the finest optimised answer with its ``verification`` extended
-    by :func:`summary`; a fallback when the first mesh already fell back.
+    None), reported beside it. ``mesh_size(mission)``: the intervals the solve really uses, over all phases (a
+    phase has at least a minimum number, so the mission's own count may be less); each refinement doubles it.
+    Returns the finest optimised answer with its ``verification`` extended by :func:`summary`; a fallback
+    when the first mesh already fell back.
     """
     started = time.perf_counter()
     budget = float(mission.time_limit_s)
     result = solve(mission, None)
-    history = [(mission.collocation.intervals, _duration(result))]
+    history = [(mesh_size(mission), _duration(result))]
     note = ""
     last_cost = time.perf_counter() - started
     while result.source == "optimized":

@@ -147,8 +147,14 @@ def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
     if mission.objective == "min-time":
         fastest = fastest_analytic(mission)
         return min_time.refine(mission, lambda m, previous: optimize_mesh(m, warm, previous),
-                               None if fastest is None else 0.5 * fastest.period)
+                               None if fastest is None else 0.5 * fastest.period, _mesh_size)
     return optimize_mesh(mission, warm)
+
+
+def _mesh_size(mission: Mission) -> int:
+    """Collocation intervals a solve of ``mission`` uses over all its phases."""
+    st = problem_for(mission).structure
+    return st.intervals * st.n_phases
 
 
 def optimize_mesh(mission: Mission, warm: bool = False, previous: OptimizeResult | None = None) -> OptimizeResult:

@@ -11,6 +11,7 @@ piecewise-constant V). One switching speed per arc is found by brentq.
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 from pathlib import Path
@@ -143,3 +144,15 @@ def test_a_fallback_never_reports_the_mission_length_as_a_minimum_time() -> None
     v = r.verification
     assert v["min_time_s"] is None and v["min_time_error_bound_s"] is None and not v["min_time_converged"]
     assert "fallback" in v["min_time_note"] and v["min_time_mesh"] == []
+
+
+def test_refinement_doubles_the_mesh_the_solve_really_uses() -> None:
+    """8 intervals over 2 phases would be 4 per phase, below the 8-per-phase minimum: the first mesh is 16, then
+    32, 64, ... (doubling the mission's 8 to 16 would re-solve the same mesh and report a false convergence)."""
+    m = mission_from_mapping({**EXAMPLE, "objective": "min-time", "collocation": {"intervals": 8},
+                              "time_limit_s": 60.0})
+    v = optimize(m).verification
+    sizes = [row["intervals"] for row in v["min_time_mesh"]]
+    assert sizes[0] == 16 and sizes == [16 * 2**k for k in range(len(sizes))] and len(sizes) >= 2
+    times = [row["min_time_s"] for row in v["min_time_mesh"]]
+    assert all(abs(a - b) > 0.0 for a, b in itertools.pairwise(times))
