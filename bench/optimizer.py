@@ -9,9 +9,10 @@ For every mission of a suite, the same collocation program (states, scaling, Rad
 ``ocp.optimize.WEIGHTS``, bounds, phases, initial guess: all taken from ``problem_for``/``problem_data``)
 is solved three ways, interleaved so that machine noise hits all of them alike:
 
-* **thrustshape** -- ``optimize(mission)``: the cached ``nlpsol`` of the structure. *cold*: structure
-  cached, initial guess = static inverse (``warm=False``); *warm*: ``warm=True`` right after a solve of
-  the same structure with thrust levels scaled by 1.02. Reported: IPOPT time
+* **thrustshape** -- ``optimize_mesh(mission)`` (one mesh; a min-time mission is not refined here): the
+  cached ``nlpsol`` of the structure. *cold*: structure cached, initial guess = static inverse
+  (``warm=False``); *warm*: ``warm=True`` right after a solve of the same structure with thrust levels
+  scaled by 1.02. Reported: IPOPT time
   (``result.solver["solve_time_s"]``), solution time (:func:`solution_time`: mission to solution, like the
   others), end-to-end time (``result.total_time_s``, adds the a-posteriori verification), and the one-off
   build time. Ratios are taken to the cold solution time, and to the cold end-to-end time beside it.
@@ -48,7 +49,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ocp import collocation as col
 from ocp.mission import Mission, mission_from_mapping
-from ocp.optimize import Problem, ipopt_options, optimize, problem_data, problem_for
+from ocp.optimize import Problem, ipopt_options, optimize_mesh, problem_data, problem_for
 from ocp.plant import CASADI
 from ocp.result import OptimizeResult, extract, simulate_response
 
@@ -488,7 +489,7 @@ def bench_mission(spec: dict[str, Any], repeats: int, log: Callable[[str], None]
     t_build = time.perf_counter()
     prog = col.solver_for(problem.plant, problem.structure, ipopt_options(mission.time_limit_s))  # the one-off build
     build = time.perf_counter() - t_build
-    optimize(mission)  # first solve (not timed)
+    optimize_mesh(mission)  # first solve (not timed)
     times: dict[str, list[float]] = {k: [] for k in ("cold_ipopt", "cold_solution", "cold_total", "warm_ipopt",
                                                       "warm_solution", "warm_total", "opti_wall", "opti_ipopt",
                                                       "rockit_total", "rockit_build", "rockit_solve", "rockit_ipopt")}
@@ -498,13 +499,13 @@ def bench_mission(spec: dict[str, Any], repeats: int, log: Callable[[str], None]
     sources = set()
     opti_run = rockit_run = None
     for _ in range(repeats):
-        cold = optimize(mission, warm=False)
+        cold = optimize_mesh(mission, warm=False)
         ts_x = prog.last["x"].copy()
         times["cold_ipopt"].append(cold.solve_time_s)
         times["cold_solution"].append(solution_time(cold))
         times["cold_total"].append(cold.total_time_s)
-        optimize(predecessor, warm=False)
-        warm = optimize(mission, warm=True)
+        optimize_mesh(predecessor, warm=False)
+        warm = optimize_mesh(mission, warm=True)
         times["warm_ipopt"].append(warm.solve_time_s)
         times["warm_solution"].append(solution_time(warm))
         times["warm_total"].append(warm.total_time_s)

@@ -150,26 +150,21 @@ def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Prog
     xc = [[ca.SX.sym(f"xc_{j}_{k}", nx, DEGREE) for k in range(N)] for j in range(P)]
     u = [[ca.SX.sym(f"u_{j}_{k}", 1) for k in range(N)] for j in range(P)]
 
-    g, f_track, u_all = [], 0, []
+    g: list[ca.SX] = []
+    u_all: list[ca.SX] = []
+    f_track = ca.SX(0.0)
     total = ca.sum1(dur)
     x_start = x0
+    interval = _interval_function(plant, st, nx, npx)  # one interval's equations, inlined below (fast build)
     for j in range(P):
         h = stretch[j] * dur[j]
         for k in range(N):
             pts = ca.horzcat(x_start, xc[j][k])  # (nx, DEGREE+1) scaled
             uk = u[j][k]
             u_all.append(uk)
-            for r in range(1, DEGREE + 1):
-                xr = pts[:, r] * xs
-                plant_u = xr[npx] if st.chain else uk * us
-                dx = plant.rhs([xr[m] for m in range(npx)], plant_u, CASADI, sigma[j])
-                chain_dx = [xr[npx + c + 1] for c in range(st.chain - 1)] + ([uk * us] if st.chain else [])
-                fx = ca.vertcat(*dx, *chain_dx)
-                slope = ca.mtimes(pts, C_MAT[:, r])
-                g.append(rho * (slope - h / N * fx / xs))
-                thrust = plant.thrust([xr[m] for m in range(npx)], CASADI, sigma[j])
-                err = thrust / fscale - fd[(k * DEGREE) + r - 1, j]
-                f_track += B_QUAD[r] / N * dur[j] / total * err**2
+            res, err2 = interval(pts, uk, sigma[j], xs, us, rho, h / N, fscale, fd[k * DEGREE:(k + 1) * DEGREE, j])
+            g += ca.vertsplit(res, nx)
+            f_track += dur[j] / (N * total) * err2
             x_start = xc[j][k][:, DEGREE - 1]
     u_vec = ca.vertcat(*u_all)
     n_u = P * N
@@ -188,6 +183,28 @@ def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Prog
                        dict(ipopt_options))  # type: ignore[arg-type]
     return Program(structure=st, nx=nx, n_plant_states=npx, solver=solver, layout=layout(P, N, nx),
                    n_params=n_par, n_g=int(ca.vertcat(*g).numel()))
+
+
+def _interval_function(plant: Plant, st: Structure, nx: int, npx: int) -> ca.Function:
+    """One interval's collocation residuals and quadrature-weighted squared tracking error, as an SX function
+    ``(pts (nx, DEGREE+1), u, sigma, xscale (nx,), uscale, rho (nx,), h/N [s], fscale [N], fd (DEGREE,))
+    -> (residuals (nx*DEGREE,), sum_r B_r err_r^2)``; calling it on SX arguments inlines it."""
+    pts, uk, sig = ca.SX.sym("pts", nx, DEGREE + 1), ca.SX.sym("u"), ca.SX.sym("sigma")
+    xs, us, rho, hn = ca.SX.sym("xs", nx), ca.SX.sym("us"), ca.SX.sym("rho", nx), ca.SX.sym("hn")
+    fscale, fd = ca.SX.sym("fscale"), ca.SX.sym("fd", DEGREE)
+    res: list[ca.SX] = []
+    err2 = ca.SX(0.0)
+    for r in range(1, DEGREE + 1):
+        xr = pts[:, r] * xs
+        plant_u = xr[npx] if st.chain else uk * us
+        dx = plant.rhs([xr[m] for m in range(npx)], plant_u, CASADI, sig)
+        chain_dx = [xr[npx + c + 1] for c in range(st.chain - 1)] + ([uk * us] if st.chain else [])
+        fx = ca.vertcat(*dx, *chain_dx)
+        slope = ca.mtimes(pts, C_MAT[:, r])
+        res.append(rho * (slope - hn * fx / xs))
+        thrust = plant.thrust([xr[m] for m in range(npx)], CASADI, sig)
+        err2 += B_QUAD[r] * (thrust / fscale - fd[r - 1]) ** 2
+    return ca.Function("interval", [pts, uk, sig, xs, us, rho, hn, fscale, fd], [ca.vertcat(*res), err2])
 
 
 @lru_cache(maxsize=64)

@@ -28,7 +28,9 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ocp.errors import ParameterError
 
-PRESETS: tuple[str, ...] = ("paper-rig",)
+#: built-in parameter sets: the seed paper's rig with its "Hz" read as rad/s (the default, ``paper-rig``) or as
+#: rev/s (``paper-rig-revs``); the paper is inconsistent, see the presets' notes and :mod:`ocp.presets.evidence`
+PRESETS: tuple[str, ...] = ("paper-rig", "paper-rig-revs")
 
 #: per-speed-squared units accepted in the ``units`` block -> factor that turns "per unit^2" into
 #: "per (rad/s)^2" (divide by (rad/s per unit)^2).

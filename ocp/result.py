@@ -33,6 +33,7 @@ PATH_TOLERANCE = 1e-3  # relative excess over a limit accepted as rounding
 SIM_STEP = 2.5e-4  # s, longest verification step (two RK4 sub-steps each)
 RK4_STIFFNESS = 0.32  # largest |h lambda| of an RK4 sub-step: RK4 is stable to 2.78, its error ~ (h lambda)^5 / 120
 MAX_SIM_STEPS = 2_000_000  # verification steps of one answer (about a second of computing)
+COMMAND_SUBSTEPS = 4  # held pieces per collocation interval of a continuous command (simulation and output)
 
 
 @dataclass
@@ -272,9 +273,10 @@ def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: d
     frac = (t - sol.phase_edges[j]) / np.diff(sol.phase_edges)[j]
     f_des = np.interp(problem.phases.bounds[j] + frac * problem.phases.durations[j], problem.t_desired,
                       problem.f_desired)
-    if sol.chain:  # continuous input: knots on the output grid, value at each step's middle
-        knots = t
-        u_knots = sol.states(0.5 * (t[:-1] + t[1:]))[1]
+    if sol.chain:  # continuous input: knots on the output grid and COMMAND_SUBSTEPS per collocation interval
+        # (a 1 kHz hold smears a voltage that turns within one interval: a min-time solve's do, in 0.1 ms)
+        knots = np.union1d(t, _subdivide(sol.edges, COMMAND_SUBSTEPS))
+        u_knots = sol.states(0.5 * (knots[:-1] + knots[1:]))[1]
     else:
         knots, u_knots = sol.edges, sol.controls
     resp = simulate_response(plant, knots, u_knots, sol.points[0, 0, :npx], t)
@@ -296,6 +298,13 @@ def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: d
     return OptimizeResult(name=m.name, source="optimized", status=solver_info["status"], reason="",
                           arrays=arrays, crossings=crossings, stretch=stretch, verification=verification,
                           solver=solver_info, fine=fine)
+
+
+def _subdivide(edges: np.ndarray, parts: int) -> np.ndarray:
+    """``edges`` (K,) with ``parts - 1`` equally spaced points inserted in each gap, shape ((K-1) parts + 1,)."""
+    frac = np.arange(parts) / parts
+    inner = (edges[:-1, None] + frac[None, :] * np.diff(edges)[:, None]).ravel()
+    return np.append(inner, edges[-1])
 
 
 def _torque_plant_commands(m: Mission, w: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

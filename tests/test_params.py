@@ -77,3 +77,38 @@ def test_units_trap_arithmetic(rig):
     assert rig.max_steady_speed(12.0) > w_needed  # reachable with rad/s
     w_needed_rev = math.sqrt(0.59 / (1.4e-4 / (2 * math.pi) ** 2))
     assert w_needed_rev > 2000 * 2 * math.pi / 60  # out of reach if Hz meant rev/s
+
+
+def test_both_readings_of_the_papers_hz_are_presets_with_paper_rig_the_rad_s_default(rig):
+    revs = load_params("paper-rig-revs")
+    assert load_params("paper-rig") == rig and rig.c_f == pytest.approx(1.4e-4)
+    assert revs.c_f == pytest.approx(1.4e-4 / (2 * math.pi) ** 2, rel=1e-12)
+    assert revs.c_tau == pytest.approx(2.2e-6 / (2 * math.pi) ** 2, rel=1e-12)
+    for name in ("paper-rig", "paper-rig-revs"):
+        notes = json.loads(Path(f"ocp/presets/{name}.json").read_text())["notes"]
+        assert "inconsistent" in notes["units"] and "assumed" in json.dumps(notes)
+        assert "2.7 V" not in notes["units"] and "0.49 A" not in notes["units"]  # the circular argument is gone
+
+
+def test_rotor_evidence_by_hand_arithmetic(rig):
+    """C_T, shaft power, momentum-theory power and figure of merit at 0.59 N, recomputed by hand:
+    rad/s reading: w = sqrt(0.59 / 1.4e-4) = 64.918 rad/s, n = 10.332 rev/s,
+    C_T = 0.59 / (1.225 * 10.332^2 * 0.2^4) = 2.820, P = 2.2e-6 * 64.918^3 = 0.6019 W,
+    P_ideal = 0.59^1.5 / sqrt(2 * 1.225 * pi * 0.01) = 0.45319 / 0.27744 = 1.6335 W, FM = 2.714;
+    rev/s reading: C_T = 1.4e-4 / (1.225 * 0.2^4) = 0.07143 (independent of the thrust), w = 2 pi 64.918 =
+    407.89 rad/s = 3895 r/min, P = (2.2e-6 / (2 pi)^2) * 407.89^3 = 3.782 W, FM = 1.6335 / 3.782 = 0.4319."""
+    from ocp.presets.evidence import rotor_evidence
+
+    ev = rotor_evidence(rig)
+    assert ev.speed == pytest.approx(64.918, rel=1e-4) and ev.rpm == pytest.approx(619.92, rel=1e-4)
+    assert ev.thrust_coefficient == pytest.approx(2.820, rel=1e-3)
+    assert ev.shaft_power == pytest.approx(0.6019, rel=1e-3) and ev.ideal_power == pytest.approx(1.6335, rel=1e-4)
+    assert ev.figure_of_merit == pytest.approx(2.714, rel=1e-3)
+    assert not ev.physical and ev.within_rating and ev.speed_at_voltage > ev.speed
+    revs = rotor_evidence(load_params("paper-rig-revs"))
+    assert revs.thrust_coefficient == pytest.approx(0.07143, rel=1e-3)
+    assert revs.speed == pytest.approx(407.89, rel=1e-4) and revs.rpm == pytest.approx(3895.05, rel=1e-4)
+    assert revs.shaft_power == pytest.approx(3.782, rel=1e-3)
+    assert revs.figure_of_merit == pytest.approx(0.4319, rel=1e-3)
+    assert revs.physical and not revs.within_rating and revs.speed_at_voltage < revs.speed
+    assert revs.rated_speed == pytest.approx(2000 * 2 * math.pi / 60)

@@ -35,7 +35,7 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
 def test_healthz_and_info(http: httpx.Client) -> None:
     assert http.get("/healthz").json() == {"status": "ok"}
     info = http.get("/v1/info").json()
-    assert info["presets"] == ["paper-rig"]
+    assert info["presets"] == ["paper-rig", "paper-rig-revs"]
     assert "continuous-voltage" in info["regularities"]
     assert info["limits"]["max_batch_missions"] == 5
     assert info["limits"]["max_body_bytes"] == BODY_LIMIT

@@ -71,8 +71,15 @@ def cmd_optimize(args: argparse.Namespace) -> int:
           f"reproduction rms {_g(v['thrust_rms_error'], '.3g')} N; tracking rms {_g(v['tracking_rms_error'], '.3g')} N")
     if "min_time_s" in v:
         analytic = v.get("analytic_min_time_s")
-        print(f"  minimum transition {_g(v['min_time_s'], '.1f', 1e3)} ms; fastest analytic sin^(2q+1) within the "
+        bound = v.get("min_time_error_bound_s")
+        found = "none" if v["min_time_s"] is None else f"{_g(v['min_time_s'], '.2f', 1e3)} ms"
+        print(f"  minimum transition {found}; fastest analytic sin^(2q+1) within the "
               + ("same limits: none" if analytic is None else f"same limits {_g(analytic, '.1f', 1e3)} ms"))
+        if bound is not None:
+            print(f"  mesh refinement: error bound {_g(bound, '.2f', 1e3)} ms, meshes "
+                  + ", ".join(f"{m['intervals']}: {_g(m['min_time_s'], '.2f', 1e3)} ms" for m in v["min_time_mesh"]))
+        if v.get("min_time_note"):
+            print(f"  ({v['min_time_note']})")
     for c in d["crossings"]:
         print(f"  reversal at {_g(c['t'], '.4f')} s, local exponent {_g(c['exponent'], '.2f')}")
     if not args.out:

@@ -71,28 +71,66 @@ def fig_trjphase(k: float, u_low: float, u_high: float) -> Figure:
     return fig
 
 
-def reference_case(params: MotorParams, p: int, amplitude: float = 0.5, period: float = 2.0) -> Reference:
-    """Exact reference of one Fig. dc_reference_cases case over one period [0, period] at 1 kHz.
-
-    Odd ``p``: ``A sin^p``; even ``p`` (touch, no sign change): a local reversal ``alpha (t - T/2)^p``
-    blended into ``A`` on both sides.
-    """
-    t = np.linspace(0.0, period, round(period * 1000) + 1)
+def case_profile(p: int, amplitude: float = 0.5, period: float = 2.0) -> SinProfile | LocalReversal:
+    """Thrust profile of one Fig. dc_reference_cases case: odd ``p``: ``A sin^p``; even ``p`` (touch, no sign
+    change): a local reversal ``alpha (t - T/2)^p`` blended into ``A`` on both sides."""
     if p % 2:
-        return reference(SinProfile(amplitude, period, (p - 1) // 2), params, t)
-    return reference(LocalReversal.between(amplitude, amplitude, period / 2, p, period / 2), params, t)
+        return SinProfile(amplitude, period, (p - 1) // 2)
+    return LocalReversal.between(amplitude, amplitude, period / 2, p, period / 2)
 
 
-def _clipped(ax: Axes, t: np.ndarray, y: np.ndarray, far: np.ndarray, color: str, label: str) -> None:
-    """Plot ``y`` clipped to 1.5x its peak away from the crossings; mark clipped/inf samples."""
-    finite_far = np.abs(y[far & np.isfinite(y)])
-    lim = 1.5 * float(finite_far.max()) if finite_far.size and finite_far.max() > 0 else 1.0
-    big = ~np.isfinite(y) | (np.abs(y) > lim)
-    ax.plot(t, np.clip(np.nan_to_num(y, posinf=lim, neginf=-lim), -lim, lim), color=color, label=label)
+def reference_case(params: MotorParams, p: int, amplitude: float = 0.5, period: float = 2.0) -> Reference:
+    """Exact reference of one Fig. dc_reference_cases case over one period [0, period] at 1 kHz."""
+    t = np.linspace(0.0, period, round(period * 1000) + 1)
+    return reference(case_profile(p, amplitude, period), params, t)
+
+
+def one_sided_limits(profile: SinProfile | LocalReversal, params: MotorParams, t_s: float, channel: str,
+                     offset: float = 1e-9) -> tuple[float, float]:
+    """(left, right) values of ``channel`` just before and after the crossing ``t_s`` [s] (closed forms at
+    ``t_s -+ offset``): their signs are the one-sided limits' signs where the channel is unbounded."""
+    ref = reference(profile, params, np.array([t_s - offset, t_s + offset]))
+    values = getattr(ref, channel)
+    return float(values[0]), float(values[1])
+
+
+def crossing_markers(profile: SinProfile | LocalReversal, params: MotorParams, ref: Reference, channel: str,
+                     lim: float) -> list[tuple[float, float, str]]:
+    """Markers ``(t [s], y, side)`` for the samples of ``ref`` exactly on a crossing where ``channel`` is
+    unbounded: one at ``+-lim`` per one-sided limit (``side`` "left" / "right"), so a channel that dives to
+    -inf on one side and returns from +inf on the other shows both."""
+    y = getattr(ref, channel)
+    out = []
+    for t_s in ref.crossing_times:
+        k = int(np.argmin(np.abs(ref.t - t_s)))
+        if abs(ref.t[k] - t_s) > 1e-9 * max(1.0, abs(t_s)) or np.isfinite(y[k]):
+            continue
+        left, right = one_sided_limits(profile, params, t_s, channel)
+        out += [(float(ref.t[k]), float(np.sign(left)) * lim, "left"),
+                (float(ref.t[k]), float(np.sign(right)) * lim, "right")]
+    return out
+
+
+def _clipped(ax: Axes, t: np.ndarray, y: np.ndarray, far: np.ndarray, color: str, label: str,
+             markers: list[tuple[float, float, str]]) -> None:
+    """Plot ``y`` clipped to 1.5x its peak away from the crossings, broken at infinite samples; mark
+    clipped samples and both one-sided limits at a crossing sample (``markers``, :func:`crossing_markers`)."""
+    lim = plot_limit(y, far)
+    big = np.isfinite(y) & (np.abs(y) > lim)
+    ax.plot(t, np.clip(np.where(np.isfinite(y), y, np.nan), -lim, lim), color=color, label=label)
     if big.any():
-        ys = np.sign(y[big]) * lim
-        ax.plot(t[big], ys, "^", color="k", ms=4, label="clipped (unbounded)")
+        ax.plot(t[big], np.sign(y[big]) * lim, "^", color="k", ms=4, label="clipped (unbounded)")
+    for side, style in (("left", "<"), ("right", ">")):
+        pts = [(tm, ym) for tm, ym, sd in markers if sd == side]
+        if pts:
+            ax.plot(*zip(*pts, strict=True), style, color="tab:red", ms=6, label=f"{side} limit ±inf")
     ax.set_ylim(-1.1 * lim, 1.1 * lim)
+
+
+def plot_limit(y: np.ndarray, far: np.ndarray) -> float:
+    """1.5x the largest finite ``|y|`` on the ``far`` samples (away from crossings); 1 when there is none."""
+    finite_far = np.abs(y[far & np.isfinite(y)])
+    return 1.5 * float(finite_far.max()) if finite_far.size and finite_far.max() > 0 else 1.0
 
 
 def fig_dc_reference_cases(params: MotorParams) -> Figure:
@@ -108,12 +146,16 @@ def fig_dc_reference_cases(params: MotorParams) -> Figure:
         cls = crossing_class(p)
         axes[0, j].set_title(f"Case {j + 1}: p={p}\ni {regularity_label(cls.current)}, "
                              f"V {regularity_label(cls.voltage)}", fontsize=8)
+        prof = case_profile(p)
         for r, (ch, lab) in enumerate(channels):
-            _clipped(axes[r, j], ref.t, getattr(ref, ch), far, COLORS[j], ch)
+            y = getattr(ref, ch)
+            _clipped(axes[r, j], ref.t, y, far, COLORS[j], ch,
+                     crossing_markers(prof, params, ref, ch, plot_limit(y, far)))
             if j == 0:
                 axes[r, j].set_ylabel(lab)
         axes[-1, j].set_xlabel("t [s]")
-    fig.suptitle("Ideal references (eqs. current_reference, voltage_reference); ▲ = clipped, unbounded at reversal")
+    fig.suptitle("Ideal references (eqs. current_reference, voltage_reference); ▲ = clipped; "
+                 "◀ ▶ = left / right limit (±inf) at a sample on a reversal")
     return fig
 
 
@@ -155,21 +197,22 @@ def fig_closed_loop(rows: list[CaseRun], title: str) -> Figure:
         k = k0 & (run.t <= 2.0 * row.period + 1e-12)
         phase = run.t[k] / row.period
         for r, (name, lab) in enumerate(left):
-            axes[r, 0].plot(phase, getattr(run, name)[k], color=COLORS[c], lw=0.9, label=row.label)
+            source = row if name.endswith("_error") else run  # errors against the row's target (desired)
+            axes[r, 0].plot(phase, getattr(source, name)[k], color=COLORS[c], lw=0.9, label=row.label)
             axes[r, 0].set_ylabel(lab)
-        for r, (ref, act, lab) in enumerate((("omega_ref", "omega", r"$\omega$ [rad/s]"),
-                                               ("thrust_ref", "thrust", "F [N]"))):
+        for r, (target, act, lab) in enumerate(((row.target[1], "omega", r"$\omega$ [rad/s]"),
+                                                  (row.target[0], "thrust", "F [N]"))):
             ax = axes[2 * r, 1]
-            ax.plot(phase, getattr(run, ref)[k], "--", color=COLORS[c], lw=0.9)
+            ax.plot(phase, target[k], "--", color=COLORS[c], lw=0.9)
             ax.plot(phase, getattr(run, act)[k], color=COLORS[c], lw=0.9, label=row.label)
             ax.set_ylabel(lab)
-        axes[1, 1].plot(phase, np.abs(run.speed_error[k]), color=COLORS[c], lw=0.9)
-        axes[3, 1].plot(phase, np.abs(run.thrust_error[k]), color=COLORS[c], lw=0.9)
+        axes[1, 1].plot(phase, np.abs(row.speed_error[k]), color=COLORS[c], lw=0.9)
+        axes[3, 1].plot(phase, np.abs(row.thrust_error[k]), color=COLORS[c], lw=0.9)
     axes[1, 1].set(ylabel=r"$|e_\omega|$ [rad/s]", yscale="log")
     axes[3, 1].set(ylabel="$|e_F|$ [N]", yscale="log")
     axes[0, 0].legend(fontsize=8)
     axes[0, 1].legend(fontsize=8)
     for ax in axes[-1]:
-        ax.set_xlabel("t / T (second period; dashed: reference)")
+        ax.set_xlabel("t / T (second period; dashed: what the row is scored against, the desired profile)")
     fig.suptitle(title)
     return fig
