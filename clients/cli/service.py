@@ -18,20 +18,26 @@ import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import yaml
-
+from clients.cli.help import add_command, require_extra
 from clients.cli.io import print_json
 from ocp.errors import MissionError, ThrustshapeError
-from ocp.mission import Mission, mission_from_mapping
+
+if TYPE_CHECKING:
+    from ocp.mission import Mission
 
 SUMMARY_COLUMNS = ("index", "name", "status", "source", "solve_time_s", "thrust_rms_error", "max_abs_current",
                    "max_abs_voltage", "error")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("serve", help="run the HTTP service (FastAPI + uvicorn; docs at /docs)")
+    p = add_command(sub, "serve", summary="run the HTTP service (FastAPI + uvicorn; docs at /docs)",
+                    description="Options become THRUSTSHAPE_* settings (see service/settings.py for the rest: "
+                                "API_KEY,\nQUEUE_SIZE, MAX_* limits, timeouts). The web page is at /, the "
+                                "OpenAPI document at /openapi.json.",
+                    examples=["thrustshape serve --port 8000 --workers 2",
+                              "THRUSTSHAPE_API_KEY=secret thrustshape serve --db /var/lib/thrustshape/jobs.sqlite3"])
     p.add_argument("--host", default=None, help="bind address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=None, help="port (default 8000)")
     p.add_argument("--workers", type=int, default=None, help="solver worker processes (default 2)")
@@ -40,7 +46,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--log-level", choices=("critical", "error", "warning", "info", "debug"), default="info")
     p.set_defaults(func=cmd_serve)
 
-    p = sub.add_parser("batch", help="optimise every mission of a file or directory, locally or on a server")
+    p = add_command(sub, "batch", summary="optimise every mission of a file or directory, locally or on a server",
+                    description="Every .json/.yaml/.yml file of a directory (or one file holding a mission, a "
+                                "list, or\n{missions: [...]}); a progress bar on stderr, a summary table on "
+                                "stdout, and with --out DIR\none <index>-<name>.json per mission plus "
+                                "summary.csv.",
+                    examples=["thrustshape batch examples/missions --out results",
+                              "thrustshape batch examples/missions --server http://127.0.0.1:8000 --json"])
     p.add_argument("missions", help="mission file (JSON/YAML: one mission, a list, or {missions: [...]}) or directory")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--server", default=None, metavar="URL", help="submit to a thrustshape server")
@@ -63,6 +75,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
     """Options become THRUSTSHAPE_* settings; uvicorn imports the app factory by name (HTTP boundary kept)."""
     import uvicorn
 
+    if args.dask or os.environ.get("THRUSTSHAPE_DASK_ADDRESS"):
+        require_extra("distributed", "dask", "--dask")
     overrides = {"HOST": args.host, "PORT": args.port, "WORKERS": args.workers, "DB_PATH": args.db,
                  "DASK_ADDRESS": args.dask}
     for key, value in overrides.items():
@@ -78,6 +92,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def _documents(path: Path) -> Iterator[tuple[str, Any]]:
+    import yaml
+
     files = sorted(f for f in path.iterdir() if f.suffix.lower() in (".json", ".yaml", ".yml")) if path.is_dir() \
         else [path]
     if not files:
@@ -98,6 +114,8 @@ def _documents(path: Path) -> Iterator[tuple[str, Any]]:
 
 def load_missions(path: str | Path) -> list[Mission]:
     """Every mission under ``path``, validated; errors name the file and the field."""
+    from ocp.mission import mission_from_mapping
+
     out: list[Mission] = []
     for where, item in _documents(Path(path)):
         try:
@@ -109,6 +127,7 @@ def load_missions(path: str | Path) -> list[Mission]:
 
 def optimize_one(mission: dict[str, Any]) -> dict[str, Any]:
     """Local batch item (runs in a worker process or on Dask): result dict, or ``{"error": ...}``."""
+    from ocp.mission import Mission
     from ocp.optimize import optimize
 
     try:
@@ -141,6 +160,7 @@ def _run_local(missions: list[Mission], workers: int, dask: str | None,
     payloads = [m.model_dump(mode="json") for m in missions]
     outcomes: list[dict[str, Any] | None] = [None] * len(payloads)
     if dask:
+        require_extra("distributed", "dask", "--dask")
         from distributed import Client as DaskClient
         from distributed import as_completed
 
