@@ -84,7 +84,10 @@ def cmd_serve(args: argparse.Namespace) -> int:
             os.environ[f"THRUSTSHAPE_{key}"] = str(value)
     host = os.environ.get("THRUSTSHAPE_HOST", "127.0.0.1")
     port = int(os.environ.get("THRUSTSHAPE_PORT", "8000"))
-    uvicorn.run("service.app:app_from_env", factory=True, host=host, port=port, log_level=args.log_level)
+    from service.api.logging import log_config
+
+    uvicorn.run("service.app:app_from_env", factory=True, host=host, port=port, log_level=args.log_level,
+                log_config=log_config(args.log_level))
     return 0
 
 
