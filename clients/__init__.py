@@ -9,7 +9,8 @@ from __future__ import annotations
 from typing import Any
 
 __all__ = ["APIError", "AsyncClient", "BadRequest", "Client", "ClientError", "ComputationTimeout", "InvalidInput",
-           "NotFound", "PayloadTooLarge", "ServerBusy", "ServerError", "Timeout", "TransportError", "Unauthorized"]
+           "MalformedResponse", "NotFound", "PayloadTooLarge", "ServerBusy", "ServerError", "Timeout",
+           "TransportError", "Unauthorized"]
 
 
 def __getattr__(name: str) -> Any:
