@@ -108,3 +108,19 @@ def test_a_missing_extra_is_named() -> None:
         require_extra("surely_not_installed_pkg", "dask", "--dask")
     assert err.value.field == "--dask" and "pip install 'thrustshape[dask]'" in err.value.reason
     require_extra("json", "dask", "--dask")  # present: no error
+
+
+def test_batch_progress_writes_lines_not_carriage_returns_off_a_terminal() -> None:
+    import io as _io
+
+    from clients.cli.service import Progress
+
+    log = _io.StringIO()  # not a terminal
+    bar = Progress(4, stream=log)
+    for done, failed in ((0, 0), (1, 0), (1, 0), (2, 1), (3, 1)):
+        bar(done, failed)
+    bar.close()
+    lines = log.getvalue().splitlines()
+    assert "\r" not in log.getvalue() and len(lines) == 4  # one line per change, none for a repeat
+    assert lines[-1].startswith("[" + "#" * 30 + "] 4/4 done=3 failed=1") and "/s" in lines[-1]
+    assert "ETA" in lines[1] and lines[1].split()[1] == "1/4"
