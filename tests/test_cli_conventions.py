@@ -142,3 +142,23 @@ def test_example_missions_and_readme_tour_run_as_they_are(tmp_path: Path) -> Non
             (tmp_path / out.strip()).write_text(run.stdout)
     response = list(csv.DictReader(io.StringIO((tmp_path / "response.csv").read_text())))
     assert len(response) > 1000 and max(abs(float(r["thrust"])) for r in response) > 0.3
+
+
+def test_logs_and_batches_read_from_stdin(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                          monkeypatch: pytest.MonkeyPatch) -> None:
+    from clients.cli import main
+    from clients.cli.service import load_missions
+    from ocp.logs import write_log_csv
+    from tests.synthetic_rig import RigSpec, generate
+
+    log = tmp_path / "rig.csv"
+    write_log_csv(generate(load_params("paper-rig"), RigSpec(seconds=0.4, seed=5)), log)
+    assert main(["check", str(log), "--params", "paper-rig", "--json"]) == 0
+    from_file = json.loads(capsys.readouterr().out)
+    monkeypatch.setattr("sys.stdin", io.TextIOWrapper(io.BytesIO(log.read_bytes())))
+    assert main(["check", "-", "--params", "paper-rig", "--json"]) == 0
+    assert json.loads(capsys.readouterr().out) == from_file  # `check - < rig.csv` is `check rig.csv`
+    example = json.loads((ROOT / "examples/reversal.json").read_text())
+    docs = "missions:\n" + "".join(f"  - {json.dumps({**example, 'name': n})}\n" for n in ("a", "b"))  # YAML
+    monkeypatch.setattr("sys.stdin", io.StringIO(docs))
+    assert [m.name for m in load_missions("-")] == ["a", "b"]

@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from clients.cli.help import add_command, require_extra
+from clients.cli.help import STDIO, add_command, require_extra
 from clients.cli.io import fmt_number as _g
 from clients.cli.io import print_json
 from clients.cli.remote import add_server_args, client, params_for_server
@@ -22,7 +24,8 @@ _LOG_DESCRIPTION = ("A log is CSV or Parquet with t, voltage, current, omega and
 
 
 def _log_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("log", help="CSV/Parquet log (t, voltage, current, omega/theta, thrust; SI) or a Tyto export")
+    p.add_argument("log", help="CSV/Parquet log (t, voltage, current, omega/theta, thrust; SI) or a Tyto export "
+                               "('-': stdin)")
     p.add_argument("--params", required=True, help="parameter file (JSON/YAML, may hold 'effects') or preset name")
     p.add_argument("--columns", default=None,
                    help='column map as JSON, e.g. \'{"omega": {"column": "speed", "unit": "rpm"}}\'')
@@ -80,20 +83,40 @@ def _columns(args: argparse.Namespace) -> Any:
     return columns
 
 
+def _stdin_log(args: argparse.Namespace) -> tuple[str, bytes]:
+    """``(file name, bytes)`` of a log given as ``-``, read once (Parquet told apart by its magic bytes)."""
+    if not hasattr(args, "_stdin_log"):
+        data = sys.stdin.buffer.read()
+        args._stdin_log = ("stdin.parquet" if data[:4] == b"PAR1" else "stdin.csv", data)
+    return args._stdin_log
+
+
 def _load_log(args: argparse.Namespace) -> Log:
     from ocp.logs import LogKind, read_log
 
-    if Path(args.log).suffix.lower() in (".parquet", ".pq"):
-        require_extra("pyarrow", "parquet", str(args.log))
     kind = LogKind.STEADY_STATE if args.steady_state else LogKind.TIME_SERIES
-    return read_log(args.log, _columns(args), kind)
+    if args.log != STDIO:
+        if Path(args.log).suffix.lower() in (".parquet", ".pq"):
+            require_extra("pyarrow", "parquet", str(args.log))
+        return read_log(args.log, _columns(args), kind)
+    name, data = _stdin_log(args)
+    if name.endswith(".parquet"):
+        require_extra("pyarrow", "parquet", "log")
+    with tempfile.TemporaryDirectory(prefix="thrustshape-") as tmp:  # the log readers take a path
+        path = Path(tmp) / name
+        path.write_bytes(data)
+        return read_log(path, _columns(args), kind)
 
 
 def _upload(args: argparse.Namespace) -> dict[str, Any]:
     """What ``--server`` sends: the log file's bytes, the parameters (a local file read here), the column map."""
-    if not Path(args.log).is_file():
+    if args.log == STDIO:
+        log: Any = _stdin_log(args)
+    elif not Path(args.log).is_file():
         raise LogError(str(args.log), "no such file")
-    return {"log": args.log, "params": params_for_server(args.params), "columns": _columns(args),
+    else:
+        log = args.log
+    return {"log": log, "params": params_for_server(args.params), "columns": _columns(args),
             "steady_state": args.steady_state}
 
 

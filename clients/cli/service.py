@@ -20,7 +20,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wai
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from clients.cli.help import add_command, require_extra
+from clients.cli.help import STDIO, add_command, require_extra
 from clients.cli.io import print_json
 from ocp.errors import MissionError, ThrustshapeError
 
@@ -53,7 +53,8 @@ def register(sub: argparse._SubParsersAction) -> None:
                                 "summary.csv.",
                     examples=["thrustshape batch examples/missions --out results",
                               "thrustshape batch examples/missions --server http://127.0.0.1:8000 --json"])
-    p.add_argument("missions", help="mission file (JSON/YAML: one mission, a list, or {missions: [...]}) or directory")
+    p.add_argument("missions", help="mission file (JSON/YAML: one mission, a list, or {missions: [...]}), directory, "
+                                    "or '-' (stdin)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--server", default=None, metavar="URL", help="submit to a thrustshape server")
     where.add_argument("--local", action="store_true", help="run here (the default)")
@@ -97,6 +98,15 @@ def cmd_serve(args: argparse.Namespace) -> int:
 def _documents(path: Path) -> Iterator[tuple[str, Any]]:
     import yaml
 
+    if str(path) == STDIO:  # one JSON/YAML document on stdin (JSON is YAML)
+        try:
+            data = yaml.safe_load(sys.stdin.read())
+        except yaml.YAMLError as exc:
+            raise MissionError("stdin", f"not valid JSON/YAML: {exc}") from None
+        data = data["missions"] if isinstance(data, dict) and "missions" in data else data
+        for i, item in enumerate(data if isinstance(data, list) else [data]):
+            yield (f"stdin[{i}]" if isinstance(data, list) else "stdin"), item
+        return
     files = sorted(f for f in path.iterdir() if f.suffix.lower() in (".json", ".yaml", ".yml")) if path.is_dir() \
         else [path]
     if not files:
