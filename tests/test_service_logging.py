@@ -6,6 +6,8 @@ kind, duration, outcome) carrying the request's ``X-Request-ID``, a timed-out ta
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
 import time
 from pathlib import Path
 
@@ -14,7 +16,7 @@ import pytest
 
 from service.jobs import JobStore
 from service.tasks import available_tasks
-from tests.test_service_support import mission, running_server
+from tests.test_service_support import ROOT, mission, running_server
 
 SIN = {"params": "paper-rig", "amplitude": 0.5, "period": 2.0, "q": 2, "rate": 100.0}
 
@@ -57,3 +59,19 @@ def test_server_logs_start_resume_requests_tasks_timeouts(tmp_path: Path) -> Non
     worker_lines = lines(text, "thrustshape.workers")  # the pool's own kill/replace lines, where it logs them
     assert all("request_id=" in line for line in worker_lines)
     assert lines(text, "thrustshape.service: stop request_id=-")
+
+
+def test_serve_logging_config_keeps_the_app_loggers_with_request_ids() -> None:
+    """``thrustshape serve`` hands uvicorn :func:`log_config`: thrustshape.* INFO lines are printed (with the
+    request id) even when uvicorn's own level is warning."""
+    code = ("import logging, logging.config\n"
+            "from service.api.logging import log_config, request_id\n"
+            "logging.config.dictConfig(log_config('warning'))\n"
+            "request_id.set('r-42')\n"
+            "logging.getLogger('thrustshape.service').info('resuming 3 batch items left running')\n"
+            "logging.getLogger('uvicorn.error').info('uvicorn chatter')\n"
+            "logging.getLogger('uvicorn.error').warning('uvicorn warning')\n")
+    run = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
+    assert re.search(r"INFO thrustshape\.service: resuming 3 batch items left running request_id=r-42$",
+                     run.stderr, re.M), run.stderr
+    assert "uvicorn chatter" not in run.stderr and "uvicorn warning request_id=r-42" in run.stderr

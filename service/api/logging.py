@@ -85,7 +85,7 @@ class RequestId:
             await self.app(scope, receive, send_with_id)
         except Exception:  # a bug, not an input error: problem+json 500 (traceback in the log), not text/plain
             http_log.exception("unexpected error on %s %s", scope.get("method"), scope.get("path"))
-            if status != 500 or sent:
+            if sent:  # too late for an error answer: let the server close the connection
                 raise
             await _internal_error(send_with_id, rid)
         finally:
