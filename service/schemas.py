@@ -288,9 +288,10 @@ class Health(_Strict):
 class Problem(_Open):
     """RFC 9457 problem details; ``field`` and ``reason`` name what was wrong."""
 
-    type: str = "about:blank"
-    title: str
-    status: int
-    detail: str
-    field: str | None = None
-    reason: str | None = None
+    type: str = Field(default="about:blank", description="problem type URI (about:blank: see title/status)")
+    title: str = Field(description="short summary of the problem type, e.g. 'Invalid input'")
+    status: int = Field(description="the HTTP status code")
+    detail: str = Field(description="what went wrong, for a person")
+    field: str | None = Field(default=None, description="the input at fault: a dotted body path "
+                              "(limits.current, segments.1.duration), a form field, a log column or a header")
+    reason: str | None = Field(default=None, description="why that input was refused")

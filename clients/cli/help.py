@@ -9,9 +9,11 @@ pay for them.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from collections.abc import Sequence
+from contextlib import AbstractContextManager
 from pathlib import Path
 from typing import IO, Any, Literal, NoReturn
 
@@ -84,12 +86,11 @@ def add_command(sub: argparse._SubParsersAction, name: str, *, summary: str, des
                           else summary, epilog=epilog, lists=lists)
 
 
-def open_input(path: str, binary: bool = False) -> IO[Any]:
-    """``path`` opened for reading, or stdin for ``-`` (not closed by the caller's ``with``)."""
+def open_input(path: str) -> AbstractContextManager[IO[str]]:
+    """``path`` opened for reading text, or stdin for ``-`` (left open after the ``with``: it is the process's)."""
     if path == STDIO:
-        stream = sys.stdin.buffer if binary else sys.stdin
-        return _Unclosed(stream)  # type: ignore[return-value]
-    return open(path, "rb") if binary else open(path, encoding="utf-8", newline="")
+        return contextlib.nullcontext(sys.stdin)
+    return open(path, encoding="utf-8", newline="")
 
 
 def read_text(path: str) -> str:
@@ -104,22 +105,6 @@ def write_text(text: str, out: str | None) -> None:
         sys.stdout.write(text)
     else:
         Path(out).write_text(text, encoding="utf-8")
-
-
-class _Unclosed:
-    """A stream whose ``with`` block leaves it open (stdin belongs to the process)."""
-
-    def __init__(self, stream: IO[Any]) -> None:
-        self._stream = stream
-
-    def __enter__(self) -> IO[Any]:
-        return self._stream
-
-    def __exit__(self, *exc: object) -> None:
-        return None
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self._stream, name)
 
 
 def require_extra(module: str, extra: str, field: str) -> None:
