@@ -63,15 +63,21 @@ def test_server_logs_start_resume_requests_tasks_timeouts(tmp_path: Path) -> Non
 
 def test_serve_logging_config_keeps_the_app_loggers_with_request_ids() -> None:
     """``thrustshape serve`` hands uvicorn :func:`log_config`: thrustshape.* INFO lines are printed (with the
-    request id) even when uvicorn's own level is warning."""
+    request id) even when uvicorn's own level is warning; uvicorn's access lines carry the request id."""
     code = ("import logging, logging.config\n"
             "from service.api.logging import log_config, request_id\n"
-            "logging.config.dictConfig(log_config('warning'))\n"
             "request_id.set('r-42')\n"
+            "logging.config.dictConfig(log_config('info'))\n"
+            "logging.getLogger('uvicorn.access').info('%s - \"%s %s HTTP/%s\" %d', '127.0.0.1:5', 'GET', '/healthz',"
+            " '1.1', 200)\n"  # the call uvicorn's protocol makes
+            "logging.config.dictConfig(log_config('warning'))\n"
             "logging.getLogger('thrustshape.service').info('resuming 3 batch items left running')\n"
             "logging.getLogger('uvicorn.error').info('uvicorn chatter')\n"
             "logging.getLogger('uvicorn.error').warning('uvicorn warning')\n")
     run = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
+    assert "Traceback" not in run.stderr and "Logging error" not in run.stderr, run.stderr
+    assert re.search(r'INFO uvicorn\.access: 127\.0\.0\.1:5 - "GET /healthz HTTP/1\.1" 200 OK request_id=r-42$',
+                     run.stderr, re.M), run.stderr
     assert re.search(r"INFO thrustshape\.service: resuming 3 batch items left running request_id=r-42$",
                      run.stderr, re.M), run.stderr
     assert "uvicorn chatter" not in run.stderr and "uvicorn warning request_id=r-42" in run.stderr

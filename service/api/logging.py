@@ -179,7 +179,8 @@ def log_config(uvicorn_level: str = "info") -> dict[str, Any]:
     return {
         "version": 1, "disable_existing_loggers": False,
         "filters": {"request_id": {"()": "service.api.logging.RequestIdFilter"}},
-        "formatters": {"default": {"format": FORMAT}, "access": {"format": ACCESS_FORMAT}},
+        "formatters": {"default": {"format": FORMAT},  # uvicorn's AccessFormatter fills client_addr, request_line
+                       "access": {"()": "uvicorn.logging.AccessFormatter", "fmt": ACCESS_FORMAT, "use_colors": False}},
         "handlers": {"default": {**handler, "formatter": "default"}, "access": {**handler, "formatter": "access"}},
         "loggers": {
             "uvicorn": {"handlers": ["default"], "level": lvl, "propagate": False},
