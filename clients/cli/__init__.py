@@ -20,7 +20,7 @@ import os
 import sys
 from collections.abc import Sequence
 
-from clients.cli.help import Parser, error_json, version
+from clients.cli.help import Parser, VersionAction, error_json
 from ocp.errors import ThrustshapeError
 
 #: command modules, in help order; each has ``register(subparsers) -> None``
@@ -37,7 +37,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Reproducible thrust references for bidirectional propellers.",
         epilog="Run 'thrustshape COMMAND --help' for a command's options and an example.",
     )
-    parser.add_argument("--version", action="version", version=f"%(prog)s {version()}")
+    parser.add_argument("--version", action=VersionAction, help="show the version and exit")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMAND_MODULES:
         importlib.import_module(name).register(sub)

@@ -33,6 +33,18 @@ def version() -> str:
         return "0+unknown"
 
 
+class VersionAction(argparse.Action):
+    """``--version``: the version is looked up only when asked for (importlib.metadata is slow to import)."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str = argparse.SUPPRESS, **kw: Any) -> None:
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS,
+                         help=kw.get("help", "show the version and exit"))
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: Any) -> None:
+        print(f"{parser.prog} {version()}")
+        parser.exit()
+
+
 def _listing(kind: Listing) -> str:
     """One help line naming what a command accepts, read from the core only when help is printed."""
     if kind == "presets":

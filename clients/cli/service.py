@@ -16,7 +16,6 @@ import re
 import sys
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -200,6 +199,8 @@ def _run_local(missions: list[Mission], workers: int, dask: str | None,
                 outcomes[futs[fut]] = fut.result()
                 progress(*_tally(outcomes))
     else:
+        from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+
         with ProcessPoolExecutor(max_workers=workers) as pool:
             pending: dict[Future[dict[str, Any]], int] = {pool.submit(optimize_one, p): i
                                                           for i, p in enumerate(payloads)}
