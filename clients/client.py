@@ -2,13 +2,15 @@
 
 Both wrap an ``httpx`` client; pass ``transport=`` to talk to an app in-process (e.g.
 ``httpx.ASGITransport(app)``) or through any other httpx transport. A 503 is retried up to
-``retries`` times, waiting what the server's ``Retry-After`` says (capped by ``max_retry_wait``).
+``retries`` times, waiting what the server's ``Retry-After`` says (capped by ``max_retry_wait``);
+``wait_batch`` polls through dropped connections (``reconnects`` in a row, with backoff).
 Errors form a tree, so callers catch as broadly or as narrowly as they need::
 
     ClientError                      root: everything this module raises
     ├── TransportError               no HTTP answer (connection refused, reset, ...)
     │   └── Timeout                  no answer within the client's timeout
     └── APIError                     the server answered with an error (problem+json parsed)
+        ├── MalformedResponse        the answer breaks the protocol (e.g. an unreadable Retry-After)
         ├── BadRequest(ValueError)   4xx: .field and .reason say what to fix
         │   ├── Unauthorized         401: missing or wrong API key
         │   ├── NotFound             404
@@ -25,6 +27,7 @@ import asyncio
 import contextlib
 import email.utils
 import json
+import math
 import os
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping
@@ -63,6 +66,11 @@ class APIError(ClientError):
         super().__init__(f"{status} {self.title}: {self.detail}".strip())
 
 
+class MalformedResponse(APIError):
+    """The server's answer cannot be read as the protocol says (e.g. a ``Retry-After`` that is neither
+    seconds nor an HTTP date); ``field`` names the header."""
+
+
 class BadRequest(APIError, ValueError):
     """4xx: the request must change before it can succeed."""
 
@@ -88,7 +96,11 @@ class ServerBusy(APIError):
 
     @property
     def retry_after(self) -> float | None:
-        return _retry_after(self.headers.get("retry-after"))
+        """Seconds the server asked to wait, or None (absent or unreadable)."""
+        try:
+            return _retry_after(self.headers.get("retry-after"))
+        except ValueError:
+            return None
 
 
 class ServerError(APIError):
@@ -104,13 +116,20 @@ _BY_STATUS: dict[int, type[APIError]] = {401: Unauthorized, 404: NotFound, 413: 
 
 
 def _retry_after(value: str | None) -> float | None:
+    """Seconds from a ``Retry-After`` value (delay-seconds or an HTTP date); ValueError when it is neither."""
     if value is None:
         return None
     try:
-        return max(float(value), 0.0)
+        seconds = float(value)
     except ValueError:
-        when = email.utils.parsedate_to_datetime(value) if value else None
-        return None if when is None else max(when.timestamp() - time.time(), 0.0)
+        try:
+            when = email.utils.parsedate_to_datetime(value)
+        except (TypeError, ValueError, IndexError, OverflowError):
+            raise ValueError(f"Retry-After {value!r} is neither seconds nor an HTTP date") from None
+        return max(when.timestamp() - time.time(), 0.0)
+    if not math.isfinite(seconds):
+        raise ValueError(f"Retry-After {value!r} is not a finite number of seconds")
+    return max(seconds, 0.0)
 
 
 def _error(resp: httpx.Response) -> APIError:
@@ -194,8 +213,18 @@ class _Spec:
         """Seconds to wait before retrying ``resp``, or None when it is final."""
         if resp.status_code != 503 or attempt >= self.retries:
             return None
-        after = _retry_after(resp.headers.get("retry-after"))
+        try:
+            after = _retry_after(resp.headers.get("retry-after"))
+        except ValueError as exc:
+            problem = {"title": "Malformed Retry-After", "detail": str(exc), "field": "Retry-After",
+                       "reason": "neither seconds nor an HTTP date"}
+            raise MalformedResponse(resp.status_code, problem, dict(resp.headers)) from None
         return min(after if after is not None else 0.5 * 2**attempt, self.max_retry_wait)
+
+    @staticmethod
+    def reconnect_delay(failures: int, backoff: float) -> float:
+        """Wait before the next poll after ``failures`` dropped connections in a row [s]."""
+        return min(backoff * 2 ** (failures - 1), 10.0)
 
     @staticmethod
     def result(resp: httpx.Response) -> httpx.Response:
@@ -305,11 +334,25 @@ class Client:
         return self._request("GET", f"/v1/batches/{batch_id}/results", params={"format": "csv"}).text
 
     def wait_batch(self, batch_id: str, *, poll: float = 0.5, timeout: float | None = None,
-                   on_progress: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
-        """Poll until the batch is done or failed; returns its last status. Raises :class:`Timeout`."""
+                   on_progress: Callable[[dict[str, Any]], None] | None = None, reconnects: int = 5,
+                   backoff: float = 0.5) -> dict[str, Any]:
+        """Poll until the batch is done or failed; returns its last status. Raises :class:`Timeout`.
+
+        A dropped connection (e.g. the server restarting) is retried up to ``reconnects`` times in a row,
+        waiting ``backoff`` [s], doubled each time (at most 10 s); the batch is stored, so nothing is lost.
+        """
         end = None if timeout is None else time.monotonic() + timeout
+        failures = 0
         while True:
-            status = self.batch(batch_id)
+            try:
+                status = self.batch(batch_id)
+            except TransportError:
+                failures += 1
+                if failures > reconnects or (end is not None and time.monotonic() > end):
+                    raise
+                time.sleep(self._spec.reconnect_delay(failures, backoff))
+                continue
+            failures = 0
             if on_progress is not None:
                 on_progress(status)
             if status["status"] in ("done", "failed"):
@@ -408,10 +451,21 @@ class AsyncClient:
         return (await self._request("GET", f"/v1/batches/{batch_id}/results", params={"format": "csv"})).text
 
     async def wait_batch(self, batch_id: str, *, poll: float = 0.5, timeout: float | None = None,
-                         on_progress: Callable[[dict[str, Any]], None] | None = None) -> dict[str, Any]:
+                         on_progress: Callable[[dict[str, Any]], None] | None = None, reconnects: int = 5,
+                         backoff: float = 0.5) -> dict[str, Any]:
+        """See :meth:`Client.wait_batch`."""
         end = None if timeout is None else time.monotonic() + timeout
+        failures = 0
         while True:
-            status = await self.batch(batch_id)
+            try:
+                status = await self.batch(batch_id)
+            except TransportError:
+                failures += 1
+                if failures > reconnects or (end is not None and time.monotonic() > end):
+                    raise
+                await asyncio.sleep(self._spec.reconnect_delay(failures, backoff))
+                continue
+            failures = 0
             if on_progress is not None:
                 on_progress(status)
             if status["status"] in ("done", "failed"):

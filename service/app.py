@@ -20,8 +20,9 @@ from fastapi import Depends, FastAPI
 from fastapi.openapi.docs import get_swagger_ui_html
 from fastapi.responses import HTMLResponse, JSONResponse
 
-from service.api import problems
+from service.api import openapi, problems
 from service.api.deps import require_api_key
+from service.api.logging import RequestId, logged_lifespan
 from service.api.middleware import BodyLimit
 from service.api.routes import batches, compare, health, info, model_check, page, references
 from service.batches import BatchRunner
@@ -76,13 +77,16 @@ def create_app(settings: Settings | None = None, tasks: TaskSet | None = None) -
         title="thrustshape",
         summary="Reproducible thrust references for bidirectional propellers",
         version=info._version(),
-        lifespan=_lifespan(settings, tasks),
+        lifespan=logged_lifespan(_lifespan(settings, tasks), lambda: _describe(settings)),
         docs_url=None, redoc_url=None, openapi_url=None,
+        generate_unique_id_function=openapi.operation_id,
     )
     problems.install(app)
+    openapi.install(app)
     # a log upload may exceed max_body_bytes: its own limit, plus room for the small form fields
     app.add_middleware(BodyLimit, max_bytes=settings.max_body_bytes,
                        uploads={model_check.PREFIX: (settings.max_upload_bytes + _FORM_SLACK, "log")})
+    app.add_middleware(RequestId)  # outermost: a 413 and an unexpected 500 carry the request id too
     guard = [Depends(require_api_key)]
     app.include_router(health.router)
     app.include_router(page.router)
@@ -99,6 +103,12 @@ def create_app(settings: Settings | None = None, tasks: TaskSet | None = None) -
     _docs(app)
     app.state.settings, app.state.tasks = settings, tasks
     return app
+
+
+def _describe(s: Settings) -> str:
+    """The ``start`` log line's fields."""
+    return (f"version={info._version()} workers={s.workers} queue={s.queue_size} db={s.db_path} "
+            f"batch_backend={'dask' if s.dask_address else 'local'} api_key={'set' if s.api_key else 'none'}")
 
 
 def _docs(app: FastAPI) -> None:

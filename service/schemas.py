@@ -23,6 +23,18 @@ PositiveFinite = Annotated[float, Field(gt=0, allow_inf_nan=False)]
 Sample = float | Literal["inf", "-inf"]
 
 
+#: request-body examples shown in the OpenAPI document (and tried by tests/test_openapi_conventions.py)
+MISSION_EXAMPLE: dict[str, Any] = {
+    "name": "reversal-2s", "params": "paper-rig", "limits": {"voltage": 12.0, "current": 1.0},
+    "regularity": "bounded", "objective": "track", "retiming": {"min_stretch": 1.0, "max_stretch": 1.5},
+    "segments": [{"kind": "hold", "duration": 0.8, "thrust": 0.4},
+                 {"kind": "reversal", "duration": 0.4, "to": -0.4, "shape": "cosine"},
+                 {"kind": "hold", "duration": 0.8, "thrust": -0.4}]}
+SIN_EXAMPLE: dict[str, Any] = {"params": "paper-rig", "amplitude": 0.5, "period": 2.0, "q": 2, "rate": 200.0}
+DESIGN_EXAMPLE: dict[str, Any] = {"params": "paper-rig", "amplitude": 0.4, "limits": {"voltage": 12.0, "current": 1.0},
+                                  "regularity": "continuous-voltage", "rate": 200.0}
+
+
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -42,7 +54,7 @@ class MissionRequest(Mission):
     """A :class:`ocp.mission.Mission`; ``params`` is a preset name or a parameter mapping, never a file
     path (the core's rule, switched on for the class since FastAPI cannot pass a validation context)."""
 
-    model_config = ConfigDict(title="Mission")
+    model_config = ConfigDict(title="Mission", json_schema_extra={"examples": [MISSION_EXAMPLE]})
     allow_files: ClassVar[bool] = False
 
 
@@ -67,6 +79,8 @@ class _ParamsMixin(_Strict):
 class SinRequest(_ParamsMixin):
     """Exact feedforward of ``F = A sin^(2q+1)(2 pi t/T + phi)``."""
 
+    model_config = ConfigDict(json_schema_extra={"examples": [SIN_EXAMPLE]})
+
     kind: Literal["sin"] = "sin"
     amplitude: Finite = Field(description="thrust amplitude A [N], non-zero")
     period: PositiveFinite = Field(description="period T [s]")
@@ -84,6 +98,8 @@ class SinRequest(_ParamsMixin):
 class DesignRequest(_ParamsMixin):
     """Analytic fallback design: smallest admissible q for ``regularity``, then the shortest period
     (``amplitude`` given) or largest amplitude (``period`` given) within ``limits``."""
+
+    model_config = ConfigDict(json_schema_extra={"examples": [DESIGN_EXAMPLE]})
 
     kind: Literal["design"] = "design"
     limits: Limits = Limits()
@@ -195,6 +211,8 @@ class FitPublic(_Open):
 
 
 class BatchCreate(_Strict):
+    model_config = ConfigDict(json_schema_extra={"examples": [{"missions": [MISSION_EXAMPLE]}]})
+
     missions: list[MissionRequest] = Field(min_length=1, description="missions to optimise, in order")
 
 
@@ -270,9 +288,10 @@ class Health(_Strict):
 class Problem(_Open):
     """RFC 9457 problem details; ``field`` and ``reason`` name what was wrong."""
 
-    type: str = "about:blank"
-    title: str
-    status: int
-    detail: str
-    field: str | None = None
-    reason: str | None = None
+    type: str = Field(default="about:blank", description="problem type URI (about:blank: see title/status)")
+    title: str = Field(description="short summary of the problem type, e.g. 'Invalid input'")
+    status: int = Field(description="the HTTP status code")
+    detail: str = Field(description="what went wrong, for a person")
+    field: str | None = Field(default=None, description="the input at fault: a dotted body path "
+                              "(limits.current, segments.1.duration), a form field, a log column or a header")
+    reason: str | None = Field(default=None, description="why that input was refused")

@@ -109,8 +109,8 @@ def test_design_optimises_the_bundled_example(page: Any, server: Server) -> None
     assert page.inner_text("#d-crossings tbody td.exponent") == "g = 2"
     assert "g = 2" in (page.locator("#d-plot-thrust .marker-label").first.text_content() or "")
     for plot in ("thrust", "speed", "current", "voltage"):
-        assert int(page.get_attribute(f"#d-plot-{plot} svg", "data-points")) > 500, plot
-    assert int(page.get_attribute("#d-plot-thrust path[data-label=desired]", "data-n")) > 500
+        assert int(page.get_attribute(f"#d-plot-{plot} .plot", "data-points")) > 500, plot
+    assert int(page.get_attribute("#d-plot-thrust .series[data-label=desired]", "data-n")) > 500
     assert page.locator("#d-plot-current .limit").count() == 2
     assert page.locator("#d-plot-voltage .limit").count() == 2
     csv_text = downloaded(page, "#d-dl-csv").splitlines()
@@ -135,7 +135,7 @@ def test_compare_puts_the_optimised_reference_beside_the_sine_family(page: Any, 
     assert "unbounded" not in rows.nth(0).inner_text()
     assert rows.nth(0).locator("td.good").count() == 1  # optimised: within limits
     assert int(page.get_attribute("#c-bars .plotbox:nth-child(3) svg", "data-points")) == 5
-    assert int(page.get_attribute("#c-plot-thrust svg", "data-points")) > 500
+    assert int(page.get_attribute("#c-plot-thrust .plot", "data-points")) > 500
     shot(page, "compare")
 
 

@@ -7,24 +7,27 @@ import json
 import math
 import sys
 
-import numpy as np
-
+from clients.cli.help import add_command, write_text
 from clients.cli.io import print_json, read_csv_columns, write_csv
-from ocp.analytic import SinProfile, reference, time_grid
 from ocp.errors import MissionError
-from ocp.params import load_params
-from ocp.plant import DCMotorPlant
-from ocp.simulate import simulate, simulate_zoh
-from ocp.theory import table_one
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("table", help="Table I of the paper, regenerated from Lemma 1")
+    p = add_command(sub, "table", summary="Table I of the paper, regenerated from Lemma 1",
+                    description="For each thrust crossing order p (thrust ~ |t|^p at a reversal): the order r of "
+                                "the speed crossing and\nthe regularity of the ideal torque, current and voltage.",
+                    examples=["thrustshape table", "thrustshape table --orders 1,3,5 --json"])
     p.add_argument("--orders", default="1,2,3,4,5,7", help="thrust orders p, comma-separated")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     p.set_defaults(func=cmd_table)
 
-    p = sub.add_parser("analytic", help="exact A sin^(2q+1) reference with its current and voltage")
+    p = add_command(sub, "analytic", summary="exact A sin^(2q+1) reference with its current and voltage",
+                    description="Samples thrust, speed, current and voltage of the exact feedforward of\n"
+                                "F(t) = A sin^(2q+1)(2 pi t / T + phi); CSV (t, thrust, omega, ...) on stdout.",
+                    examples=["thrustshape analytic --params paper-rig --amplitude 0.5 --period 2 --q 2 > sin5.csv",
+                              "thrustshape analytic --params examples/params.yaml --amplitude 0.3 --period 1 --q 1 "
+                              "--json"],
+                    lists=("presets",))
     p.add_argument("--params", required=True, help="parameter file (JSON/YAML) or preset name, e.g. paper-rig")
     p.add_argument("--amplitude", type=float, required=True, help="thrust amplitude A [N]")
     p.add_argument("--period", type=float, required=True, help="period T [s]")
@@ -34,22 +37,32 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--rate", type=float, default=1000.0, help="sampling rate [Hz]")
     p.add_argument("--format", choices=("csv", "json"), default="csv")
     p.add_argument("--json", action="store_true", help="same as --format json")
-    p.add_argument("--out", default=None, help="output file (default: stdout)")
+    p.add_argument("--out", default=None, help="output file (default or '-': stdout)")
     p.set_defaults(func=cmd_analytic)
 
-    p = sub.add_parser("simulate", help="drive the DC-motor plant with a voltage CSV (t,voltage)")
-    p.add_argument("voltage_csv", help="CSV with columns t [s], voltage [V]")
+    p = add_command(sub, "simulate", summary="drive the DC-motor plant with a voltage CSV (t,voltage)",
+                    description="Integrates the plant under the sampled voltage; CSV (t, voltage, omega, current,\n"
+                                "theta, thrust) on stdout. Any CSV with t and voltage columns works, e.g. the\n"
+                                "output of 'analytic' or of 'optimize --out'.",
+                    examples=["thrustshape analytic --params paper-rig --amplitude 0.5 --period 2 --q 2 > sin5.csv",
+                              "thrustshape simulate sin5.csv --params paper-rig > response.csv",
+                              "thrustshape optimize examples/reversal.json --out - | "
+                              "thrustshape simulate - --params paper-rig | head"],
+                    lists=("presets",))
+    p.add_argument("voltage_csv", help="CSV with columns t [s], voltage [V] ('-': stdin)")
     p.add_argument("--params", required=True, help="parameter file or preset name")
     p.add_argument("--omega0", type=float, default=0.0, help="initial speed [rad/s]")
     p.add_argument("--current0", type=float, default=0.0, help="initial current [A]")
     p.add_argument("--hold", choices=("zoh", "linear"), default="zoh",
                    help="zoh: sampled command held per sample (default); linear: interpolated")
-    p.add_argument("--out", default=None, help="output CSV (default: stdout)")
+    p.add_argument("--out", default=None, help="output CSV (default or '-': stdout)")
     p.add_argument("--json", action="store_true", help="JSON output instead of CSV")
     p.set_defaults(func=cmd_simulate)
 
 
 def cmd_table(args: argparse.Namespace) -> int:
+    from ocp.theory import table_one
+
     try:
         orders = tuple(int(x) for x in args.orders.split(","))
     except ValueError:
@@ -67,23 +80,17 @@ def cmd_table(args: argparse.Namespace) -> int:
 
 
 def cmd_analytic(args: argparse.Namespace) -> int:
+    from ocp.analytic import SinProfile, reference, time_grid
+    from ocp.params import load_params
+
     params = load_params(args.params)
     prof = SinProfile(args.amplitude, args.period, args.q, args.phase)
     duration = args.period if args.duration is None else args.duration
     ref = reference(prof, params, time_grid(duration, args.rate))
     if args.json or args.format == "json":
-        text = json.dumps(ref.to_dict(), allow_nan=False)
-        if args.out:
-            with open(args.out, "w", encoding="utf-8") as fh:
-                fh.write(text + "\n")
-        else:
-            print(text)
+        write_text(json.dumps(ref.to_dict(), allow_nan=False) + "\n", args.out)
         return 0
-    if args.out:
-        with open(args.out, "w", encoding="utf-8") as fh:
-            fh.write(ref.to_csv())
-    else:
-        sys.stdout.write(ref.to_csv())
+    write_text(ref.to_csv(), args.out)
     if any(ref.unbounded[c] for c in ("current", "voltage")):
         bad = [c for c in ("current", "voltage") if ref.unbounded[c]]
         print(f"thrustshape analytic: warning: {', '.join(bad)} unbounded at the crossings (q = {args.q}); "
@@ -92,6 +99,12 @@ def cmd_analytic(args: argparse.Namespace) -> int:
 
 
 def cmd_simulate(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    from ocp.params import load_params
+    from ocp.plant import DCMotorPlant
+    from ocp.simulate import simulate, simulate_zoh
+
     params = load_params(args.params)
     cols = read_csv_columns(args.voltage_csv, ("t", "voltage"))
     plant = DCMotorPlant(params)

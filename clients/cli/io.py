@@ -1,4 +1,6 @@
-"""Small I/O helpers shared by CLI commands: CSV columns in, CSV/JSON out."""
+"""Small I/O helpers shared by CLI commands: CSV columns in, CSV/JSON out (``-``: stdin / stdout).
+
+numpy is imported inside the functions: the CLI's start-up must not pay for it."""
 
 from __future__ import annotations
 
@@ -7,19 +9,23 @@ import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
+from clients.cli.help import STDIO, open_input
 from ocp.errors import MissionError
+
+if TYPE_CHECKING:
+    import numpy as np
 
 
 def read_csv_columns(path: str | Path, required: Sequence[str]) -> dict[str, np.ndarray]:
-    """Numeric columns of a CSV file with a header row; errors name the file and the column."""
-    p = Path(path)
-    if not p.is_file():
+    """Numeric columns of a CSV file with a header row (``-``: stdin); errors name the file and the column."""
+    import numpy as np
+
+    p = Path("stdin" if str(path) == STDIO else path)
+    if str(path) != STDIO and not p.is_file():
         raise MissionError(str(path), "no such file")
-    with p.open(newline="", encoding="utf-8") as fh:
+    with open_input(str(path)) as fh:
         rows = list(csv.reader(fh))
     if not rows:
         raise MissionError(str(path), "empty file")
@@ -40,16 +46,17 @@ def read_csv_columns(path: str | Path, required: Sequence[str]) -> dict[str, np.
 
 
 def write_csv(columns: dict[str, np.ndarray], out: str | None) -> None:
-    """Write equal-length columns as CSV to ``out`` (a path) or stdout."""
+    """Write equal-length columns as CSV to ``out`` (a path) or stdout (``None`` or ``-``)."""
     names = list(columns)
-    fh = open(out, "w", newline="", encoding="utf-8") if out else sys.stdout
+    to_file = bool(out) and out != STDIO
+    fh = open(out, "w", newline="", encoding="utf-8") if to_file and out else sys.stdout
     try:
         w = csv.writer(fh, lineterminator="\n")
         w.writerow(names)
         for row in zip(*(columns[n] for n in names), strict=True):
             w.writerow([repr(float(v)) for v in row])
     finally:
-        if out:
+        if to_file:
             fh.close()
 
 

@@ -4,21 +4,28 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
+import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from clients.cli.help import STDIO, add_command, require_extra
 from clients.cli.io import fmt_number as _g
 from clients.cli.io import print_json
 from clients.cli.remote import add_server_args, client, params_for_server
-from ocp.effects import load_plant
 from ocp.errors import LogError, ParameterError
-from ocp.identify import CheckOptions, DiagnoseOptions, FitOptions, check, diagnose, fit
-from ocp.identify.report import write_report
-from ocp.logs import Log, LogKind, read_log
+
+if TYPE_CHECKING:  # the core is imported inside the commands: `thrustshape --help` stays fast
+    from ocp.logs import Log
+
+_LOG_DESCRIPTION = ("A log is CSV or Parquet with t, voltage, current, omega and/or theta, thrust in SI "
+                    "(--columns maps\nother names and units: rpm, kgf, gf, mA; Tyto/RCbenchmark exports are "
+                    "recognised).")
 
 
 def _log_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("log", help="CSV/Parquet log (t, voltage, current, omega/theta, thrust; SI) or a Tyto export")
+    p.add_argument("log", help="CSV/Parquet log (t, voltage, current, omega/theta, thrust; SI) or a Tyto export "
+                               "('-': stdin)")
     p.add_argument("--params", required=True, help="parameter file (JSON/YAML, may hold 'effects') or preset name")
     p.add_argument("--columns", default=None,
                    help='column map as JSON, e.g. \'{"omega": {"column": "speed", "unit": "rpm"}}\'')
@@ -28,18 +35,35 @@ def _log_args(p: argparse.ArgumentParser) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("check", help="compare the model with a measured log: where does it fail?")
+    p = add_command(sub, "check", summary="compare the model with a measured log: where does it fail?",
+                    description="Free-run error (the plant simulated under the measured voltage) and one-step "
+                                "equation\nresiduals, broken down by direction, reversals, speed band, "
+                                "acceleration and angle.\n" + _LOG_DESCRIPTION,
+                    examples=["thrustshape check rig.csv --params paper-rig --report check.html",
+                              "thrustshape check rig.csv --params examples/params.yaml --json"],
+                    lists=("presets",))
     _log_args(p)
     p.add_argument("--report", default=None, help="write a self-contained HTML report here")
     p.set_defaults(func=cmd_check)
 
-    p = sub.add_parser("diagnose", help="rank candidate effects by held-out error reduction")
+    p = add_command(sub, "diagnose", summary="rank candidate effects by held-out error reduction",
+                    description="Fits every effect of the catalogue (and corrections param:<key> of the nominal "
+                                "constants)\nand ranks them by held-out error reduction; clean data gives an "
+                                "empty verdict.\n" + _LOG_DESCRIPTION,
+                    examples=["thrustshape diagnose rig.csv --params paper-rig --json"],
+                    lists=("presets", "effects"))
     _log_args(p)
     p.add_argument("--max-effects", type=int, default=3, help="at most this many effects in the verdict")
     p.add_argument("--no-corrections", action="store_true", help="do not try corrections of the nominal constants")
     p.set_defaults(func=cmd_diagnose)
 
-    p = sub.add_parser("fit", help="add named effects, refit, write a calibrated parameter file")
+    p = add_command(sub, "fit", summary="add named effects, refit, write a calibrated parameter file",
+                    description="Adds the named effects to the model, refits them (and the constants named "
+                                "param:<key>)\nand writes a calibrated parameter file that --params and "
+                                "missions accept.\n" + _LOG_DESCRIPTION,
+                    examples=["thrustshape fit rig.csv --params paper-rig --effects coulomb_friction "
+                              "--out calibrated.json"],
+                    lists=("presets", "effects"))
     _log_args(p)
     p.add_argument("--effects", required=True, help="comma-separated effect names (or param:<key> corrections)")
     p.add_argument("--out", default=None, help="write the calibrated parameter file (JSON) here")
@@ -59,16 +83,40 @@ def _columns(args: argparse.Namespace) -> Any:
     return columns
 
 
+def _stdin_log(args: argparse.Namespace) -> tuple[str, bytes]:
+    """``(file name, bytes)`` of a log given as ``-``, read once (Parquet told apart by its magic bytes)."""
+    if not hasattr(args, "_stdin_log"):
+        data = sys.stdin.buffer.read()
+        args._stdin_log = ("stdin.parquet" if data[:4] == b"PAR1" else "stdin.csv", data)
+    return args._stdin_log
+
+
 def _load_log(args: argparse.Namespace) -> Log:
+    from ocp.logs import LogKind, read_log
+
     kind = LogKind.STEADY_STATE if args.steady_state else LogKind.TIME_SERIES
-    return read_log(args.log, _columns(args), kind)
+    if args.log != STDIO:
+        if Path(args.log).suffix.lower() in (".parquet", ".pq"):
+            require_extra("pyarrow", "parquet", str(args.log))
+        return read_log(args.log, _columns(args), kind)
+    name, data = _stdin_log(args)
+    if name.endswith(".parquet"):
+        require_extra("pyarrow", "parquet", "log")
+    with tempfile.TemporaryDirectory(prefix="thrustshape-") as tmp:  # the log readers take a path
+        path = Path(tmp) / name
+        path.write_bytes(data)
+        return read_log(path, _columns(args), kind)
 
 
 def _upload(args: argparse.Namespace) -> dict[str, Any]:
     """What ``--server`` sends: the log file's bytes, the parameters (a local file read here), the column map."""
-    if not Path(args.log).is_file():
+    if args.log == STDIO:
+        log: Any = _stdin_log(args)
+    elif not Path(args.log).is_file():
         raise LogError(str(args.log), "no such file")
-    return {"log": args.log, "params": params_for_server(args.params), "columns": _columns(args),
+    else:
+        log = args.log
+    return {"log": log, "params": params_for_server(args.params), "columns": _columns(args),
             "steady_state": args.steady_state}
 
 
@@ -79,6 +127,10 @@ def cmd_check(args: argparse.Namespace) -> int:
             if args.report:
                 Path(args.report).write_text(c.check_report(**_upload(args)), encoding="utf-8")
     else:
+        from ocp.effects import load_plant
+        from ocp.identify import CheckOptions, check
+        from ocp.identify.report import write_report
+
         log = _load_log(args)
         res = check(load_plant(args.params), log, CheckOptions())
         if args.report:
@@ -103,6 +155,9 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         with client(args) as c:
             d = c.diagnose(**_upload(args), max_effects=args.max_effects, corrections=not args.no_corrections)
     else:
+        from ocp.effects import load_plant
+        from ocp.identify import DiagnoseOptions, diagnose
+
         log = _load_log(args)
         opt = DiagnoseOptions(max_effects=args.max_effects, include_params=not args.no_corrections)
         d = diagnose(load_plant(args.params), log, opt).to_dict()
@@ -130,6 +185,9 @@ def cmd_fit(args: argparse.Namespace) -> int:
             Path(args.out).write_text(json.dumps(d["calibrated_params"], indent=2, allow_nan=False) + "\n",
                                       encoding="utf-8")
     else:
+        from ocp.effects import load_plant
+        from ocp.identify import FitOptions, fit
+
         log = _load_log(args)
         res = fit(load_plant(args.params), log, names, FitOptions(refine=not args.no_refine))
         if args.out:

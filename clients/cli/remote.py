@@ -6,8 +6,6 @@ import argparse
 import os
 from typing import Any
 
-from ocp.params import PRESETS, read_mapping
-
 
 def add_server_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--server", default=None, metavar="URL",
@@ -26,6 +24,8 @@ def client(args: argparse.Namespace) -> Any:
 def params_for_server(params: str | dict[str, Any]) -> str | dict[str, Any]:
     """A preset name stays a name; a local parameter file is read here and sent as its mapping
     (the server never reads files)."""
+    from ocp.params import PRESETS, read_mapping
+
     if isinstance(params, dict) or params in PRESETS:
         return params
     return read_mapping(params)

@@ -16,22 +16,27 @@ import re
 import sys
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-import yaml
-
+from clients.cli.help import STDIO, add_command, require_extra
 from clients.cli.io import print_json
 from ocp.errors import MissionError, ThrustshapeError
-from ocp.mission import Mission, mission_from_mapping
+
+if TYPE_CHECKING:
+    from ocp.mission import Mission
 
 SUMMARY_COLUMNS = ("index", "name", "status", "source", "solve_time_s", "thrust_rms_error", "max_abs_current",
                    "max_abs_voltage", "error")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("serve", help="run the HTTP service (FastAPI + uvicorn; docs at /docs)")
+    p = add_command(sub, "serve", summary="run the HTTP service (FastAPI + uvicorn; docs at /docs)",
+                    description="Options become THRUSTSHAPE_* settings (see service/settings.py for the rest: "
+                                "API_KEY,\nQUEUE_SIZE, MAX_* limits, timeouts). The web page is at /, the "
+                                "OpenAPI document at /openapi.json.",
+                    examples=["thrustshape serve --port 8000 --workers 2",
+                              "THRUSTSHAPE_API_KEY=secret thrustshape serve --db /var/lib/thrustshape/jobs.sqlite3"])
     p.add_argument("--host", default=None, help="bind address (default 127.0.0.1)")
     p.add_argument("--port", type=int, default=None, help="port (default 8000)")
     p.add_argument("--workers", type=int, default=None, help="solver worker processes (default 2)")
@@ -40,8 +45,15 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--log-level", choices=("critical", "error", "warning", "info", "debug"), default="info")
     p.set_defaults(func=cmd_serve)
 
-    p = sub.add_parser("batch", help="optimise every mission of a file or directory, locally or on a server")
-    p.add_argument("missions", help="mission file (JSON/YAML: one mission, a list, or {missions: [...]}) or directory")
+    p = add_command(sub, "batch", summary="optimise every mission of a file or directory, locally or on a server",
+                    description="Every .json/.yaml/.yml file of a directory (or one file holding a mission, a "
+                                "list, or\n{missions: [...]}); a progress bar on stderr, a summary table on "
+                                "stdout, and with --out DIR\none <index>-<name>.json per mission plus "
+                                "summary.csv.",
+                    examples=["thrustshape batch examples/missions --out results",
+                              "thrustshape batch examples/missions --server http://127.0.0.1:8000 --json"])
+    p.add_argument("missions", help="mission file (JSON/YAML: one mission, a list, or {missions: [...]}), directory, "
+                                    "or '-' (stdin)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--server", default=None, metavar="URL", help="submit to a thrustshape server")
     where.add_argument("--local", action="store_true", help="run here (the default)")
@@ -63,6 +75,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
     """Options become THRUSTSHAPE_* settings; uvicorn imports the app factory by name (HTTP boundary kept)."""
     import uvicorn
 
+    if args.dask or os.environ.get("THRUSTSHAPE_DASK_ADDRESS"):
+        require_extra("distributed", "dask", "--dask")
     overrides = {"HOST": args.host, "PORT": args.port, "WORKERS": args.workers, "DB_PATH": args.db,
                  "DASK_ADDRESS": args.dask}
     for key, value in overrides.items():
@@ -70,7 +84,10 @@ def cmd_serve(args: argparse.Namespace) -> int:
             os.environ[f"THRUSTSHAPE_{key}"] = str(value)
     host = os.environ.get("THRUSTSHAPE_HOST", "127.0.0.1")
     port = int(os.environ.get("THRUSTSHAPE_PORT", "8000"))
-    uvicorn.run("service.app:app_from_env", factory=True, host=host, port=port, log_level=args.log_level)
+    from service.api.logging import log_config
+
+    uvicorn.run("service.app:app_from_env", factory=True, host=host, port=port, log_level=args.log_level,
+                log_config=log_config(args.log_level))
     return 0
 
 
@@ -78,6 +95,17 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def _documents(path: Path) -> Iterator[tuple[str, Any]]:
+    import yaml
+
+    if str(path) == STDIO:  # one JSON/YAML document on stdin (JSON is YAML)
+        try:
+            data = yaml.safe_load(sys.stdin.read())
+        except yaml.YAMLError as exc:
+            raise MissionError("stdin", f"not valid JSON/YAML: {exc}") from None
+        data = data["missions"] if isinstance(data, dict) and "missions" in data else data
+        for i, item in enumerate(data if isinstance(data, list) else [data]):
+            yield (f"stdin[{i}]" if isinstance(data, list) else "stdin"), item
+        return
     files = sorted(f for f in path.iterdir() if f.suffix.lower() in (".json", ".yaml", ".yml")) if path.is_dir() \
         else [path]
     if not files:
@@ -98,6 +126,8 @@ def _documents(path: Path) -> Iterator[tuple[str, Any]]:
 
 def load_missions(path: str | Path) -> list[Mission]:
     """Every mission under ``path``, validated; errors name the file and the field."""
+    from ocp.mission import mission_from_mapping
+
     out: list[Mission] = []
     for where, item in _documents(Path(path)):
         try:
@@ -109,6 +139,7 @@ def load_missions(path: str | Path) -> list[Mission]:
 
 def optimize_one(mission: dict[str, Any]) -> dict[str, Any]:
     """Local batch item (runs in a worker process or on Dask): result dict, or ``{"error": ...}``."""
+    from ocp.mission import Mission
     from ocp.optimize import optimize
 
     try:
@@ -118,22 +149,39 @@ def optimize_one(mission: dict[str, Any]) -> dict[str, Any]:
 
 
 class Progress:
-    """``[#####-----] 5/10 done, 0 failed`` on stderr, redrawn in place."""
+    """Progress on stderr: on a terminal ``[#####-----] 5/10 done=5 failed=0 2.10/s ETA 2 s`` redrawn in
+    place; elsewhere (a log file, CI) one plain line each time an item finishes, never a carriage return."""
 
-    def __init__(self, total: int, width: int = 30) -> None:
+    def __init__(self, total: int, width: int = 30, stream: Any = None) -> None:
         self.total, self.width, self._last = total, width, ""
+        self.stream = stream if stream is not None else sys.stderr
+        self.tty = bool(getattr(self.stream, "isatty", lambda: False)())
+        self._t0 = time.monotonic()
 
-    def __call__(self, done: int, failed: int) -> None:
+    def line(self, done: int, failed: int) -> str:
         finished = done + failed
         filled = self.width * finished // max(self.total, 1)
-        line = f"[{'#' * filled}{'-' * (self.width - filled)}] {finished}/{self.total} done={done} failed={failed}"
-        if line != self._last:
-            sys.stderr.write("\r" + line)
-            sys.stderr.flush()
-            self._last = line
+        elapsed = max(time.monotonic() - self._t0, 1e-9)
+        rate = finished / elapsed
+        if 0 < finished < self.total:
+            eta = f"ETA {(self.total - finished) / rate:.0f} s"
+        else:
+            eta = f"in {elapsed:.1f} s" if finished else "ETA -"
+        return (f"[{'#' * filled}{'-' * (self.width - filled)}] {finished}/{self.total} done={done} failed={failed} "
+                f"{rate:.2f}/s {eta}")
+
+    def __call__(self, done: int, failed: int) -> None:
+        key = f"{done}/{failed}"
+        if key == self._last:
+            return
+        self._last = key
+        text = self.line(done, failed)
+        self.stream.write("\r" + text if self.tty else text + "\n")
+        self.stream.flush()
 
     def close(self) -> None:
-        sys.stderr.write("\n")
+        if self.tty:
+            self.stream.write("\n")
 
 
 def _run_local(missions: list[Mission], workers: int, dask: str | None,
@@ -141,6 +189,7 @@ def _run_local(missions: list[Mission], workers: int, dask: str | None,
     payloads = [m.model_dump(mode="json") for m in missions]
     outcomes: list[dict[str, Any] | None] = [None] * len(payloads)
     if dask:
+        require_extra("distributed", "dask", "--dask")
         from distributed import Client as DaskClient
         from distributed import as_completed
 
@@ -150,6 +199,8 @@ def _run_local(missions: list[Mission], workers: int, dask: str | None,
                 outcomes[futs[fut]] = fut.result()
                 progress(*_tally(outcomes))
     else:
+        from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+
         with ProcessPoolExecutor(max_workers=workers) as pool:
             pending: dict[Future[dict[str, Any]], int] = {pool.submit(optimize_one, p): i
                                                           for i, p in enumerate(payloads)}

@@ -1,7 +1,8 @@
 """PNG figures and a self-contained HTML report of a :class:`~ocp.identify.check.CheckResult`.
 
-matplotlib runs on the non-interactive Agg backend (selected here, inside this module only); the
-HTML embeds the PNGs as base64 data URIs, so the report is one file with no external resources.
+Figures are :class:`matplotlib.figure.Figure` objects drawn on their own Agg canvas: the caller's
+pyplot backend and figure list are never touched. The HTML embeds the PNGs as base64 data URIs,
+so the report is one file with no external resources.
 """
 
 from __future__ import annotations
@@ -20,28 +21,27 @@ from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, EQUATION_UNITS, EQUATI
 from ocp.logs import Log
 
 
-def _pyplot() -> Any:
-    import matplotlib
+def _subplots(nrows: int, ncols: int, figsize: tuple[float, float], **kw: Any) -> tuple[Any, Any]:
+    """``pyplot.subplots`` without pyplot: a Figure on its own Agg canvas (no global backend switch)."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    fig = Figure(figsize=figsize)
+    FigureCanvasAgg(fig)
+    return fig, fig.subplots(nrows, ncols, **kw)
 
-    return plt
 
-
-def _png(fig: object) -> bytes:
+def _png(fig: Any) -> bytes:
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=90)  # type: ignore[attr-defined]
-    _pyplot().close(fig)
+    fig.savefig(buf, format="png", dpi=90)
     return buf.getvalue()
 
 
 def figures(result: CheckResult, log: Log) -> dict[str, bytes]:
     """PNG bytes by name: ``free_run``, ``one_step``, ``breakdown``, ``correlation``."""
-    plt = _pyplot()
     out: dict[str, bytes] = {}
     fr, res = result.free, result.residuals
-    fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
+    fig, axes = _subplots(3, 1, (9, 7), sharex=True)
     for ax, ch in zip(axes, CHANNELS, strict=True):
         ax.plot(log.t, getattr(log, ch), lw=0.6, color="0.5", label="measured")
         ax.plot(log.t[fr.idx], fr.channel(ch), lw=0.8, label="model (free run)")
@@ -49,7 +49,7 @@ def figures(result: CheckResult, log: Log) -> dict[str, bytes]:
     axes[0].legend(loc="upper right")
     axes[-1].set_xlabel("t [s]")
     out["free_run"] = _png(fig)
-    fig, axes = plt.subplots(3, 1, figsize=(9, 7), sharex=True)
+    fig, axes = _subplots(3, 1, (9, 7), sharex=True)
     for ax, eq in zip(axes, EQUATIONS, strict=True):
         ax.plot(log.t[res.idx], res.equation(eq), lw=0.5)
         ax.set_ylabel(f"{eq} [{EQUATION_UNITS[eq]}]")
@@ -57,7 +57,7 @@ def figures(result: CheckResult, log: Log) -> dict[str, bytes]:
     axes[-1].set_xlabel("t [s]")
     out["one_step"] = _png(fig)
     groups = list(result.breakdown)
-    fig, axes = plt.subplots(len(groups), 1, figsize=(9, 2.2 * len(groups)))
+    fig, axes = _subplots(len(groups), 1, (9, 2.2 * len(groups)))
     for ax, g in zip(np.atleast_1d(axes), groups, strict=True):
         labels = list(result.breakdown[g])
         vals = [result.breakdown[g][lb]["one_step_mean.mechanical"] or 0.0 for lb in labels]
@@ -68,7 +68,7 @@ def figures(result: CheckResult, log: Log) -> dict[str, bytes]:
     fig.tight_layout()
     out["breakdown"] = _png(fig)
     corr = result.correlation
-    fig, axes = plt.subplots(1, 3, figsize=(10, 3))
+    fig, axes = _subplots(1, 3, (10, 3))
     for ax, key in zip(axes, ("acf", "xcorr_voltage", "xcorr_omega"), strict=True):
         for eq in EQUATIONS:
             ax.plot(corr["lags"], [v or 0.0 for v in corr[key][eq]], lw=0.8, label=eq)

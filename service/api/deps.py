@@ -6,7 +6,7 @@ Everything comes from ``request.app.state``, filled by the lifespan in :func:`se
 from __future__ import annotations
 
 import hmac
-from typing import Annotated
+from typing import Annotated, cast
 
 from fastapi import Depends, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
@@ -14,6 +14,7 @@ from starlette.exceptions import HTTPException
 
 from ocp.errors import MissionError
 from ocp.mission import Mission, segment_samples
+from service.api.logging import TaskLog
 from service.batches import BatchRunner
 from service.jobs import JobStore
 from service.settings import Settings
@@ -28,7 +29,8 @@ def get_settings(request: Request) -> Settings:
 
 
 def get_pool(request: Request) -> WorkerPool:
-    return request.app.state.pool
+    """The worker pool, each task it runs logged (one line: id, kind, duration, outcome)."""
+    return cast(WorkerPool, TaskLog(request.app.state.pool, request.app.state.tasks))
 
 
 def get_store(request: Request) -> JobStore:

@@ -38,13 +38,20 @@ async function unzip(buf) {
   return out;
 }
 
+/** a .json entry of a zip that is a mission file: not macOS metadata (__MACOSX/, AppleDouble ._name), not hidden */
+export function isMissionEntry(name) {
+  const parts = name.split("/");
+  const base = parts[parts.length - 1];
+  return /\.json$/i.test(base) && !parts.includes("__MACOSX") && !base.startsWith("._") && !base.startsWith(".");
+}
+
 async function addBatchFiles(files) {
   const got = [];
   for (const f of files) {
     if (/\.zip$/i.test(f.name)) {
       let entries;
       try { entries = await unzip(await f.arrayBuffer()); } catch (e) { throw new FieldError("missions", `${f.name}: ${e.message}`); }
-      for (const e of entries) if (/\.json$/i.test(e.name)) got.push(...missionsFromJson(`${f.name}/${e.name}`, e.text));
+      for (const e of entries) if (isMissionEntry(e.name)) got.push(...missionsFromJson(`${f.name}/${e.name}`, e.text));
     } else {
       got.push(...missionsFromJson(f.name, await f.text()));
     }

@@ -2,7 +2,7 @@
    beside the A sin^(2q+1) family): the table, bar charts of its figures and the candidates' curves. */
 
 import {
-  $, ApiError, api, emptied, fmt, guarded, limitLines, on, plotBox, row, selectTab, showError, td,
+  $, ApiError, api, download, emptied, fmt, guarded, limitLines, on, plotBox, row, safeName, selectTab, showError, td,
 } from "./common.js";
 import { buildMission, lastDesign } from "./design.js";
 
@@ -20,6 +20,21 @@ function exponentsText(xs) {
   if (!Array.isArray(xs) || !xs.length) return "none";
   const uniq = [...new Set(xs.map((x) => fmt(x, 3)))];
   return `${uniq.join(", ")} (${xs.length} crossing${xs.length > 1 ? "s" : ""})`;
+}
+
+let lastTable = { mission: "", rows: [] };
+
+/** the Compare table as CSV: one row per shape, the raw numbers (unbounded peaks as inf, exponents ;-separated) */
+export function compareCsv(rows) {
+  const cell = (k, v) => {
+    if (v === null || v === undefined) return UNBOUNDED_IF_NULL.has(k) ? "inf" : "";
+    if (Array.isArray(v)) return v.join(";");
+    const text = String(v);
+    return /[",\n]/.test(text) ? `"${text.replace(/"/g, '""')}"` : text;
+  };
+  const lines = [COMPARE_COLS.map(([k]) => k).join(",")];
+  for (const r of rows) lines.push(COMPARE_COLS.map(([k]) => cell(k, r[k])).join(","));
+  return lines.join("\n") + "\n";
 }
 
 function showCompareTable(table) {
@@ -49,11 +64,11 @@ function drawCompare(series, mission) {
   const lim = mission.limits;
   const colors = ["#1f6feb", "#cf222e", "#bf8700", "#1a7f37", "#8250df"];
   const mk = (key) => series.map((s, k) => ({ x: s.r.t, y: s.r[key], label: s.label, color: colors[k % colors.length] }));
-  Plot.line($("#c-plot-thrust"), { title: "thrust", xlabel: "t [s]", ylabel: "N", series: mk("thrust") });
-  Plot.line($("#c-plot-speed"), { title: "speed", xlabel: "t [s]", ylabel: "rad/s", series: mk("omega") });
-  Plot.line($("#c-plot-current"), { title: "current (clipped at ±3× limit)", xlabel: "t [s]", ylabel: "A",
+  Plot.line($("#c-plot-thrust"), { title: "thrust", group: "compare", xlabel: "t [s]", ylabel: "N", series: mk("thrust") });
+  Plot.line($("#c-plot-speed"), { title: "speed", group: "compare", xlabel: "t [s]", ylabel: "rad/s", series: mk("omega") });
+  Plot.line($("#c-plot-current"), { title: "current (clipped at ±3× limit)", group: "compare", xlabel: "t [s]", ylabel: "A",
     series: mk("current"), hlines: limitLines(lim.current, "A"), yrange: [-3 * lim.current, 3 * lim.current] });
-  Plot.line($("#c-plot-voltage"), { title: "voltage (clipped at ±3× limit)", xlabel: "t [s]", ylabel: "V",
+  Plot.line($("#c-plot-voltage"), { title: "voltage (clipped at ±3× limit)", group: "compare", xlabel: "t [s]", ylabel: "V",
     series: mk("voltage"), hlines: limitLines(lim.voltage, "V"), yrange: [-3 * lim.voltage, 3 * lim.voltage] });
 }
 
@@ -90,6 +105,8 @@ async function runCompare() {
     const opt = (cmp.candidates || []).length ? null
       : sameAsDesign ? design.result : await api("POST", "/v1/references/optimize", mission);
     showCompareTable(cmp.table || []);
+    lastTable = { mission: cmp.mission, rows: cmp.table || [] };
+    $("#c-dl-csv").disabled = !lastTable.rows.length;
     $("#c-note").textContent = `mission ${cmp.mission}: optimised answer from the ${cmp.optimized_source === "optimized" ? "optimiser" : "analytic fallback"}` +
       (cmp.optimized_reason ? ` (${cmp.optimized_reason})` : "") + ". Unbounded peaks are the ideal feedforward at a linear crossing.";
     const curves = compareCurves(cmp, opt);
@@ -101,4 +118,5 @@ async function runCompare() {
 
 export function initCompare() {
   on("#c-run", "click", runCompare);
+  on("#c-dl-csv", "click", () => download(`${safeName(lastTable.mission)}-compare.csv`, compareCsv(lastTable.rows), "text/csv"));
 }

@@ -281,15 +281,15 @@ function showDesign(res, mission) {
                                               td(fmt(c.current), "num"), td(fmt(c.voltage), "num")]));
   const t = res.t;
   const markers = (key) => cross.map((c) => ({ x: c.t, y: key ? c[key] : 0, label: `g = ${fmt(c.exponent, 3)}` }));
-  Plot.line($("#d-plot-thrust"), { title: "thrust", xlabel: "t [s]", ylabel: "N", markers: markers(null),
+  Plot.line($("#d-plot-thrust"), { title: "thrust", group: "design", xlabel: "t [s]", ylabel: "N", markers: markers(null),
     series: [{ x: t, y: res.thrust_desired, label: "desired", color: "#8c959f", dash: "5 4" },
              { x: t, y: res.thrust, label: "optimised (simulated)", color: "#1f6feb" }] });
-  Plot.line($("#d-plot-speed"), { title: "speed", xlabel: "t [s]", ylabel: "rad/s", markers: markers(null),
+  Plot.line($("#d-plot-speed"), { title: "speed", group: "design", xlabel: "t [s]", ylabel: "rad/s", markers: markers(null),
     series: [{ x: t, y: res.omega, label: "ω", color: "#1a7f37" }],
     hlines: lim.speed ? limitLines(lim.speed, "rad/s") : [] });
-  Plot.line($("#d-plot-current"), { title: "current", xlabel: "t [s]", ylabel: "A", markers: markers("current"),
+  Plot.line($("#d-plot-current"), { title: "current", group: "design", xlabel: "t [s]", ylabel: "A", markers: markers("current"),
     series: [{ x: t, y: res.current, label: "i", color: "#bf8700" }], hlines: limitLines(lim.current, "A") });
-  Plot.line($("#d-plot-voltage"), { title: "voltage", xlabel: "t [s]", ylabel: "V", markers: markers("voltage"),
+  Plot.line($("#d-plot-voltage"), { title: "voltage", group: "design", xlabel: "t [s]", ylabel: "V", markers: markers("voltage"),
     series: [{ x: t, y: res.voltage, label: "V", color: "#8250df" }],
     hlines: limitLines(lim.voltage, "V") });
 }

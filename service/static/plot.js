@@ -1,190 +1,269 @@
-/* thrustshape page: a small dependency-free SVG plotter (line plots with limit lines and markers,
-   grouped bar charts). Values that are null/NaN break the line; "inf"/"-inf" or values outside a fixed
-   y range are drawn clipped at the edge and counted in data-clipped. */
+/* thrustshape page: interactive line plots on the vendored uPlot (uPlot-1.6.32.iife.min.js, MIT, see
+   uPlot-LICENSE.txt): drag to zoom on t (plots of one `group` zoom together), double-click to zoom out,
+   the legend reads out every series at the cursor, uPlot draws at most a few points per pixel column
+   (min/max decimation), so a millisecond reversal inside a seconds-long reference stays visible when zoomed.
+   Every plot has downloads: PNG (what is drawn), SVG (plot-svg.js over the current zoom) and CSV (the samples
+   in view). Bar charts stay SVG (plot-svg.js) with the same downloads.
+
+   Public API (other tabs use only this):
+     Plot.line(container, opts) -> the plot element   opts: {title, xlabel, ylabel, height, group,
+       series: [{x, y, label, color, dash}], hlines: [{y, label, color}], markers: [{x, y, label}],
+       yrange: [lo, hi] (fixed; else from the data in view and the hlines)}
+     Plot.bars(container, opts) -> the plot element   opts: {title, ylabel, height, groups, series: [{label, values}]}
+   Values null/NaN break a line; "inf"/"-inf" and values outside a fixed yrange are drawn clipped at the edge.
+   The plot element carries data-points, data-xmin/data-xmax (current zoom); each series a hidden
+   .series[data-label][data-n][data-clipped], each limit line a hidden .limit, each marker a .marker-label. */
 "use strict";
 
 const Plot = (() => {
-  const NS = "http://www.w3.org/2000/svg";
-  const PALETTE = ["#1f6feb", "#d1242f", "#1a7f37", "#8250df", "#bf8700", "#0a7e8c", "#cf222e", "#57606a"];
-  const W = 640, M = { l: 58, r: 14, t: 26, b: 36 };
+  const { num, fmt, PALETTE } = PlotSvg;
+  const groups = new Map(); // group name -> Set of uPlot instances zooming together
+  /* the legend's read-out: 5 significant digits (the axes' ticks keep fmt's shorter form) */
+  const readout = (u, v) => (v === null || v === undefined ? "–" : String(Number(v.toPrecision(5))));
 
-  function el(name, attrs, parent) {
-    const e = document.createElementNS(NS, name);
-    for (const [k, v] of Object.entries(attrs || {})) e.setAttribute(k, String(v));
-    if (parent) parent.appendChild(e);
+  function hidden(parent, cls, attrs, text) {
+    const e = document.createElement("span");
+    e.className = cls;
+    e.hidden = true;
+    for (const [k, v] of Object.entries(attrs || {})) e.dataset[k] = String(v);
+    if (text) e.textContent = text;
+    parent.appendChild(e);
     return e;
   }
 
-  function num(v) {
-    if (v === "inf") return Infinity;
-    if (v === "-inf") return -Infinity;
-    if (v === null || v === undefined || v === "") return NaN;
-    return Number(v);
+  /* one x grid for all series: shared when every series has the same x, else the union (uPlot.join) */
+  function align(series) {
+    const same = series.every((s) => s.xs.length === series[0].xs.length && s.xs.every((v, i) => v === series[0].xs[i]));
+    if (same) return [series[0].xs, ...series.map((s) => s.ys)];
+    return uPlot.join(series.map((s) => [s.xs, s.ys]));
   }
 
-  function niceStep(span, n) {
-    const raw = span / Math.max(n, 1);
-    const mag = Math.pow(10, Math.floor(Math.log10(raw)));
-    const f = raw / mag;
-    return (f < 1.5 ? 1 : f < 3 ? 2 : f < 7 ? 5 : 10) * mag;
-  }
-
-  function ticks(lo, hi, n) {
-    if (!(hi > lo)) return [lo];
-    const step = niceStep(hi - lo, n);
-    const out = [];
-    for (let v = Math.ceil(lo / step) * step; v <= hi + step * 1e-9; v += step) out.push(Math.abs(v) < step * 1e-9 ? 0 : v);
-    return out;
-  }
-
-  function fmt(v) {
-    const a = Math.abs(v);
-    if (a === 0) return "0";
-    if (a >= 1e4 || a < 1e-3) return v.toExponential(1);
-    return String(Number(v.toPrecision(4)));
-  }
-
-  function frame(container, title, height) {
-    container.innerHTML = "";
-    const svg = el("svg", { viewBox: `0 0 ${W} ${height}`, class: "plot", role: "img", "aria-label": title });
-    el("text", { x: M.l, y: 16, class: "plot-title" }, svg).textContent = title;
-    container.appendChild(svg);
-    return svg;
-  }
-
-  function axes(svg, xr, yr, height, xlabel, ylabel, xticks) {
-    const H = height, pw = W - M.l - M.r, ph = H - M.t - M.b;
-    const sx = (x) => M.l + ((x - xr[0]) / (xr[1] - xr[0] || 1)) * pw;
-    const sy = (y) => M.t + ph - ((y - yr[0]) / (yr[1] - yr[0] || 1)) * ph;
-    const g = el("g", { class: "axes" }, svg);
-    for (const v of ticks(yr[0], yr[1], 4)) {
-      el("line", { x1: M.l, x2: M.l + pw, y1: sy(v), y2: sy(v), class: "grid" }, g);
-      el("text", { x: M.l - 6, y: sy(v) + 4, class: "tick", "text-anchor": "end" }, g).textContent = fmt(v);
-    }
-    if (xticks !== false) {
-      for (const v of ticks(xr[0], xr[1], 6)) {
-        el("line", { x1: sx(v), x2: sx(v), y1: M.t, y2: M.t + ph, class: "grid" }, g);
-        el("text", { x: sx(v), y: M.t + ph + 15, class: "tick", "text-anchor": "middle" }, g).textContent = fmt(v);
-      }
-    }
-    el("rect", { x: M.l, y: M.t, width: pw, height: ph, class: "frame" }, g);
-    if (xlabel) el("text", { x: M.l + pw / 2, y: H - 4, class: "label", "text-anchor": "middle" }, g).textContent = xlabel;
-    if (ylabel) {
-      el("text", { x: 12, y: M.t + ph / 2, class: "label", "text-anchor": "middle",
-                   transform: `rotate(-90 12 ${M.t + ph / 2})` }, g).textContent = ylabel;
-    }
-    return { sx, sy, pw, ph };
-  }
-
-  function legend(svg, items) {
-    let x = W - M.r;
-    for (let k = items.length - 1; k >= 0; k--) {
-      const it = items[k];
-      const w = 22 + 6.2 * it.label.length;
-      x -= w;
-      el("line", { x1: x, x2: x + 16, y1: 12, y2: 12, stroke: it.color, "stroke-width": 2.5,
-                   "stroke-dasharray": it.dash || "" }, svg);
-      el("text", { x: x + 19, y: 16, class: "legend" }, svg).textContent = it.label;
-    }
-  }
-
-  /* opts: {title, xlabel, ylabel, height, series: [{x, y, label, color, dash}], hlines: [{y, label, color}],
-            markers: [{x, y, label}], yrange: [lo, hi] (fixed; else from data and hlines)} */
-  function line(container, opts) {
-    const height = opts.height || 230;
-    const svg = frame(container, opts.title || "", height);
+  /* numbers for uPlot: NaN -> null (a gap), +-inf and values outside a fixed range -> the range edge (counted) */
+  function prepare(opts) {
     const series = (opts.series || []).map((s, k) => ({ ...s, color: s.color || PALETTE[k % PALETTE.length],
-      xs: Array.from(s.x, num), ys: Array.from(s.y, num) }));
-    let xlo = Infinity, xhi = -Infinity, ylo = Infinity, yhi = -Infinity;
-    for (const s of series) {
-      for (let i = 0; i < s.xs.length; i++) {
-        const x = s.xs[i], y = s.ys[i];
-        if (Number.isFinite(x)) { xlo = Math.min(xlo, x); xhi = Math.max(xhi, x); }
-        if (Number.isFinite(y)) { ylo = Math.min(ylo, y); yhi = Math.max(yhi, y); }
-      }
-    }
+      xs: Array.from(s.x, num), raw: Array.from(s.y, num) }));
+    let ylo = Infinity, yhi = -Infinity;
+    for (const s of series) for (const y of s.raw) if (Number.isFinite(y)) { ylo = Math.min(ylo, y); yhi = Math.max(yhi, y); }
     for (const h of opts.hlines || []) { ylo = Math.min(ylo, h.y); yhi = Math.max(yhi, h.y); }
-    if (opts.yrange) [ylo, yhi] = opts.yrange;
-    if (!Number.isFinite(xlo)) { xlo = 0; xhi = 1; }
     if (!Number.isFinite(ylo)) { ylo = -1; yhi = 1; }
-    if (yhi - ylo < 1e-12) { ylo -= 1; yhi += 1; }
-    if (!opts.yrange) { const pad = 0.06 * (yhi - ylo); ylo -= pad; yhi += pad; }
-    const ax = axes(svg, [xlo, xhi], [ylo, yhi], height, opts.xlabel, opts.ylabel);
-    const clipId = "c" + Math.random().toString(36).slice(2);
-    const clip = el("clipPath", { id: clipId }, el("defs", {}, svg));
-    el("rect", { x: M.l, y: M.t - 1, width: ax.pw, height: ax.ph + 2 }, clip);
-    const body = el("g", { "clip-path": `url(#${clipId})` }, svg);
-    for (const h of opts.hlines || []) {
-      el("line", { x1: M.l, x2: M.l + ax.pw, y1: ax.sy(h.y), y2: ax.sy(h.y), class: "limit",
-                   stroke: h.color || "#d1242f" }, body);
-      if (h.label) {
-        el("text", { x: M.l + ax.pw - 4, y: ax.sy(h.y) + (h.y >= 0 ? -4 : 12), class: "limit-label",
-                     "text-anchor": "end" }, body).textContent = h.label;
-      }
-    }
-    let total = 0;
+    const [lo, hi] = opts.yrange || [ylo - 0.06 * (yhi - ylo || 1), yhi + 0.06 * (yhi - ylo || 1)];
     for (const s of series) {
-      let d = "", pen = false, n = 0, clipped = 0;
-      for (let i = 0; i < s.xs.length; i++) {
-        let x = s.xs[i], y = s.ys[i];
-        if (Number.isNaN(x) || Number.isNaN(y)) { pen = false; continue; }
-        if (y > yhi || y < ylo) { clipped++; y = y > yhi ? yhi : ylo; }
-        d += (pen ? "L" : "M") + ax.sx(x).toFixed(1) + " " + ax.sy(y).toFixed(1);
-        pen = true; n++;
-      }
-      total += n;
-      el("path", { d: d || "M0 0", class: "series", stroke: s.color, "stroke-dasharray": s.dash || "",
-                   "data-label": s.label || "", "data-n": n, "data-clipped": clipped }, body);
+      s.clipped = 0; s.n = 0;
+      s.ys = s.raw.map((y) => {
+        if (Number.isNaN(y)) return null;
+        s.n++;
+        if (y > hi || y < lo) { s.clipped++; return y > hi ? hi : lo; }
+        return y;
+      });
     }
-    for (const m of opts.markers || []) {
-      const x = ax.sx(m.x);
-      el("line", { x1: x, x2: x, y1: M.t, y2: M.t + ax.ph, class: "marker-line" }, body);
-      const yv = Number.isFinite(m.y) ? Math.min(Math.max(m.y, ylo), yhi) : (ylo + yhi) / 2;
-      el("circle", { cx: x, cy: ax.sy(yv), r: 4, class: "marker" }, body);
-      if (m.label) {
-        const t = el("text", { x: x + 6, y: M.t + 14, class: "marker-label" }, svg);
-        t.textContent = m.label;
-      }
-    }
-    svg.setAttribute("data-points", total);
-    legend(svg, series.filter((s) => s.label).map((s) => ({ label: s.label, color: s.color, dash: s.dash })));
-    return svg;
+    return { series, lo, hi };
   }
 
-  /* opts: {title, ylabel, height, groups: [labels], series: [{label, values, color}]} */
-  function bars(container, opts) {
-    const height = opts.height || 220;
-    const svg = frame(container, opts.title || "", height);
-    const groups = opts.groups || [];
-    const series = (opts.series || []).map((s, k) => ({ ...s, color: s.color || PALETTE[k % PALETTE.length],
-      vs: Array.from(s.values, num) }));
-    let lo = 0, hi = 0;
-    for (const s of series) for (const v of s.vs) if (Number.isFinite(v)) { lo = Math.min(lo, v); hi = Math.max(hi, v); }
-    if (hi - lo < 1e-300) hi = lo + 1;
-    const pad = 0.08 * (hi - lo);
-    const yr = [lo < 0 ? lo - pad : 0, hi > 0 ? hi + pad : 0];
-    const ax = axes(svg, [0, Math.max(groups.length, 1)], yr, height, "", opts.ylabel, false);
-    const gw = ax.pw / Math.max(groups.length, 1);
-    const bw = (gw * 0.76) / Math.max(series.length, 1);
+  function drawOverlays(u, opts) {
+    const ctx = u.ctx, { left, top, width, height } = u.bbox, dpr = devicePixelRatio || 1;
+    ctx.save();
+    ctx.beginPath(); ctx.rect(left, top, width, height); ctx.clip();
+    ctx.font = `${10 * dpr}px system-ui, sans-serif`;
+    for (const h of opts.hlines || []) {
+      const y = u.valToPos(h.y, "y", true);
+      ctx.strokeStyle = h.color || "#d1242f"; ctx.fillStyle = h.color || "#d1242f";
+      ctx.setLineDash([6 * dpr, 4 * dpr]); ctx.lineWidth = 1.3 * dpr;
+      ctx.beginPath(); ctx.moveTo(left, y); ctx.lineTo(left + width, y); ctx.stroke();
+      if (h.label) { ctx.textAlign = "right"; ctx.fillText(h.label, left + width - 4 * dpr, y + (h.y >= 0 ? -4 : 12) * dpr); }
+    }
+    ctx.strokeStyle = "#8250df"; ctx.fillStyle = "#8250df"; ctx.setLineDash([2 * dpr, 3 * dpr]); ctx.lineWidth = dpr;
+    ctx.font = `600 ${11 * dpr}px system-ui, sans-serif`; ctx.textAlign = "left";
+    for (const m of opts.markers || []) {
+      const x = u.valToPos(m.x, "x", true);
+      if (x < left || x > left + width) continue;
+      ctx.beginPath(); ctx.moveTo(x, top); ctx.lineTo(x, top + height); ctx.stroke();
+      const sy = u.scales.y;
+      const yv = Number.isFinite(m.y) ? Math.min(Math.max(m.y, sy.min), sy.max) : (sy.min + sy.max) / 2;
+      ctx.beginPath(); ctx.arc(x, u.valToPos(yv, "y", true), 4 * dpr, 0, 2 * Math.PI); ctx.fill();
+      if (m.label) ctx.fillText(m.label, x + 6 * dpr, top + 14 * dpr);
+    }
+    ctx.restore();
+  }
+
+  function yRange(opts) {
+    if (opts.yrange) return { auto: false, range: opts.yrange };
+    const limits = (opts.hlines || []).map((h) => h.y);
+    return { range: (u, lo, hi) => {
+      if (lo === null || hi === null) { lo = -1; hi = 1; }
+      lo = Math.min(lo, ...limits); hi = Math.max(hi, ...limits);
+      const pad = 0.06 * (hi - lo || Math.abs(hi) || 1);
+      return [lo - pad, hi + pad];
+    } };
+  }
+
+  function zoomTogether(u, group) {
+    if (!group) return;
+    if (!groups.has(group)) groups.set(group, new Set());
+    groups.get(group).add(u);
+  }
+
+  function onScale(u, key, root, group) {
+    if (key !== "x") return;
+    const { min, max } = u.scales.x;
+    root.dataset.xmin = String(min); root.dataset.xmax = String(max);
+    if (!group || u._syncing) return;
+    for (const other of groups.get(group) || []) {
+      if (other === u || !document.contains(other.root)) { if (!document.contains(other.root)) groups.get(group).delete(other); continue; }
+      const s = other.scales.x;
+      if (s.min === min && s.max === max) continue;
+      other._syncing = true;
+      other.setScale("x", { min, max });
+      other._syncing = false;
+    }
+  }
+
+  function line(container, opts) {
+    container.innerHTML = "";
+    const root = document.createElement("div");
+    root.className = "plot";
+    root.setAttribute("role", "img");
+    root.setAttribute("aria-label", opts.title || "plot");
+    container.appendChild(root);
+    const { series } = prepare(opts);
+    const data = series.length ? align(series) : [[0, 1]];
+    const uopts = {
+      title: opts.title || "", width: Math.max(container.clientWidth - 8, 320), height: opts.height || 230,
+      scales: { x: { time: false }, y: yRange(opts) },
+      series: [{ label: opts.xlabel || "x", value: readout },
+               ...series.map((s) => ({ label: s.label || "", stroke: s.color, width: 1.6, spanGaps: false,
+                 dash: s.dash ? String(s.dash).split(/[ ,]+/).map(Number) : undefined,
+                 value: readout }))],
+      axes: [{ label: opts.xlabel || "" }, { label: opts.ylabel || "", size: 60 }],
+      cursor: { drag: { x: true, y: false, setScale: true } },
+      legend: { live: true },
+      hooks: { draw: [(u) => drawOverlays(u, opts)], setScale: [(u, key) => onScale(u, key, root, opts.group)] },
+    };
+    const u = new uPlot(uopts, data, root);
+    root._uplot = u;
+    root._opts = opts;
+    zoomTogether(u, opts.group);
     let total = 0;
-    groups.forEach((label, gi) => {
-      series.forEach((s, si) => {
-        const v = s.vs[gi];
-        if (!Number.isFinite(v)) return;
-        const y0 = ax.sy(0), y1 = ax.sy(v);
-        el("rect", { x: M.l + gi * gw + gw * 0.12 + si * bw, y: Math.min(y0, y1), width: Math.max(bw - 1, 1),
-                     height: Math.max(Math.abs(y1 - y0), 0.5), fill: s.color, class: "bar",
-                     "data-value": v }, svg).appendChild(el("title")).textContent = `${s.label || ""} ${label}: ${fmt(v)}`;
-        total++;
+    for (const s of series) {
+      total += s.n;
+      hidden(root, "series", { label: s.label || "", n: s.n, clipped: s.clipped });
+    }
+    for (const h of opts.hlines || []) hidden(root, "limit", { y: h.y }, h.label || "");
+    for (const m of opts.markers || []) hidden(root, "marker-label", { x: m.x }, m.label || "");
+    root.dataset.points = String(total);
+    root.dataset.xmin = String(u.scales.x.min); root.dataset.xmax = String(u.scales.x.max);
+    toolbar(root, { png: () => linePng(u), svg: () => lineSvg(root), csv: () => lineCsv(u, opts),
+                    reset: () => u.setScale("x", { min: data[0][0], max: data[0][data[0].length - 1] }) });
+    if (window.ResizeObserver) {
+      new ResizeObserver(() => {
+        const w = Math.max(container.clientWidth - 8, 320);
+        if (Math.abs(w - u.width) > 2) u.setSize({ width: w, height: u.height });
+      }).observe(container);
+    }
+    return root;
+  }
+
+  /* ------------------------------------------------------------------ downloads */
+
+  function save(name, blob) {
+    const a = document.createElement("a");
+    a.href = URL.createObjectURL(blob);
+    a.download = name;
+    document.body.appendChild(a);
+    a.click();
+    setTimeout(() => { URL.revokeObjectURL(a.href); a.remove(); }, 1000);
+  }
+
+  const fileName = (root, ext) => `${(root.getAttribute("aria-label") || "plot").replace(/[^A-Za-z0-9._-]+/g, "_")}.${ext}`;
+
+  function toolbar(root, actions) {
+    const bar = document.createElement("div");
+    bar.className = "plot-tools";
+    for (const [fmtName, label] of [["png", "PNG"], ["svg", "SVG"], ["csv", "CSV"], ["reset", "reset zoom"]]) {
+      if (!actions[fmtName]) continue;
+      const b = document.createElement("button");
+      b.type = "button"; b.className = "plot-dl"; b.dataset.format = fmtName; b.textContent = label;
+      b.title = fmtName === "reset" ? "show all (or double-click the plot)" : `download this plot as ${label}`;
+      b.addEventListener("click", async () => {
+        const out = await actions[fmtName]();
+        if (out) save(fileName(root, fmtName), out);
       });
-      const size = groups.length > 8 ? 9 : 11;
-      el("text", { x: M.l + gi * gw + gw / 2, y: M.t + ax.ph + 15, class: "tick", "text-anchor": "middle",
-                   style: `font-size:${size}px` }, svg).textContent = label;
+      bar.appendChild(b);
+    }
+    root.insertBefore(bar, root.firstChild);
+  }
+
+  function linePng(u) {
+    const src = u.ctx.canvas, dpr = devicePixelRatio || 1, head = Math.round(24 * dpr);
+    const c = document.createElement("canvas");
+    c.width = src.width; c.height = src.height + head;
+    const ctx = c.getContext("2d");
+    ctx.fillStyle = "#fff"; ctx.fillRect(0, 0, c.width, c.height);
+    ctx.fillStyle = "#1f2328"; ctx.font = `600 ${13 * dpr}px system-ui, sans-serif`;
+    ctx.fillText(u.root.querySelector(".u-title")?.textContent || "", 8 * dpr, 17 * dpr);
+    ctx.drawImage(src, 0, head);
+    return new Promise((resolve) => c.toBlob(resolve, "image/png"));
+  }
+
+  function lineSvg(root) {
+    const u = root._uplot, opts = root._opts, tmp = document.createElement("div");
+    const { min, max } = u.scales.x;
+    const yr = opts.yrange || [u.scales.y.min, u.scales.y.max];
+    const svg = PlotSvg.line(tmp, { ...opts, xrange: [min, max], yrange: yr, series: (opts.series || []).map((s) => {
+      const xs = Array.from(s.x, num), ys = Array.from(s.y, num);
+      const keep = xs.map((x, i) => i).filter((i) => xs[i] >= min && xs[i] <= max);
+      return { ...s, x: keep.map((i) => xs[i]), y: keep.map((i) => ys[i]) };
+    }), markers: (opts.markers || []).filter((m) => m.x >= min && m.x <= max) });
+    return new Blob([PlotSvg.serialize(svg)], { type: "image/svg+xml" });
+  }
+
+  function lineCsv(u, opts) {
+    const [xs, ...cols] = u.data, { min, max } = u.scales.x;
+    const head = [opts.xlabel || "x", ...(opts.series || []).map((s, k) => s.label || `series ${k + 1}`)];
+    const lines = [head.map((h) => `"${String(h).replace(/"/g, '""')}"`).join(",")];
+    for (let i = 0; i < xs.length; i++) {
+      if (xs[i] < min || xs[i] > max) continue;
+      lines.push([xs[i], ...cols.map((c) => (c[i] === null || c[i] === undefined ? "" : c[i]))].join(","));
+    }
+    return new Blob([lines.join("\n") + "\n"], { type: "text/csv" });
+  }
+
+  function barsCsv(opts) {
+    const series = opts.series || [];
+    const lines = [["group", ...series.map((s, k) => s.label || `value ${k + 1}`)].join(",")];
+    (opts.groups || []).forEach((g, gi) => lines.push([`"${String(g).replace(/"/g, '""')}"`,
+      ...series.map((s) => { const v = num(s.values[gi]); return Number.isNaN(v) ? "" : v; })].join(",")));
+    return new Blob([lines.join("\n") + "\n"], { type: "text/csv" });
+  }
+
+  function svgPng(svg) {
+    const text = PlotSvg.serialize(svg);
+    const [, , w, h] = svg.getAttribute("viewBox").split(" ").map(Number);
+    const img = new Image(), scale = 2;
+    return new Promise((resolve, reject) => {
+      img.onload = () => {
+        const c = document.createElement("canvas");
+        c.width = w * scale; c.height = h * scale;
+        const ctx = c.getContext("2d");
+        ctx.fillStyle = "#fff"; ctx.fillRect(0, 0, c.width, c.height);
+        ctx.drawImage(img, 0, 0, c.width, c.height);
+        c.toBlob(resolve, "image/png");
+      };
+      img.onerror = reject;
+      img.src = "data:image/svg+xml;charset=utf-8," + encodeURIComponent(text);
     });
-    el("line", { x1: M.l, x2: M.l + ax.pw, y1: ax.sy(0), y2: ax.sy(0), class: "zero" }, svg);
-    svg.setAttribute("data-points", total);
-    legend(svg, series.filter((s) => s.label).map((s) => ({ label: s.label, color: s.color })));
-    return svg;
+  }
+
+  function bars(container, opts) {
+    const svg = PlotSvg.bars(container, opts);
+    const root = document.createElement("div");
+    root.className = "plot plot-bars";
+    root.setAttribute("aria-label", opts.title || "bars");
+    root.dataset.points = svg.getAttribute("data-points");
+    container.appendChild(root);
+    root.appendChild(svg);
+    toolbar(root, { png: () => svgPng(svg), svg: () => new Blob([PlotSvg.serialize(svg)], { type: "image/svg+xml" }),
+                    csv: () => barsCsv(opts) });
+    return root;
   }
 
   return { line, bars, num, fmt, PALETTE };
