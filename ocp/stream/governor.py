@@ -14,40 +14,37 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 
-Constraint = tuple[Callable[[float], float], float, bool]  # (c(v), limit, is_voltage)
+Quantities = Callable[[float], Sequence[float]]  # v -> the limited quantities (current, voltage, ...)
 
 PASSES = 3
 
 
-def _interval(c: Callable[[float], float], limit: float, v: float) -> tuple[float, float] | None:
-    """Admissible v for ``|c(v)| <= limit`` by linearisation at ``v``; None when c does not depend on v."""
+def _interval(q: Quantities, j: int, limit: float, v: float, c0: float) -> tuple[float, float] | None:
+    """Admissible v for ``|q(v)[j]| <= limit`` by linearisation at ``v``; None when it does not depend on v."""
     d = 1e-6 * (abs(v) + 1.0)
-    c0 = c(v)
-    s = (c(v + d) - c(v - d)) / (2.0 * d)
+    s = (q(v + d)[j] - q(v - d)[j]) / (2.0 * d)
     if abs(s) * (abs(v) + 1.0) < 1e-12 * (abs(c0) + limit):
         return None
     a, b = v + (-limit - c0) / s, v + (limit - c0) / s
     return (a, b) if a <= b else (b, a)
 
 
-def _intersect(lo: float, hi: float, iv: tuple[float, float] | None) -> tuple[float, float, bool]:
-    if iv is None:
-        return lo, hi, True
-    a, b = max(lo, iv[0]), min(hi, iv[1])
-    return (a, b, True) if a <= b else (lo, hi, False)
-
-
-def govern(v: float, constraints: Sequence[Constraint]) -> tuple[float, bool]:
-    """(admissible v closest to ``v``, True when ``v`` was changed)."""
+def govern(v: float, q: Quantities, limits: Sequence[float], is_voltage: Sequence[bool]) -> tuple[float, bool]:
+    """(admissible v closest to ``v``, True when ``v`` was changed); ``q(v)[j]`` must stay within
+    ``+-limits[j]``; voltages (``is_voltage[j]``) first."""
     changed = False
     for _ in range(PASSES):
-        if all(abs(c(v)) <= lim for c, lim, _ in constraints):
+        vals = q(v)
+        if all(abs(c) <= lim for c, lim in zip(vals, limits, strict=True)):
             return v, changed
         lo, hi = -float("inf"), float("inf")
         for want_voltage in (True, False):
-            for c, lim, is_v in constraints:
-                if is_v == want_voltage:
-                    lo, hi, _ok = _intersect(lo, hi, _interval(c, lim, v))
+            for j, (lim, is_v) in enumerate(zip(limits, is_voltage, strict=True)):
+                if is_v != want_voltage:
+                    continue
+                iv = _interval(q, j, lim, v, vals[j])
+                if iv is not None and max(lo, iv[0]) <= min(hi, iv[1]):
+                    lo, hi = max(lo, iv[0]), min(hi, iv[1])
         v = min(max(v, lo), hi)
         changed = True
     return v, changed

@@ -25,7 +25,7 @@ import numpy as np
 
 from ocp.errors import MissionError
 from ocp.params import MotorParams
-from ocp.stream.governor import Constraint, govern
+from ocp.stream.governor import govern
 from ocp.stream.inverse import Inverse, speed_derivatives, target_coordinate
 from ocp.stream.options import StreamOptions
 from ocp.stream.preview import design
@@ -62,15 +62,20 @@ class StreamShaper:
         self._m = options.speed_power
         self._foh = options.chain == 3
         g = design("foh" if self._foh else "zoh", options.dt, options.bandwidth, options.preview)
-        self._A, self._B, self._K, self._F = g.A, g.B, g.K, g.F
+        # Python floats for the O(n) scalar parts of the step (numpy scalars cost ~10x per operation)
+        self._A: list[list[float]] = g.A.tolist()
+        self._B: list[float] = g.B.tolist()
+        self._K: list[float] = g.K.tolist()
+        self._F = g.F
         self._L = options.preview + 1
         self._r = np.zeros(2 * self._L)  # target coordinate, doubled ring buffer
         self._f = np.zeros(2 * self._L)  # raw desired thrust, same ring
         self._w = 0
         self._z = [0.0] * options.chain
         self._t_last: float | None = None
-        self._imax = options.current * (1.0 - options.margin)
-        self._vmax = options.voltage * (1.0 - options.margin)
+        imax, vmax = options.current * (1.0 - options.margin), options.voltage * (1.0 - options.margin)
+        self._limits = (imax, vmax) if self._foh else (imax, vmax, vmax)
+        self._is_voltage = (False, True) if self._foh else (False, True, True)
         self.samples = 0
         self.saturations = 0
 
@@ -91,23 +96,22 @@ class StreamShaper:
         self._w = (w + 1) % L
 
     def _advance(self, v: float) -> list[float]:
-        A, B, z = self._A, self._B, self._z
-        return [sum(A[i, j] * z[j] for j in range(len(z))) + B[i] * v for i in range(len(z))]
+        """State at ``t_{k+1}`` for the decision ``v`` (the chain's A z + B v, unrolled: A is triangular)."""
+        A, b, z = self._A, self._B, self._z
+        if self._foh:
+            return [z[0] + A[0][1] * z[1] + A[0][2] * z[2] + b[0] * v, z[1] + A[1][2] * z[2] + b[1] * v, v]
+        return [z[0] + A[0][1] * z[1] + b[0] * v, z[1] + b[1] * v]
 
-    def _constraints(self, v_now_eta2: float | None) -> list[Constraint]:
-        inv, m, z = self._inv, self._m, self._z
-
-        def nxt(v: float) -> tuple[float, float, float]:
-            zn = self._advance(v)
-            return speed_derivatives(zn[0], zn[1], v, m)
-
-        out: list[Constraint] = [
-            (lambda v: inv.current(*nxt(v)[:2]), self._imax, False),
-            (lambda v: inv.voltage(*nxt(v)), self._vmax, True),
-        ]
-        if v_now_eta2 is None:  # zoh: eta'' jumps to v at t_k, so V(t_k+) depends on v
-            out.append((lambda v: inv.voltage(*speed_derivatives(z[0], z[1], v, m)), self._vmax, True))
-        return out
+    def _limited(self, v: float) -> tuple[float, ...]:
+        """(current at t_{k+1}, voltage at t_{k+1}[, voltage at t_k+ when eta'' is held]) for decision v."""
+        inv, m = self._inv, self._m
+        zn = self._advance(v)
+        w, w1, w2 = speed_derivatives(zn[0], zn[1], v, m)
+        out = (inv.current(w, w1), inv.voltage(w, w1, w2))
+        if self._foh:
+            return out
+        z = self._z  # eta'' jumps to v at t_k, so V(t_k+) depends on v
+        return (*out, inv.voltage(*speed_derivatives(z[0], z[1], v, m)))
 
     def push(self, t: float, thrust: float) -> StreamSample:
         """Feed the desired thrust ``thrust`` [N] at ``t`` [s]; returns the output sample at ``t``."""
@@ -117,7 +121,7 @@ class StreamShaper:
         win = self._r[w + 1:w + L]
         v = float(self._F @ win) - sum(k * x for k, x in zip(self._K, z, strict=True))
         eta2_now = z[2] if self._foh else None
-        v, sat = govern(v, self._constraints(eta2_now))
+        v, sat = govern(v, self._limited, self._limits, self._is_voltage)
         w0, w1, w2 = speed_derivatives(z[0], z[1], v if eta2_now is None else eta2_now, self._m)
         inv = self._inv
         out = StreamSample(t=t, thrust=inv.thrust(w0), omega=w0, omega_dot=w1, omega_ddot=w2,
