@@ -1,4 +1,5 @@
-"""Live streaming shaper: ``WS /v1/stream`` (the API key, when the server has one, is checked here).
+"""Live streaming shaper: ``WS /v1/stream`` (the API key, when the server has one, is checked here), and
+``GET /v1/stream/example``: the paper's interaction example to play through it (the page's Stream tab).
 
 Protocol (JSON text frames)::
 
@@ -32,15 +33,19 @@ import contextlib
 import hmac
 import json
 import time
-from typing import Any
+from functools import lru_cache
+from typing import Annotated, Any
 
-from fastapi import APIRouter, WebSocket, WebSocketDisconnect
+import numpy as np
+from fastapi import APIRouter, Depends, Query, WebSocket, WebSocketDisconnect
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ocp.errors import MissionError, ThrustshapeError, validation_location
+from ocp.gallery.interaction import InteractionSetup, Law, interaction_reference
 from ocp.params import PRESETS, MotorParams, load_params
 from ocp.stream import StreamShaper, stream_options
 from ocp.theory import ReversalRegularity
+from service.api.deps import require_api_key
 
 MAX_SESSIONS = 4
 MAX_SAMPLES = 600_000  # per session: 10 min at 1 kHz
@@ -50,7 +55,40 @@ MAX_BURST = 2_000  # samples
 IDLE_S = 30.0
 MAX_FRAME_CHARS = 64 * 1024
 
+EXAMPLE_MAX_DURATION_S = 20.0
+
 router = APIRouter(tags=["stream"])
+
+
+class StreamExample(BaseModel):
+    """The paper's Section IV-B reference sampled for streaming: ``t`` [s], ``thrust`` [N]."""
+
+    law: Law
+    rate: float
+    amplitude: float
+    t: list[float]
+    thrust: list[float]
+    crossings: list[float]
+
+
+@lru_cache(maxsize=8)
+def _example(law: Law, duration: float, rate: float, amplitude: float) -> StreamExample:
+    """Section IV-B's impedance or admittance reference (M_I = 0.65, B_I = 3.5, K_I = 5.0, ...), its
+    normalised time read as seconds and its thrust scaled to +-``amplitude`` [N] (the paper's example is
+    normalised; a rig needs newtons)."""
+    ref = interaction_reference(law, InteractionSetup(duration=duration), rate=rate)
+    scale = amplitude / float(np.max(np.abs(ref.x2d)))
+    return StreamExample(law=law, rate=rate, amplitude=amplitude, t=ref.t.tolist(), thrust=(ref.x2d * scale).tolist(),
+                         crossings=list(ref.crossings))
+
+
+@router.get("/v1/stream/example", response_model=StreamExample, dependencies=[Depends(require_api_key)],
+            summary="The paper's interaction example (impedance/admittance) as a thrust reference to stream")
+async def example(law: Law = Law.IMPEDANCE, duration: Annotated[float, Query(gt=0, le=EXAMPLE_MAX_DURATION_S)] = 10.0,
+                  rate: Annotated[float, Query(ge=100, le=2000)] = 1000.0,
+                  amplitude: Annotated[float, Query(gt=0, le=100)] = 0.4) -> StreamExample:
+    # ~1 s of ODE integration for a new argument set: in a thread (cached afterwards), never on the loop
+    return await asyncio.to_thread(_example, law, duration, rate, amplitude)
 
 
 class StreamStart(BaseModel):
