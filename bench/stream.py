@@ -2,6 +2,7 @@
 
     PYTHONPATH=$PWD python bench/stream.py            # everything (the offline optimiser takes a while)
     PYTHONPATH=$PWD python bench/stream.py --quick    # skip the offline optimiser
+    PYTHONPATH=$PWD python bench/stream.py --speed    # only the Python and C step timings
 
 Profile: the seed paper's Section IV-B impedance reference (M_I = 0.65, B_I = 3.5, K_I = 5.0), 10 s at
 1 kHz, scaled to +-0.4 N, 19 linear crossings; paper-rig motor, |i| <= 1 A, |V| <= 12 V, look-ahead 0.1 s.
@@ -157,14 +158,16 @@ def table(rows: list[dict[str, object]]) -> None:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="skip the offline optimiser")
+    ap.add_argument("--speed", action="store_true", help="only the Python and C step timings")
     args = ap.parse_args()
     p = preset("paper-rig")
     t, f = profile()
-    rows = streams(p, t, f)
-    if not args.quick:
-        rows += offline(p, t, f)
-    print("## approaches on the 10 s impedance reference (1 kHz, |i| <= 1 A, |V| <= 12 V, look-ahead 0.1 s)")
-    table(rows)
+    if not args.speed:
+        rows = streams(p, t, f)
+        if not args.quick:
+            rows += offline(p, t, f)
+        print("## approaches on the 10 s impedance reference (1 kHz, |i| <= 1 A, |V| <= 12 V, look-ahead 0.1 s)")
+        table(rows)
     print("\n## Python API, one push() per sample (default bandwidth 20 Hz)")
     for reg, s in python_speed(p, t, f).items():
         print(reg, " ".join(f"{k}={v:.4g}" for k, v in s.items()))

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import io
 import os
 import selectors
 import subprocess
@@ -9,7 +10,9 @@ import sys
 from pathlib import Path
 
 import numpy as np
+import pytest
 
+from clients.cli import main
 from ocp.params import MotorParams
 from ocp.stream import shape_profile, stream_options
 
@@ -53,15 +56,18 @@ def test_stream_answers_each_row_before_the_next_arrives(rig: MotorParams) -> No
         np.testing.assert_allclose(got[:, j], getattr(ref, name), rtol=1e-12, atol=1e-15)
 
 
-def test_stream_infers_dt_and_names_the_bad_line() -> None:
-    proc = _start()
-    out, err = proc.communicate("t,thrust\n0,0.1\n0.001,0.1\n0.002,0.1\n0.003,abc\n0.004,0.1\n", timeout=60)
-    assert proc.returncode == 1
-    assert len(out.strip().splitlines()) == 1 + 3  # header + the three good rows, already written
-    assert "line 5" in err and "not a number" in err
-    proc = _start("--dt", "0.001")
-    _, err = proc.communicate("t,thrust\n0,0.1\n0.01,0.1\n", timeout=60)
-    assert proc.returncode == 1 and "line 3" in err and "sample period" in err
-    proc = _start()
-    _, err = proc.communicate("time,F\n0,1\n", timeout=60)
-    assert proc.returncode == 1 and "line 1" in err and "header" in err
+@pytest.mark.parametrize(("extra", "text", "lines_out", "message"), [
+    ((), "t,thrust\n0,0.1\n0.001,0.1\n0.002,0.1\n0.003,abc\n0.004,0.1\n", 4, "line 5: not a number"),
+    (("--dt", "0.001"), "t,thrust\n0,0.1\n0.01,0.1\n", 2, "line 3: t: advances by 0.01 s"),
+    (("--dt", "0.001"), "t,thrust\n0,0.1\n0.001,nan\n", 2, "line 3: thrust: must be a finite number"),
+    ((), "time,F\n0,1\n", 0, "line 1: header must be t,thrust"),
+    ((), "t,thrust\n0,0.1\n", 1, "line 2: one data row is not a stream"),
+])
+def test_stream_errors_name_the_line(monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str],
+                                     extra: tuple[str, ...], text: str, lines_out: int, message: str) -> None:
+    """In process (the same ``main`` the console script runs): rows before the bad one are already out."""
+    monkeypatch.setattr(sys, "stdin", io.StringIO(text))
+    assert main(["stream", *ARGS, *extra]) == 1
+    out, err = capsys.readouterr()
+    assert len(out.splitlines()) == lines_out
+    assert message in err, err

@@ -34,20 +34,28 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
         srv.stop()
 
 
-@pytest.fixture()
-def page(server: Server, tmp_path: Path) -> Iterator[Any]:
+@pytest.fixture(scope="module")
+def browser() -> Iterator[Any]:
     with sync_api.sync_playwright() as pw:
-        browser = pw.chromium.launch(executable_path=str(CHROMIUM), args=ARGS, headless=True)
+        b = pw.chromium.launch(executable_path=str(CHROMIUM), args=ARGS, headless=True)
         try:
-            pg = browser.new_page(viewport={"width": 1400, "height": 1100})
-            errors: list[str] = []
-            pg.on("pageerror", lambda e: errors.append(str(e)))
-            pg.set_default_timeout(60_000)
-            pg.goto(server.url + "/#stream")
-            yield pg
-            assert errors == [], f"script errors on the page: {errors}"
+            yield b
         finally:
-            browser.close()
+            b.close()
+
+
+@pytest.fixture()
+def page(server: Server, browser: Any) -> Iterator[Any]:
+    pg = browser.new_page(viewport={"width": 1400, "height": 1100})
+    errors: list[str] = []
+    pg.on("pageerror", lambda e: errors.append(str(e)))
+    pg.set_default_timeout(60_000)
+    try:
+        pg.goto(server.url + "/#stream")
+        yield pg
+        assert errors == [], f"script errors on the page: {errors}"
+    finally:
+        pg.close()
 
 
 def _value(page: Any, key: str) -> str:

@@ -37,13 +37,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=cmd_stream)
 
 
-def _rows(stream: TextIO) -> Iterator[tuple[int, float, float]]:
-    """(line number, t, thrust) per data row; the header must be ``t,thrust``."""
+def _header(stream: TextIO) -> None:
+    """Read and check the input header ``t,thrust`` (line 1)."""
     header = stream.readline()
     if not header:
         raise MissionError("line 1", "empty input; expected the header t,thrust")
     if tuple(h.strip() for h in header.split(",")) != HEADER_IN:
         raise MissionError("line 1", f"header must be t,thrust, got {header.strip()!r}")
+
+
+def _rows(stream: TextIO) -> Iterator[tuple[int, float, float]]:
+    """(line number, t, thrust) per data row after the header."""
     for n, line in enumerate(iter(stream.readline, ""), start=2):
         if not line.strip():
             continue
@@ -66,6 +70,7 @@ def cmd_stream(args: argparse.Namespace) -> int:
     opts = dict(current=args.current, voltage=args.voltage, regularity=args.regularity, delay=args.delay,
                 bandwidth=args.bandwidth)
     out = sys.stdout
+    _header(sys.stdin)
     rows = _rows(sys.stdin)
     pending: list[tuple[int, float, float]] = []
     shaper: StreamShaper | None = None

@@ -147,20 +147,30 @@ void ts_step(ts_state *s, double thrust, double *y) {
 
 HARNESS = r"""
 #include <stdio.h>
+#include <stdlib.h>
 #include <time.h>
+#define TS_MAX_TIMED 2000000
+static double ts_us[TS_MAX_TIMED];
+static int ts_cmp(const void *a, const void *b) {
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
 int main(void) {
     static ts_state s; ts_init(&s);
-    double f, y[TS_OUT], worst = 0.0, total = 0.0; long n = 0;
+    double f, y[TS_OUT], total = 0.0; long n = 0;
     struct timespec a, b;
     while (scanf("%lf", &f) == 1) {
         clock_gettime(CLOCK_MONOTONIC, &a);
         ts_step(&s, f, y);
         clock_gettime(CLOCK_MONOTONIC, &b);
         double us = (b.tv_sec - a.tv_sec) * 1e6 + (b.tv_nsec - a.tv_nsec) * 1e-3;
-        total += us; worst = us > worst ? us : worst; ++n;
+        total += us; if (n < TS_MAX_TIMED) ts_us[n] = us; ++n;
         printf("%.17g %.17g %.17g %.17g %.17g %.17g %.17g %.0f\n", y[0], y[1], y[2], y[3], y[4], y[5], y[6], y[7]);
     }
-    fprintf(stderr, "steps %ld mean_us %.4f worst_us %.4f\n", n, n ? total / n : 0.0, worst);
+    long m = n < TS_MAX_TIMED ? n : TS_MAX_TIMED;
+    qsort(ts_us, (size_t)m, sizeof ts_us[0], ts_cmp);
+    fprintf(stderr, "steps %ld mean_us %.4f p99_us %.4f p999_us %.4f worst_us %.4f\n", n, n ? total / n : 0.0,
+            m ? ts_us[(long)(0.99 * (m - 1))] : 0.0, m ? ts_us[(long)(0.999 * (m - 1))] : 0.0, m ? ts_us[m - 1] : 0.0);
     return 0;
 }
 """
