@@ -8,9 +8,11 @@ import json
 from collections.abc import Iterator
 from typing import Any
 
+import httpx
 import numpy as np
 import pytest
 
+from ocp.gallery.interaction import Law, interaction_reference
 from ocp.params import MotorParams
 from ocp.stream import shape_profile, stream_options
 from service.api.routes.stream import MAX_BATCH, MAX_SESSIONS
@@ -118,3 +120,16 @@ def test_stream_rate_and_sessions_are_bounded(server: Server) -> None:
     with _connect(server) as ws:  # the sessions closed: room again
         ws.send(json.dumps({**START, "api_key": KEY}))
         assert json.loads(ws.recv(timeout=30))["type"] == "ready"
+
+
+def test_stream_example_is_the_papers_impedance_reference(server: Server) -> None:
+    url = server.url + "/v1/stream/example?law=impedance&duration=2&amplitude=0.5"
+    assert httpx.get(url, timeout=60).status_code == 401
+    body = httpx.get(url, headers={"Authorization": f"Bearer {KEY}"}, timeout=60).json()
+    ref = interaction_reference(Law.IMPEDANCE)  # the gallery's 4 s normalised reference, same law and constants
+    thrust = np.array(body["thrust"])
+    assert len(body["t"]) == 2001 and np.max(np.abs(thrust)) == pytest.approx(0.5)
+    np.testing.assert_allclose(thrust / 0.5 * np.max(np.abs(ref.x2d[:2001])), ref.x2d[:2001], rtol=0, atol=1e-7)
+    bad = httpx.get(server.url + "/v1/stream/example?duration=50", headers={"Authorization": f"Bearer {KEY}"},
+                    timeout=60)
+    assert bad.status_code == 422 and "duration" in bad.text

@@ -34,7 +34,7 @@ import hmac
 import json
 import time
 from functools import lru_cache
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from fastapi import APIRouter, Depends, Query, WebSocket, WebSocketDisconnect
@@ -55,7 +55,7 @@ MAX_BURST = 2_000  # samples
 IDLE_S = 30.0
 MAX_FRAME_CHARS = 64 * 1024
 
-EXAMPLE_MAX_DURATION_S = 20.0
+EXAMPLE_MAX_DURATION_S = 10.0
 
 router = APIRouter(tags=["stream"])
 
@@ -68,27 +68,37 @@ class StreamExample(BaseModel):
     amplitude: float
     t: list[float]
     thrust: list[float]
-    crossings: list[float]
+    crossings: list[float]  # sample times just before each sign change [s]
 
 
-@lru_cache(maxsize=8)
+@lru_cache(maxsize=4)
+def _example_full(law: Law, rate: float) -> tuple[np.ndarray, np.ndarray]:
+    """Section IV-B's impedance or admittance reference (M_I = 0.65, B_I = 3.5, K_I = 5.0, ...) over the
+    longest example, normalised: (t, x2d). At most four of these exist (two laws, two rates)."""
+    ref = interaction_reference(law, InteractionSetup(duration=EXAMPLE_MAX_DURATION_S), rate=rate)
+    return ref.t, ref.x2d
+
+
 def _example(law: Law, duration: float, rate: float, amplitude: float) -> StreamExample:
-    """Section IV-B's impedance or admittance reference (M_I = 0.65, B_I = 3.5, K_I = 5.0, ...), its
-    normalised time read as seconds and its thrust scaled to +-``amplitude`` [N] (the paper's example is
-    normalised; a rig needs newtons)."""
-    ref = interaction_reference(law, InteractionSetup(duration=duration), rate=rate)
-    scale = amplitude / float(np.max(np.abs(ref.x2d)))
-    return StreamExample(law=law, rate=rate, amplitude=amplitude, t=ref.t.tolist(), thrust=(ref.x2d * scale).tolist(),
-                         crossings=list(ref.crossings))
+    """The first ``duration`` seconds (the paper's normalised time read as seconds), the thrust scaled to a
+    peak of ``amplitude`` [N] (the paper's example is normalised; a rig needs newtons)."""
+    t, x2d = _example_full(law, rate)
+    n = round(duration * rate) + 1
+    t, x2d = t[:n], x2d[:n]
+    scale = amplitude / float(np.max(np.abs(x2d)))
+    crossings = t[:-1][x2d[:-1] * x2d[1:] < 0]
+    return StreamExample(law=law, rate=rate, amplitude=amplitude, t=t.tolist(), thrust=(x2d * scale).tolist(),
+                         crossings=crossings.tolist())
 
 
 @router.get("/v1/stream/example", response_model=StreamExample, dependencies=[Depends(require_api_key)],
             summary="The paper's interaction example (impedance/admittance) as a thrust reference to stream")
-async def example(law: Law = Law.IMPEDANCE, duration: Annotated[float, Query(gt=0, le=EXAMPLE_MAX_DURATION_S)] = 10.0,
-                  rate: Annotated[float, Query(ge=100, le=2000)] = 1000.0,
+async def example(law: Law = Law.IMPEDANCE,
+                  duration: Annotated[float, Query(ge=0.5, le=EXAMPLE_MAX_DURATION_S)] = 10.0,
+                  rate: Literal[500, 1000] = 1000,
                   amplitude: Annotated[float, Query(gt=0, le=100)] = 0.4) -> StreamExample:
-    # ~1 s of ODE integration for a new argument set: in a thread (cached afterwards), never on the loop
-    return await asyncio.to_thread(_example, law, duration, rate, amplitude)
+    # a fixed example: ~2 s of ODE integration the first time per (law, rate), in a thread, cached after
+    return await asyncio.to_thread(_example, law, duration, float(rate), amplitude)
 
 
 class StreamStart(BaseModel):
