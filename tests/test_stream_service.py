@@ -98,6 +98,13 @@ def test_stream_bad_input_names_the_field(server: Server, start: dict, frame: di
     assert code in (1007, 1008)
 
 
+def test_stream_binary_frame_is_refused(server: Server) -> None:
+    with _connect(server) as ws:
+        ws.send(b"\x00\x01")
+        msg, code = _refusal(ws)
+    assert msg["field"] == "frame" and code == 1003
+
+
 def test_stream_rate_and_sessions_are_bounded(server: Server) -> None:
     with _connect(server) as ws:
         ws.send(json.dumps({**START, "api_key": KEY}))

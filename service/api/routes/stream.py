@@ -182,8 +182,19 @@ class _Bucket:
         self.tokens -= n
 
 
+async def _receive(ws: WebSocket) -> str:
+    """The next text frame (idle timeout); a binary frame is refused."""
+    msg = await asyncio.wait_for(ws.receive(), IDLE_S)
+    if msg["type"] == "websocket.disconnect":
+        raise WebSocketDisconnect(msg.get("code", 1000))
+    text = msg.get("text")
+    if text is None:
+        raise _Refused("frame", "frames are JSON text, not binary", 1003)
+    return str(text)
+
+
 async def _session(ws: WebSocket) -> None:
-    start = _parse(StreamStart, await asyncio.wait_for(ws.receive_text(), IDLE_S))
+    start = _parse(StreamStart, await _receive(ws))
     if not _key_ok(ws, start):
         raise _Refused("api_key", "missing or wrong API key (Authorization: Bearer or the first frame's api_key)")
     try:
@@ -197,7 +208,7 @@ async def _session(ws: WebSocket) -> None:
                         "max_samples": MAX_SAMPLES, "max_batch": MAX_BATCH, "max_rate": MAX_RATE})
     bucket, total = _Bucket(), 0
     while True:
-        batch = _parse(StreamBatch, await asyncio.wait_for(ws.receive_text(), IDLE_S))
+        batch = _parse(StreamBatch, await _receive(ws))
         total += len(batch.t)
         if total > MAX_SAMPLES:
             raise _Refused("t", f"a session carries at most {MAX_SAMPLES} samples")
