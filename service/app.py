@@ -25,6 +25,7 @@ from service.api.deps import require_api_key
 from service.api.logging import RequestId, logged_lifespan
 from service.api.middleware import BodyLimit
 from service.api.routes import batches, compare, health, info, model_check, page, references
+from service.api.routes import stream as stream_route
 from service.batches import BatchRunner
 from service.jobs import JobStore
 from service.settings import Settings
@@ -90,6 +91,7 @@ def create_app(settings: Settings | None = None, tasks: TaskSet | None = None) -
     guard = [Depends(require_api_key)]
     app.include_router(health.router)
     app.include_router(page.router)
+    app.include_router(stream_route.router)  # WebSocket: checks the API key itself (browsers send no headers)
     app.include_router(info.router, dependencies=guard)
     app.include_router(references.analytic_router, dependencies=guard)
     if tasks.optimize is not None and tasks.fallback is not None:

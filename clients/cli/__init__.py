@@ -25,7 +25,7 @@ from ocp.errors import ThrustshapeError
 
 #: command modules, in help order; each has ``register(subparsers) -> None``
 COMMAND_MODULES: tuple[str, ...] = ("clients.cli.core", "clients.cli.optimize", "clients.cli.gallery",
-                                    "clients.cli.service", "clients.cli.model")
+                                    "clients.cli.service", "clients.cli.model", "clients.cli.stream")
 
 #: exit status after a closed output pipe (128 + SIGPIPE)
 EXIT_PIPE = 141

@@ -1,0 +1,256 @@
+"""Live streaming shaper: ``WS /v1/stream`` (the API key, when the server has one, is checked here), and
+``GET /v1/stream/example``: the paper's interaction example to play through it (the page's Stream tab).
+
+Protocol (JSON text frames)::
+
+    client -> {"params": "paper-rig" | {J, B, ...}, "current": 1.0, "voltage": 12.0,
+               "regularity": "continuous-voltage", "delay": 0.1, "dt": 0.001, "bandwidth": 20,
+               "api_key": "..."}                                   # first frame: the session
+    server -> {"type": "ready", "preview": 100, "delay": 0.1, "dt": 0.001, "max_samples": ..., ...}
+    client -> {"t": [...], "thrust": [...]}                        # 1..MAX_BATCH samples per frame
+    server -> {"type": "samples", "t": [...], "desired": [...], "thrust": [...], "omega": [...],
+               "current": [...], "voltage": [...], "saturated": [...]}
+    server -> {"type": "error", "field": ..., "reason": ...}       # then the socket closes (1008 / 1007)
+
+Browsers cannot set headers on a WebSocket, so the key may come as ``Authorization: Bearer`` or as the
+first frame's ``api_key``. ``params`` is a preset name or a mapping: never a path (the server reads no
+file a client names).
+
+Bounds, all checked before the work they guard: sessions per server (:data:`MAX_SESSIONS`), samples
+per session (:data:`MAX_SAMPLES`), samples per frame (:data:`MAX_BATCH`), sample rate (a token bucket
+of :data:`MAX_RATE` samples/s with a burst of :data:`MAX_BURST`), an idle timeout and the frame size.
+
+The shaper's step costs ~40 us in Python (``bench/stream.py``); a frame of at most MAX_BATCH samples
+is a few milliseconds of CPU, run with ``asyncio.to_thread`` so the event loop keeps serving other
+requests meanwhile. A stateful stream cannot live in the worker processes (every frame would ship the
+state back and forth); the bounds above cap what one client can take from the server process.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import hmac
+import json
+import time
+from functools import lru_cache
+from typing import Annotated, Any, Literal
+
+import numpy as np
+from fastapi import APIRouter, Depends, Query, WebSocket, WebSocketDisconnect
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from ocp.errors import MissionError, ThrustshapeError, validation_location
+from ocp.gallery.interaction import InteractionSetup, Law, interaction_reference
+from ocp.params import PRESETS, MotorParams, load_params
+from ocp.stream import StreamShaper, stream_options
+from ocp.theory import ReversalRegularity
+from service.api.deps import require_api_key
+
+MAX_SESSIONS = 4
+MAX_SAMPLES = 600_000  # per session: 10 min at 1 kHz
+MAX_BATCH = 200  # samples per frame
+MAX_RATE = 5_000.0  # samples/s, sustained
+MAX_BURST = 2_000  # samples
+IDLE_S = 30.0
+MAX_FRAME_CHARS = 64 * 1024
+
+EXAMPLE_MAX_DURATION_S = 10.0
+
+router = APIRouter(tags=["stream"])
+
+
+class StreamExample(BaseModel):
+    """The paper's Section IV-B reference sampled for streaming: ``t`` [s], ``thrust`` [N]."""
+
+    law: Law
+    rate: float
+    amplitude: float
+    t: list[float]
+    thrust: list[float]
+    crossings: list[float]  # sample times just before each sign change [s]
+
+
+@lru_cache(maxsize=4)
+def _example_full(law: Law, rate: float) -> tuple[np.ndarray, np.ndarray]:
+    """Section IV-B's impedance or admittance reference (M_I = 0.65, B_I = 3.5, K_I = 5.0, ...) over the
+    longest example, normalised: (t, x2d). At most four of these exist (two laws, two rates)."""
+    ref = interaction_reference(law, InteractionSetup(duration=EXAMPLE_MAX_DURATION_S), rate=rate)
+    return ref.t, ref.x2d
+
+
+def _example(law: Law, duration: float, rate: float, amplitude: float) -> StreamExample:
+    """The first ``duration`` seconds (the paper's normalised time read as seconds), the thrust scaled to a
+    peak of ``amplitude`` [N] (the paper's example is normalised; a rig needs newtons)."""
+    t, x2d = _example_full(law, rate)
+    n = round(duration * rate) + 1
+    t, x2d = t[:n], x2d[:n]
+    scale = amplitude / float(np.max(np.abs(x2d)))
+    crossings = t[:-1][x2d[:-1] * x2d[1:] < 0]
+    return StreamExample(law=law, rate=rate, amplitude=amplitude, t=t.tolist(), thrust=(x2d * scale).tolist(),
+                         crossings=crossings.tolist())
+
+
+@router.get("/v1/stream/example", response_model=StreamExample, dependencies=[Depends(require_api_key)],
+            summary="The paper's interaction example (impedance/admittance) as a thrust reference to stream")
+async def example(law: Law = Law.IMPEDANCE,
+                  duration: Annotated[float, Query(ge=0.5, le=EXAMPLE_MAX_DURATION_S)] = 10.0,
+                  rate: Literal[500, 1000] = 1000,
+                  amplitude: Annotated[float, Query(gt=0, le=100)] = 0.4) -> StreamExample:
+    # a fixed example: ~2 s of ODE integration the first time per (law, rate), in a thread, cached after
+    return await asyncio.to_thread(_example, law, duration, float(rate), amplitude)
+
+
+class StreamStart(BaseModel):
+    """First frame of a session (units: A, V, s, Hz; see :class:`ocp.stream.StreamOptions`)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    params: str | dict[str, Any]
+    current: float
+    voltage: float
+    regularity: ReversalRegularity = ReversalRegularity.CONTINUOUS_VOLTAGE
+    delay: float = 0.1
+    dt: float = 0.001
+    bandwidth: float = 20.0
+    api_key: str | None = None
+
+
+class StreamBatch(BaseModel):
+    """A frame of samples: times [s] and desired thrust [N], equal lengths."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    t: list[float] = Field(min_length=1, max_length=MAX_BATCH)
+    thrust: list[float] = Field(min_length=1, max_length=MAX_BATCH)
+
+
+class _Refused(Exception):
+    def __init__(self, field: str, reason: str, code: int = 1008) -> None:
+        self.field, self.reason, self.code = field, reason, code
+
+
+def _parse(model: type[BaseModel], text: str) -> Any:
+    if len(text) > MAX_FRAME_CHARS:
+        raise _Refused("frame", f"{len(text)} characters; at most {MAX_FRAME_CHARS}", 1009)
+    try:
+        return model.model_validate_json(text)
+    except ValidationError as exc:
+        field, reason = validation_location(exc.errors()[0])
+        raise _Refused(field or "frame", reason, 1007) from None
+
+
+def _key_ok(ws: WebSocket, start: StreamStart) -> bool:
+    settings = ws.app.state.settings
+    if settings.api_key is None:
+        return True
+    key = settings.api_key.get_secret_value().encode()
+    header = ws.headers.get("authorization", "")
+    given = header[7:] if header.lower().startswith("bearer ") else (start.api_key or "")
+    return hmac.compare_digest(given.encode(), key)
+
+
+def _params(start: StreamStart) -> MotorParams:
+    if isinstance(start.params, str) and start.params not in PRESETS:
+        raise MissionError("params", f"a preset name {list(PRESETS)} or a mapping of parameters")
+    return load_params(start.params)
+
+
+def _run(shaper: StreamShaper, batch: StreamBatch) -> dict[str, Any]:
+    """Push a frame through the shaper (runs in a thread); columns of the output samples."""
+    if len(batch.t) != len(batch.thrust):
+        raise MissionError("thrust", f"{len(batch.thrust)} values for {len(batch.t)} times")
+    rows = [shaper.push(a, b) for a, b in zip(batch.t, batch.thrust, strict=True)]
+    out: dict[str, Any] = {"type": "samples"}
+    for name in ("t", "desired", "thrust", "omega", "current", "voltage", "saturated"):
+        out[name] = [getattr(r, name) for r in rows]
+    return out
+
+
+class _Bucket:
+    """Token bucket: ``MAX_RATE`` samples/s sustained, ``MAX_BURST`` at once."""
+
+    def __init__(self) -> None:
+        self.tokens, self.last = float(MAX_BURST), time.monotonic()
+
+    def take(self, n: int) -> None:
+        now = time.monotonic()
+        self.tokens = min(float(MAX_BURST), self.tokens + (now - self.last) * MAX_RATE)
+        self.last = now
+        if n > self.tokens:
+            raise _Refused("rate", f"more than {MAX_RATE:g} samples/s (burst {MAX_BURST})")
+        self.tokens -= n
+
+
+async def _receive(ws: WebSocket) -> str:
+    """The next text frame (idle timeout); a binary frame is refused."""
+    msg = await asyncio.wait_for(ws.receive(), IDLE_S)
+    if msg["type"] == "websocket.disconnect":
+        raise WebSocketDisconnect(msg.get("code", 1000))
+    text = msg.get("text")
+    if text is None:
+        raise _Refused("frame", "frames are JSON text, not binary", 1003)
+    return str(text)
+
+
+async def _session(ws: WebSocket) -> None:
+    start = _parse(StreamStart, await _receive(ws))
+    if not _key_ok(ws, start):
+        raise _Refused("api_key", "missing or wrong API key (Authorization: Bearer or the first frame's api_key)")
+    try:
+        opts = stream_options(current=start.current, voltage=start.voltage, regularity=start.regularity,
+                              delay=start.delay, dt=start.dt, bandwidth=start.bandwidth)
+        shaper = await asyncio.to_thread(StreamShaper, _params(start), opts)
+    except ThrustshapeError as exc:
+        raise _Refused(exc.field, exc.reason, 1007) from None
+    await ws.send_json({"type": "ready", "preview": opts.preview, "delay": opts.delay, "dt": opts.dt,
+                        "regularity": opts.regularity.value, "current": opts.current, "voltage": opts.voltage,
+                        "max_samples": MAX_SAMPLES, "max_batch": MAX_BATCH, "max_rate": MAX_RATE})
+    bucket, total = _Bucket(), 0
+    while True:
+        batch = _parse(StreamBatch, await _receive(ws))
+        total += len(batch.t)
+        if total > MAX_SAMPLES:
+            raise _Refused("t", f"a session carries at most {MAX_SAMPLES} samples")
+        bucket.take(len(batch.t))
+        try:
+            out = await asyncio.to_thread(_run, shaper, batch)
+        except ThrustshapeError as exc:
+            raise _Refused(exc.field, exc.reason, 1007) from None
+        await ws.send_text(json.dumps(out, allow_nan=False))
+
+
+@router.websocket("/v1/stream")
+async def stream(ws: WebSocket) -> None:
+    """One live stream per connection (module doc)."""
+    state = ws.app.state
+    await ws.accept()
+    active = getattr(state, "stream_sessions", 0)
+    if active >= MAX_SESSIONS:
+        await ws.send_json({"type": "error", "field": "session", "reason": f"at most {MAX_SESSIONS} live streams"})
+        await ws.close(1013)
+        return
+    state.stream_sessions = active + 1
+    refusal: tuple[str, str, int] | None = None
+    try:
+        await _session(ws)
+    except _Refused as exc:
+        refusal = (exc.field, exc.reason, exc.code)
+    except TimeoutError:
+        refusal = ("session", f"idle for {IDLE_S:g} s", 1001)
+    except WebSocketDisconnect:
+        pass
+    finally:
+        # the slot is free once the work is over, not after the closing handshake (a slow client
+        # must not hold it)
+        state.stream_sessions -= 1
+    if refusal is not None:
+        await _goodbye(ws, *refusal)
+
+
+async def _goodbye(ws: WebSocket, field: str, reason: str, code: int) -> None:
+    """Tell the client why, then close; a client that already left is not an error."""
+    with contextlib.suppress(WebSocketDisconnect, RuntimeError, OSError):
+        await ws.send_json({"type": "error", "field": field, "reason": reason})
+        await ws.close(code)
+
