@@ -71,3 +71,10 @@ def test_stream_errors_name_the_line(monkeypatch: pytest.MonkeyPatch, capsys: py
     out, err = capsys.readouterr()
     assert len(out.splitlines()) == lines_out
     assert message in err, err
+
+
+def test_cli_regularities_are_the_shapers() -> None:
+    from clients.cli.stream import REGULARITIES
+    from ocp.stream.options import STREAM_REGULARITIES
+
+    assert tuple(r.value for r in STREAM_REGULARITIES) == REGULARITIES

@@ -13,23 +13,31 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Iterator
-from typing import TextIO
+from typing import TYPE_CHECKING, TextIO
 
+from clients.cli.help import add_command
 from ocp.errors import MissionError, ThrustshapeError
-from ocp.params import load_params
-from ocp.stream import StreamSample, StreamShaper, stream_options
-from ocp.stream.options import STREAM_REGULARITIES
 
+if TYPE_CHECKING:
+    from ocp.stream import StreamSample, StreamShaper
+
+#: the stream's crossing classes (ocp.stream.options.STREAM_REGULARITIES, spelled out so that
+#: ``thrustshape --help`` imports no numerics; tests/test_stream_cli.py keeps the two equal)
+REGULARITIES = ("bounded", "continuous-current", "continuous-voltage")
 HEADER_IN = ("t", "thrust")
 HEADER_OUT = "t,thrust,omega,current,voltage"
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("stream", help="shape a thrust reference sample by sample (stdin CSV t,thrust -> stdout)")
+    p = add_command(sub, "stream", summary="shape a thrust reference sample by sample (stdin CSV t,thrust -> stdout)",
+                    description="Each output line t,thrust,omega,current,voltage is written (flushed) as its "
+                                "input row arrives;\nthe output thrust at t tracks the desired thrust at t - delay.",
+                    examples=["thrustshape stream --params paper-rig --voltage 12 --current 1 < desired.csv"],
+                    lists=("presets",))
     p.add_argument("--params", required=True, help="parameter file (JSON/YAML) or preset name, e.g. paper-rig")
     p.add_argument("--voltage", type=float, required=True, help="voltage limit |V| [V]")
     p.add_argument("--current", type=float, required=True, help="current limit |i| [A]")
-    p.add_argument("--regularity", choices=[r.value for r in STREAM_REGULARITIES], default="continuous-voltage",
+    p.add_argument("--regularity", choices=REGULARITIES, default="continuous-voltage",
                    help="crossing class (default continuous-voltage: thrust ~ |s|^6 at reversals)")
     p.add_argument("--delay", type=float, default=0.1, help="look-ahead D [s]: output at t tracks input at t - D")
     p.add_argument("--dt", type=float, default=None, help="sample period [s] (default: from the first two rows)")
@@ -66,6 +74,9 @@ def _write(out: TextIO, s: StreamSample) -> None:
 
 
 def cmd_stream(args: argparse.Namespace) -> int:
+    from ocp.params import load_params
+    from ocp.stream import StreamShaper, stream_options
+
     params = load_params(args.params)
     opts = dict(current=args.current, voltage=args.voltage, regularity=args.regularity, delay=args.delay,
                 bandwidth=args.bandwidth)
