@@ -45,7 +45,7 @@ class Thruster:
                 "R": self.R, "L": 5e-5}
 
     def speed(self, pwm: np.ndarray) -> np.ndarray:
-        """Steady speed [rad/s]: k_t (V_a - k_e w)/R = B w + c_tau w|w|, V_a = duty * supply (quadratic, closed form)."""
+        """Steady speed [rad/s]: k_t (V_a - k_e w)/R = B w + c_tau w|w|, V_a = duty * supply (closed form)."""
         duty = np.where(np.abs(pwm - self.neutral) <= self.deadband, 0.0, (pwm - self.neutral) / self.half)
         va = duty * self.supply
         b = self.B + self.k_t * self.k_e / self.R

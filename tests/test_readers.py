@@ -10,7 +10,17 @@ import pytest
 
 from ocp.errors import LogError
 from ocp.logs import LogKind, ReadOptions, read_log, write_reference_mat
-from tests.logfiles import G0, RPM, Thruster, thruster_sweep, tyto_series, write_csv, write_dataflash, write_ulog, write_xlsx
+from tests.logfiles import (
+    G0,
+    RPM,
+    Thruster,
+    thruster_sweep,
+    tyto_series,
+    write_csv,
+    write_dataflash,
+    write_ulog,
+    write_xlsx,
+)
 
 
 def _check_sweep(log, cols) -> None:  # type: ignore[no-untyped-def]
