@@ -91,12 +91,13 @@ class ReadOptions(BaseModel):
     motor: int = Field(default=0, ge=0, le=15)
 
     def half_range_us(self) -> float:
+        """Full-scale pulse offset [us] from neutral; the range must hold the neutral (a unidirectional ESC:
+        neutral = min)."""
         lo, hi = self.throttle_range_us
-        half = max(self.neutral_us - lo, hi - self.neutral_us)
-        if not half > 0:
-            raise LogError("throttle_range_us", f"{self.throttle_range_us} does not contain the neutral "
-                                                f"{self.neutral_us} us")
-        return half
+        if not (lo < hi and lo <= self.neutral_us <= hi):
+            raise LogError("throttle_range_us", f"({lo:g}, {hi:g}) us must hold the neutral {self.neutral_us:g} us "
+                                                "(min <= neutral <= max, min < max)")
+        return max(self.neutral_us - lo, hi - self.neutral_us)
 
 
 @dataclass(frozen=True)
