@@ -1,5 +1,6 @@
 """The page's model tab with an ESC sweep (real uvicorn server, Debian's headless Chromium): the read
-options reach the server (pole pairs and the rest: tests/test_readers_api.py), the answer lists the equations checked and not, the verdict names the asymmetry."""
+options reach the server (pole pairs and the rest: tests/test_readers_api.py), the answer lists the
+equations checked and not, the verdict names the asymmetry."""
 
 from __future__ import annotations
 
