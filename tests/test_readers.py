@@ -183,3 +183,19 @@ def test_ardupilot_dataflash_esc_and_rcou(tmp_path: Path) -> None:
     np.testing.assert_allclose(log.omega[moving], (sign * at(np.round(100 * tr["rpm"]) / 100) * RPM)[moving],
                                rtol=1e-6)
     assert math.isclose(log.dt, 0.02, rel_tol=1e-6)
+
+
+
+def test_optimize_out_mat_writes_a_simulink_reference(tmp_path: Path) -> None:
+    """``thrustshape optimize --out ref.mat`` goes through clients.cli.io.write_csv: a .mat path gets MATLAB."""
+    from scipy import io as sio
+
+    from clients.cli.io import write_csv as cli_write
+
+    t = np.linspace(0.0, 2.0, 101)
+    cols = {"t": t, "thrust": 0.3 * np.sin(np.pi * t), "omega": np.cos(t), "voltage": 2 * t}
+    cli_write(cols, str(tmp_path / "ref.mat"))
+    m = sio.loadmat(tmp_path / "ref.mat")
+    assert m["ref_ts"].shape == (101, 4) and m["t"].shape == (101, 1)
+    for j, name in enumerate(str(m["ref_columns"][0]).split(",")):
+        np.testing.assert_array_equal(m["ref_ts"][:, j], cols[name])

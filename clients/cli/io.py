@@ -40,7 +40,13 @@ def read_csv_columns(path: str | Path, required: Sequence[str]) -> dict[str, np.
 
 
 def write_csv(columns: dict[str, np.ndarray], out: str | None) -> None:
-    """Write equal-length columns as CSV to ``out`` (a path) or stdout."""
+    """Write equal-length columns as CSV to ``out`` (a path) or stdout; a ``.mat`` path gets a MATLAB file
+    for Simulink instead (:func:`ocp.logs.write_reference_mat`: column vectors and ``ref_ts = [t, ...]``)."""
+    if out and Path(out).suffix.lower() == ".mat":
+        from ocp.logs import write_reference_mat
+
+        write_reference_mat(columns, out)
+        return
     names = list(columns)
     fh = open(out, "w", newline="", encoding="utf-8") if out else sys.stdout
     try:

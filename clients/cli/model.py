@@ -71,6 +71,20 @@ def _steady(args: argparse.Namespace) -> bool | None:
     return None if args.steady_state == "auto" else args.steady_state == "yes"
 
 
+def _print_points(d: dict[str, Any]) -> None:
+    """A point-by-point check: residual RMS per equation, forward and reverse (text output)."""
+    print(f"{d['one_step']['label']}, RMS by direction:")
+    for eq, dirs in d["breakdown"]["direction"].items():
+        unit = d["one_step"]["units"][eq]
+        parts = [f"{k} {_g(v['rms'], '.4g')} {unit} ({_g(v['relative_rms'], '.1%')} of measured, n={v['n']})"
+                 for k, v in dirs.items()]
+        print(f"  {eq:10s} " + "; ".join(parts))
+    drive = d.get("drive") or {}
+    if drive:
+        print(f"  drive: efficiency {_g(drive.get('efficiency'), '.3f')}, "
+              f"idle power {_g(drive.get('idle_power_W'), '.3g')} W")
+
+
 def _print_equations(d: dict[str, Any]) -> None:
     """The equations checked and those that could not be, with why (text output)."""
     for note in d.get("notes", []):
@@ -151,6 +165,9 @@ def cmd_check(args: argparse.Namespace) -> int:
         print_json(d)
         return 0
     _print_equations(d)
+    if d.get("route") == "point-by-point":
+        _print_points(d)
+        return 0
     print("free run (model simulated under the measured voltage) RMS error:")
     for ch, v in d["free_run"]["rms"].items():
         print(f"  {ch:8s} {_g(v, '.4g')}   (sensor noise ~{_g(d['noise'][ch], '.3g')})")

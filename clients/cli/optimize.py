@@ -21,7 +21,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("optimize", help="optimise a mission's thrust reference under current/voltage limits")
     p.add_argument("mission", help="mission file (JSON or YAML)")
     p.add_argument("--json", action="store_true", help="print the full result as JSON")
-    p.add_argument("--out", default=None, help="write the reference as CSV to this file")
+    p.add_argument("--out", default=None, help="write the reference as CSV to this file (FILE.mat: MATLAB/Simulink)")
     add_server_args(p)
     p.set_defaults(func=cmd_optimize)
 

@@ -105,7 +105,7 @@ def read_flight_log(p: Path, fmt: str, opt: ReadOptions) -> Log:
     reference = next(iter(topics))
     t, ch, notes = merge(_dedupe(topics), reference, opt.resample == "auto")
     kind = LogKind.STEADY_STATE if opt.kind == "steady-state" else LogKind.TIME_SERIES
-    notes = [f"{'PX4 ULog' if fmt == 'ulog' else 'ArduPilot DataFlash'} log, motor {opt.motor}: ESC speed, "
+    notes = [f"{'PX4 ULog' if fmt == 'ulog' else 'ArduPilot DataFlash log'}, motor {opt.motor}: ESC speed, "
              "current and voltage (the supply's); no thrust is logged in flight", *notes]
     if "command" in ch:
         u, how = command_fraction(ch["command"], unit, opt)

@@ -24,7 +24,8 @@ def write_log_csv(log: Log, path: str | Path) -> None:
 def write_reference_mat(arrays: Mapping[str, np.ndarray], path: str | Path, name: str = "ref") -> None:
     """Write equal-length SI arrays (N,) as a MATLAB v5 ``.mat``: each as a column vector (N, 1) at top
     level (``t``, ``thrust``, ``omega``, ...), and ``<name>_ts = [t, thrust, omega, ...]`` (N, 1+K), the
-    matrix a Simulink *From Workspace* block takes (first column time)."""
+    matrix a Simulink *From Workspace* block takes (first column time), with ``<name>_columns`` naming its
+    columns (one comma-separated string)."""
     from scipy import io as sio
 
     cols = {k: np.asarray(v, dtype=float).reshape(-1, 1) for k, v in arrays.items()}
@@ -32,5 +33,5 @@ def write_reference_mat(arrays: Mapping[str, np.ndarray], path: str | Path, name
     if "t" in cols:
         rest = [v for k, v in cols.items() if k != "t"]
         data[f"{name}_ts"] = np.hstack([cols["t"], *rest])
-        data[f"{name}_columns"] = np.array(["t", *(k for k in cols if k != "t")], dtype=object)
+        data[f"{name}_columns"] = ",".join(["t", *(k for k in cols if k != "t")])
     sio.savemat(Path(path), data, do_compression=True, oned_as="column")
