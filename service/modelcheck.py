@@ -122,9 +122,10 @@ def _in(field: str, exc: ThrustshapeError) -> ThrustshapeError:
     return type(exc)(field, reason)
 
 
-#: file suffixes read by ocp.logs, and the first bytes that give each format away (issue #13)
+#: file suffixes read by ocp.logs (".bin" is too common a name to trust: its content decides), and the
+#: first bytes that give each format away (issue #13)
 LOG_SUFFIXES = {".parquet": ".parquet", ".pq": ".parquet", ".csv": ".csv", ".txt": ".csv", ".xlsx": ".xlsx",
-                ".mat": ".mat", ".ulg": ".ulg", ".bin": ".bin"}
+                ".mat": ".mat", ".ulg": ".ulg"}
 LOG_MAGIC = ((PARQUET_MAGIC, ".parquet"), (b"ULog", ".ulg"), (b"PK\x03\x04", ".xlsx"), (b"MATLAB", ".mat"),
              (b"\xa3\x95", ".bin"))
 

@@ -199,3 +199,26 @@ def test_optimize_out_mat_writes_a_simulink_reference(tmp_path: Path) -> None:
     assert m["ref_ts"].shape == (101, 4) and m["t"].shape == (101, 1)
     for j, name in enumerate(str(m["ref_columns"][0]).split(",")):
         np.testing.assert_array_equal(m["ref_ts"][:, j], cols[name])
+
+
+def test_tyto_proptest_export_one_way_esc(tmp_path: Path) -> None:
+    """A Tyto "PropTest" export as the 1580/1585 software writes it (full header with accelerometers and
+    efficiencies, one row per ESC step 1000..2000 us, 5.5 s apart, a one-way ESC, the torque cell's
+    reaction sign negative): a sweep, AccX (g) is not a thrust, nothing signed, torque aligned with speed."""
+    esc = np.arange(1000.0, 2001.0, 100.0)
+    rpm = np.where(esc > 1000, 11.5 * (esc - 1000), 0.0)
+    w = rpm * RPM
+    header = ("Time (s),ESC signal (µs),Servo 1 (µs),Servo 2 (µs),Servo 3 (µs),AccX (g),AccY (g),AccZ (g),"
+              "Torque (N·m),Thrust (kgf),Voltage (V),Current (A),Motor Electrical Speed (RPM),"
+              "Motor Optical Speed (RPM),Electrical Power (W),Mechanical Power (W),Motor Efficiency (%),"
+              "Propeller Mech. Efficiency (kgf/W),Overall Efficiency (kgf/W),Vibration (g),App message,")
+    rows = [f"{0.24 + 5.5 * k},{esc[k]:.0f},,,,0.03,0.02,-0.98,{-6e-7 * w[k] ** 2},{5.2e-6 * w[k] ** 2 / G0},"
+            f"16.0,{1e-5 * w[k] ** 1.5},{7 * rpm[k]},{rpm[k]},1,1,50,0.1,0.05,0.06,," for k in range(esc.size)]
+    (tmp_path / "PropTest.csv").write_text("\ufeff" + header + "\n" + "\n".join(rows) + "\n", encoding="utf-8")
+    log = read_log(tmp_path / "PropTest.csv")
+    assert log.kind is LogKind.STEADY_STATE and log.n == 11
+    np.testing.assert_allclose(log.thrust, 5.2e-6 * w**2, rtol=1e-9, atol=1e-12)  # Thrust (kgf), not AccX (g)
+    np.testing.assert_allclose(log.omega, w, rtol=1e-12)  # nothing signed: a one-way ESC
+    assert log.torque is not None
+    np.testing.assert_allclose(log.torque, 6e-7 * w**2, rtol=1e-9, atol=1e-15)
+    assert any("one-way ESC" in n for n in log.notes) and any("sign flipped" in n for n in log.notes)

@@ -104,8 +104,8 @@ def allowed(name: str, channel: str, log: Log) -> bool:
         return False
     if eqs & set(_ON[channel]) == {"power"}:
         return name in _POWER_ONLY
-    if channel == "current-sensor" and not _armature(log, "current"):
-        return False
+    if (channel == "current-sensor" or name == "param:k_t") and not _armature(log, "current"):
+        return False  # both act through the armature current
     return bool(eqs & set(_ON[channel]))
 
 

@@ -2,10 +2,16 @@
 convert to SI, sign unsigned channels by the command, divide electrical speed by the pole pairs,
 decide the kind (sweep or time series) and the time base. Every decision lands in ``Log.notes``.
 
-Signs: a bidirectional ESC turns the propeller backwards below its neutral pulse. A speed, thrust or
-torque column with no negative value, in a file whose command has rows on both sides of neutral, is
-unsigned: it takes ``sign(command - neutral)`` (rows at neutral keep the previous sign in a time
-series). Supply current and voltage stay positive: the supply delivers power in both directions.
+Signs: a bidirectional ESC turns the propeller backwards below its neutral pulse. A speed or torque
+column with no negative value, in a file whose command has rows on both sides of neutral, is unsigned:
+it takes ``sign(command - neutral)`` (rows at neutral keep the previous sign in a time series). A
+measured thrust arbitrates: if it is never negative although the command crosses the neutral, the ESC
+is a one-way ESC (neutral not at 1500 us) and nothing is signed -- the notes say so. Supply current and
+voltage stay positive: the supply delivers power in both directions.
+
+Sweeps with a time column (a Tyto "PropTest": one row per ESC step, seconds apart) are sweeps too when
+the command is strictly monotone and the rows are at least ``SWEEP_ROW_S`` apart: no time series is
+logged that slowly.
 """
 
 from __future__ import annotations
@@ -21,7 +27,8 @@ from ocp.logs.headers import Header, recognise
 from ocp.logs.model import QUANTITIES, UNITS, ColumnSpec, Log, LogKind, ReadOptions, log_from_arrays
 from ocp.logs.timebase import uniform
 
-_SIGNED_BY_COMMAND = ("omega", "thrust", "torque")
+_SIGNED_BY_COMMAND = ("omega", "torque")
+SWEEP_ROW_S = 1.0  # [s] median time between the rows of a steady sweep that has a time column
 
 
 def column_specs(columns: Mapping[str, Any] | None) -> dict[str, ColumnSpec]:
@@ -89,14 +96,21 @@ def _directions(u: np.ndarray, kind: LogKind) -> np.ndarray:
 def _kind(table: Mapping[str, np.ndarray], chosen: Mapping[str, Header], opt: ReadOptions) -> tuple[LogKind, str]:
     if opt.kind != "auto":
         return LogKind(opt.kind), f"{opt.kind} (as told)"
+    monotone = False
+    if "command" in chosen:
+        d = np.diff(np.asarray(table[chosen["command"].column], float))
+        monotone = d.size >= 3 and bool(np.all(d > 0) or np.all(d < 0))
     if "t" in chosen:
+        t = _si(table, chosen["t"])
+        step = float(np.nanmedian(np.diff(t))) if t.size > 1 else 0.0
+        if monotone and step >= SWEEP_ROW_S:
+            return LogKind.STEADY_STATE, (f"steady-state sweep: {chosen['command'].column!r} is strictly monotone and "
+                                          f"the rows are {step:.3g} s apart (one row per operating point; the time "
+                                          "column is not used)")
         return LogKind.TIME_SERIES, f"time series (time column {chosen['t'].column!r})"
-    for q in ("command",):
-        if q in chosen:
-            d = np.diff(np.asarray(table[chosen[q].column], float))
-            if d.size >= 3 and (np.all(d > 0) or np.all(d < 0)):
-                return LogKind.STEADY_STATE, (f"steady-state sweep: no time column and {chosen[q].column!r} "
-                                              "is strictly monotone (one row per operating point)")
+    if monotone:
+        return LogKind.STEADY_STATE, (f"steady-state sweep: no time column and {chosen['command'].column!r} "
+                                      "is strictly monotone (one row per operating point)")
     raise LogError("t", "missing column; a time series needs t [s]. A steady-state sweep (one row per operating "
                         "point) does not: say so with steady_state / --steady-state")
 
@@ -139,6 +153,10 @@ def log_from_table(table: Mapping[str, np.ndarray], options: ReadOptions | None 
                          "if they were measured at the motor")
         sign_by_command(ch, u, kind, electrical, notes)
     electrical = "armature" if electrical == "auto" else electrical
+    if "torque" in ch and "omega" in ch and float(np.nansum(ch["torque"] * ch["omega"])) < 0:
+        ch["torque"] = -ch["torque"]  # a reaction-torque cell's sign is a mounting convention
+        notes.append("torque: sign flipped so that the drag torque has the sign of the speed (the cell's mounting "
+                     "convention)")
     t = _si(table, chosen["t"]) if "t" in chosen and kind is LogKind.TIME_SERIES else None
     if t is not None:
         finite = np.flatnonzero(np.all(np.isfinite(np.vstack([t, *ch.values()])), axis=0))
@@ -156,6 +174,11 @@ def sign_by_command(ch: dict[str, np.ndarray], u: np.ndarray, kind: LogKind, ele
                      notes: list[str]) -> None:
     """Sign the unsigned channels in place (see module doc)."""
     if not (np.any(u < 0) and np.any(u > 0)):
+        return
+    f = ch.get("thrust")
+    if f is not None and np.nanmax(np.abs(f)) > 0 and np.nanmin(f) >= -0.02 * np.nanmax(np.abs(f)):
+        notes.append("the command crosses the neutral but the thrust is never negative: read as a one-way ESC, "
+                     "nothing signed (give neutral_us / --neutral-us, the zero-thrust pulse, if it reverses)")
         return
     s = _directions(u, kind)
     names = _SIGNED_BY_COMMAND + (("current", "voltage") if electrical == "armature" else ())

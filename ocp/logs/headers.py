@@ -30,7 +30,7 @@ _UNIT_ALIASES: dict[str, tuple[str, str]] = {
     "v": ("voltage", "V"), "mv": ("voltage", "mV"), "a": ("current", "A"), "ma": ("current", "mA"),
     "w": ("power", "W"), "g/w": ("efficiency", "g/W"),
 }
-_IGNORED = ("servo", "efficien", "temperat", "temp ", "vibration", "accel", "pressure", "power", "acc ")
+_IGNORED = ("servo", "efficien", "temperat", "temp ", "vibration", "acc", "pressure", "power", "settling", "message")
 _NAME_KEYS: tuple[tuple[str, tuple[str, ...]], ...] = (
     ("t", ("time", "timestamp")),
     ("torque", ("torque",)),
@@ -96,7 +96,7 @@ def _by_name(name: str) -> str | None:
 def parse_header(column: str) -> Header | None:
     """The quantity and unit of one header, or None when it is not one thrustshape uses."""
     name, unit_text = _split(column)
-    if any(k in f"{name} " for k in _IGNORED):
+    if any(k in f"{name} " for k in _IGNORED) or name.startswith("acc"):
         return None
     electrical = "electrical" in name or "erpm" in name.replace("-", "")
     if unit_text is None:
@@ -118,8 +118,8 @@ def parse_header(column: str) -> Header | None:
     if family in ("power", "efficiency"):
         return None
     q = _FAMILY_QUANTITY[family]
-    if family == "force" and by_name not in (None, "thrust"):
-        return None  # "Weight (g)" and the like
+    if family == "force" and by_name != "thrust":
+        return None  # "AccX (g)", "Weight (g)": a force column must say thrust, force or lift
     if family == "speed" and electrical:
         unit = "erpm" if unit in ("rpm", "erpm") else unit
     return Header(column, q, unit, electrical and q == "omega")
