@@ -122,3 +122,12 @@ def test_a_missing_current_is_absent_not_an_error(tmp_path: Path) -> None:
     log = read_log(tmp_path / "nocur.csv")
     assert not log.has("current") and log.has("thrust") and log.has("voltage") and not log.complete
     assert np.all(np.isnan(log.current)) and "current" not in log.columns()
+
+
+def test_irregular_arrays_are_refused_not_integrated_on_a_median_step() -> None:
+    from ocp.logs import log_from_arrays
+
+    t = np.cumsum(np.where(np.arange(N) % 2 == 0, 1e-3, 1.5e-3))
+    with pytest.raises(LogError) as err:
+        log_from_arrays(t, np.ones(N), np.ones(N), np.ones(N), omega=np.ones(N))
+    assert err.value.field == "t" and "irregular" in err.value.reason

@@ -118,3 +118,25 @@ def test_flight_log_has_no_thrust_equation_and_says_why(tmp_path: Path) -> None:
     dd = diagnose(load_plant(th.params()), log).to_dict()
     names = _named(dd)
     assert not names & TIME_EFFECTS and not names & {"thrust_asymmetry", "force_offset", "param:c_f"}
+
+
+def test_armature_sweep_checks_all_three_equations_and_finds_friction(tmp_path: Path) -> None:
+    """A DC-motor sweep with the armature's voltage and current (no ESC): steady state from its own closed
+    form with a Coulomb friction the model lacks; the sweep is told (no time column, no command)."""
+    p = {"J": 2.7e-5, "B": 5.3e-5, "c_tau": 2.2e-6, "c_f": 1.4e-4, "k_t": 0.0573, "k_e": 0.0573, "R": 5.0, "L": 2e-3}
+    tau_c = 0.004
+    w = np.concatenate([np.linspace(-60, -5, 12), np.linspace(5, 60, 12)])
+    i = (p["B"] * w + p["c_tau"] * w * np.abs(w) + tau_c * np.sign(w)) / p["k_t"]  # k_t i = load + friction
+    v = p["R"] * i + p["k_e"] * w
+    write_csv({"voltage": v, "current": i, "omega": w, "thrust": p["c_f"] * w * np.abs(w)}, tmp_path / "arm.csv")
+    log = read_log(tmp_path / "arm.csv", kind="steady-state")
+    d = diagnose(load_plant(p), log).to_dict()
+    assert {e["equation"]: e["checked"] for e in d["equations"]} == {
+        "thrust": True, "mechanical": True, "electrical": True, "power": False}
+    assert d["verdict"][:1] == ["coulomb_friction"]
+    assert d["ranking"][0]["parameters"]["tau_c"] == pytest.approx(tau_c, rel=0.02)
+    assert not _named(d) & TIME_EFFECTS
+    from ocp.identify.report import html_report
+
+    page = html_report(check(load_plant(p), log), log, plant=load_plant(p))
+    assert "not checked" in page and "power" in page and page.count("data:image/png;base64,") == 1
