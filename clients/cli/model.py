@@ -164,9 +164,9 @@ def cmd_check(args: argparse.Namespace) -> int:
     if args.json:
         print_json(d)
         return 0
-    _print_equations(d)
     if d.get("route") == "point-by-point":
         _print_points(d)
+        _print_equations(d)
         return 0
     print("free run (model simulated under the measured voltage) RMS error:")
     for ch, v in d["free_run"]["rms"].items():
@@ -174,6 +174,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     print("one-step equation residual RMS:")
     for eq, v in d["one_step"]["rms"].items():
         print(f"  {eq:10s} {_g(v, '.4g')}")
+    _print_equations(d)
     return 0
 
 
@@ -190,7 +191,6 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     if args.json:
         print_json(d)
         return 0
-    _print_equations(d)
     print("nothing missing" if not d["verdict"] else "missing: " + ", ".join(d["verdict"]))
     for text in d["explanations"]:
         print(f"  {text}")
@@ -198,6 +198,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     for e in d["ranking"][:8]:
         imp = 100 * e["improvement"] if isinstance(e["improvement"], int | float) else None
         print(f"  {e['effect']:18s} {_g(imp, '6.1f'):>6s} %  {'significant' if e['significant'] else ''}")
+    _print_equations(d)
     return 0
 
 
@@ -220,11 +221,11 @@ def cmd_fit(args: argparse.Namespace) -> int:
     if args.json:
         print_json(d)
         return 0
-    _print_equations(d)
     print(f"fitted ({d['stage']} stage):")
     for n, p in d["parameters"].items():
         print(f"  {n:28s} {_g(p['value'], '.5g')}  +- {_g(p['stderr'], '.2g')}")
     print("free-run RMS error   before -> after:")
     for ch in d["rms_before"]:
         print(f"  {ch:8s} {_g(d['rms_before'][ch], '.4g')} -> {_g(d['rms_after'][ch], '.4g')}")
+    _print_equations(d)
     return 0

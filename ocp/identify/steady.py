@@ -135,7 +135,8 @@ def fit_candidates(base: DCMotorPlant, cands: Sequence[Candidate], log: Log, row
                             max_nfev=200, ftol=1e-10, xtol=1e-10, gtol=1e-12)
         if best is None or sol.cost < best.cost:
             best = sol
-    assert best is not None
+    if best is None:  # _starts always gives one: a programming error, not bad input
+        raise RuntimeError("no starting point")
     return Fitted(assemble(base, cands, best.x), best.x, best.jac, best.fun)
 
 

@@ -1,6 +1,8 @@
 """Unit-aware header parsing: which column holds which quantity, in which unit.
 
-A header is ``name (unit)``, ``name [unit]``, ``name_unit`` or a bare name. The unit decides the
+A header is ``name (unit)``, ``name [unit]``, ``name_unit`` or a bare canonical SI name (``t``,
+``voltage``, ``omega``, ...; another bare name such as ``force`` has no unit to trust and is left to
+the column map; ``RPM`` is a unit used as a name). The unit decides the
 family (time, pulse, speed, force, torque, voltage, current) and the name settles what units alone
 cannot: ``us`` is a time in ``Time (us)`` but an ESC pulse in ``ESC (µs)``; ``kg`` is a force under
 ``Thrust`` or ``Force``. Recognised, among others, the Tyto/RCbenchmark export (``Time (s), ESC (µs),
@@ -99,15 +101,12 @@ def parse_header(column: str) -> Header | None:
     if any(k in f"{name} " for k in _IGNORED) or name.startswith("acc"):
         return None
     electrical = "electrical" in name or "erpm" in name.replace("-", "")
-    if unit_text is None:
+    if unit_text is None:  # no unit: only the canonical SI names and speed units used as names ("RPM")
         if normalise_unit(name) in ("rpm", "erpm"):
             return Header(column, "omega", "erpm" if electrical else "rpm", electrical)
-        q = _by_name(name)
-        if q is None:
-            return None
-        if q == "command" and name != "command":  # a bare "pwm"/"esc" is a pulse, a bare "throttle" a percentage
-            return Header(column, q, "%" if "throttle" in name else "us")
-        return Header(column, q, _SI_DEFAULT[q])
+        if name in _SI_DEFAULT:
+            return Header(column, name, _SI_DEFAULT[name])
+        return None
     family_unit = _UNIT_ALIASES.get(normalise_unit(unit_text))
     if family_unit is None:
         return None

@@ -94,7 +94,7 @@ class ReadOptions(BaseModel):
         """Full-scale pulse offset [us] from neutral; the range must hold the neutral (a unidirectional ESC:
         neutral = min)."""
         lo, hi = self.throttle_range_us
-        if not (lo < hi and lo <= self.neutral_us <= hi):
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi and lo <= self.neutral_us <= hi):
             raise LogError("throttle_range_us", f"({lo:g}, {hi:g}) us must hold the neutral {self.neutral_us:g} us "
                                                 "(min <= neutral <= max, min < max)")
         return max(self.neutral_us - lo, hi - self.neutral_us)
