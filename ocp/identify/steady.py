@@ -181,11 +181,18 @@ class PointDiagnosis(DiagnoseResult):
         return d
 
 
-def _thrust_ratio(plant: DCMotorPlant) -> float | None:
-    for e in plant.effects:
-        if e.name == "thrust_asymmetry":
-            return (plant.params.c_f + float(getattr(e, "dc_f"))) / plant.params.c_f  # noqa: B009
-    return None
+def thrust_ratio(plant: DCMotorPlant, log: Log) -> float | None:
+    """Reverse/forward thrust coefficient ``(c_f + dc_f) / c_f`` of a plant with a thrust asymmetry, both
+    coefficients refitted on every row of the thrust equation (the forward one is released even when its
+    correction was not significant: the ratio needs both estimated). None without an asymmetry."""
+    if not any(e.name == "thrust_asymmetry" for e in plant.effects) or "thrust" not in checked(log):
+        return None
+    cands = [candidate("param:c_f"), candidate("thrust_asymmetry")]
+    r0 = residuals(plant, log, ("thrust",))["thrust"]
+    f = fit_candidates(plant, cands, log, np.ones(log.n, dtype=bool),
+                       {"thrust": max(float(np.sqrt(np.mean(r0**2))), 1e-12)})
+    c_f, dc_f = float(f.values[0]), float(f.values[1])
+    return (c_f + dc_f) / c_f
 
 
 def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None) -> PointDiagnosis:
@@ -223,7 +230,7 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
         chosen.append(cand)
         verdict.append(best.name)
         explanations.append(f"{best.explanation} Held-out error down {100 * best.improvement:.0f} %.")
-    fitted_maps = {"thrust_ratio_reverse_to_forward": finite(r) if (r := _thrust_ratio(current)) else None}
+    fitted_maps = {"thrust_ratio_reverse_to_forward": finite(r) if (r := thrust_ratio(current, log)) else None}
     return PointDiagnosis(verdict, rounds, current, nz, explanations, statuses(log), direction_maps(log),
                           log.kind.value, log.notes, fitted_maps)
 
