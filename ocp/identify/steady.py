@@ -6,7 +6,8 @@ broken down by direction (``w > 0`` forward, ``w < 0`` reverse). ``diagnose`` is
 selection of :mod:`ocp.identify.diagnose` on those residuals: each candidate that acts on a checked
 equation and needs no time (never a lag, delay, ``J`` or ``L``) is fitted by bounded least squares,
 jointly with those already chosen (a static map has few points: a compromise fit of one must not hide
-the next), on the training rows (every ``holdout_every``-th held out), scored by the held-out combined error
+the next; ``thrust_asymmetry`` is fitted with ``c_f`` free, :data:`PARTNERS`, and must then beat ``c_f``
+alone too), on the training rows (every ``holdout_every``-th held out), scored by the held-out combined error
 ``E = sqrt(mean_eq (rms_eq / noise_eq)^2)``, and accepted when it improves ``E`` by at least
 ``min_improvement`` while ``E > noise_floor``.
 
@@ -195,6 +196,35 @@ def thrust_ratio(plant: DCMotorPlant, log: Log) -> float | None:
     return (c_f + dc_f) / c_f
 
 
+#: an asymmetry is a ratio between the directions: it is fitted with the forward coefficient free (a nominal
+#: c_f between the true forward and reverse ones hides both when each is tried alone)
+PARTNERS = {"thrust_asymmetry": "param:c_f"}
+
+
+@dataclass(frozen=True)
+class _Try:
+    entry: RankEntry
+    plant: DCMotorPlant
+    cands: tuple[Candidate, ...]  # the candidate, after its partner when it has one
+
+
+def _try(current: DCMotorPlant, chosen: list[Candidate], cand: Candidate, pool_: list[Candidate], log: Log,
+         rows: tuple[np.ndarray, np.ndarray], scale: dict[str, float], nz: dict[str, float], base: Score,
+         opt: DiagnoseOptions) -> _Try:
+    """Fit ``cand`` (with its partner) jointly with those chosen on the training rows; score it held out."""
+    train, test = rows
+    extra = tuple(c for c in pool_ if c.name == PARTNERS.get(cand.name) and c not in chosen)
+    fitted = fit_candidates(current, [*chosen, *extra, cand], log, train, scale)
+    s = score(fitted.plant, log, test, nz)
+    imp = 1.0 - s.combined / base.combined if math.isfinite(s.combined) and base.combined > 0 else -math.inf
+    ok = imp >= opt.min_improvement and base.combined > opt.noise_floor
+    if ok and extra:  # the candidate must earn its place against its partner alone, not borrow the partner's gain
+        partner = score(fit_candidates(current, [*chosen, *extra], log, train, scale).plant, log, test, nz)
+        ok = 1.0 - s.combined / partner.combined >= opt.min_improvement
+    return _Try(RankEntry(cand.name, imp, ok, cand.values(fitted.plant), cand.units(), s.rms,
+                          cand.explain(current, fitted.plant)), fitted.plant, (*extra, cand))
+
+
 def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None) -> PointDiagnosis:
     """Rank the time-free candidates on the checkable equations, point by point (module doc)."""
     opt = options or DiagnoseOptions()
@@ -204,32 +234,31 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
                               direction_maps(log), log.kind.value, log.notes)
     nz = noise(log, eqs, plant)
     test = np.arange(log.n) % opt.holdout_every == opt.holdout_every - 1
-    train = ~test
+    rows = (~test, test)
     current, verdict, explanations, rounds = plant, [], [], []
     chosen: list[Candidate] = []
     cands = pool(log, opt, plant)
     for _ in range(opt.max_effects):
         base = score(current, log, test, nz)
         r0 = residuals(current, log, eqs)
-        scale = {eq: max(float(np.sqrt(np.mean(r0[eq][train] ** 2))), 1e-12) for eq in eqs}
-        entries: list[tuple[RankEntry, DCMotorPlant, Candidate]] = []
-        for cand in cands:
-            if cand in chosen:
-                continue
-            fitted = fit_candidates(current, [*chosen, cand], log, train, scale)  # jointly with those chosen
-            s = score(fitted.plant, log, test, nz)
-            imp = 1.0 - s.combined / base.combined if math.isfinite(s.combined) and base.combined > 0 else -math.inf
-            ok = imp >= opt.min_improvement and base.combined > opt.noise_floor
-            entries.append((RankEntry(cand.name, imp, ok, cand.values(fitted.plant), cand.units(), s.rms,
-                                      cand.explain(current, fitted.plant)), fitted.plant, cand))
-        entries.sort(key=lambda e: (-e[0].improvement, len(e[2].keys)))
-        rounds.append(Round(base, [e[0] for e in entries]))
-        if not entries or not entries[0][0].significant:
+        scale = {eq: max(float(np.sqrt(np.mean(r0[eq][~test] ** 2))), 1e-12) for eq in eqs}
+        tries = sorted((_try(current, chosen, c, cands, log, rows, scale, nz, base, opt) for c in cands
+                        if c not in chosen), key=lambda t: (-t.entry.improvement, len(t.cands)))
+        rounds.append(Round(base, [t.entry for t in tries]))
+        best = next((t for t in tries if t.entry.significant), None)  # a paired one may rank first yet fail
+        if best is None:
             break
-        best, current, cand = entries[0]
-        chosen.append(cand)
-        verdict.append(best.name)
-        explanations.append(f"{best.explanation} Held-out error down {100 * best.improvement:.0f} %.")
+        if len(best.cands) > 1:  # the partner (c_f) is named too when it matters on its own
+            alone = fit_candidates(current, [*chosen, best.cands[-1]], log, rows[0], scale)
+            gain = 1.0 - score(best.plant, log, test, nz).combined / score(alone.plant, log, test, nz).combined
+            if gain >= opt.min_improvement:
+                verdict.append(best.cands[0].name)
+                explanations.append(f"{best.cands[0].explain(current, best.plant)} Fitted with "
+                                    f"{best.entry.name}; held-out error down {100 * gain:.0f} % against it alone.")
+        current = best.plant
+        chosen += best.cands
+        verdict.append(best.entry.name)
+        explanations.append(f"{best.entry.explanation} Held-out error down {100 * best.entry.improvement:.0f} %.")
     fitted_maps = {"thrust_ratio_reverse_to_forward": finite(r) if (r := thrust_ratio(current, log)) else None}
     return PointDiagnosis(verdict, rounds, current, nz, explanations, statuses(log), direction_maps(log),
                           log.kind.value, log.notes, fitted_maps)
