@@ -140,3 +140,14 @@ def test_armature_sweep_checks_all_three_equations_and_finds_friction(tmp_path: 
 
     page = html_report(check(load_plant(p), log), log, plant=load_plant(p))
     assert "not checked" in page and "power" in page and page.count("data:image/png;base64,") == 1
+
+
+def test_a_time_effect_asked_for_by_name_on_a_sweep_is_refused(tmp_path: Path) -> None:
+    from ocp.errors import ParameterError
+    from ocp.identify import DiagnoseOptions
+
+    th = Thruster()
+    write_csv(thruster_sweep(th), tmp_path / "s.csv")
+    with pytest.raises(ParameterError) as err:
+        diagnose(load_plant(th.params()), read_log(tmp_path / "s.csv"), DiagnoseOptions(candidates=("input_delay",)))
+    assert err.value.field == "input_delay" and "time effects" in err.value.reason

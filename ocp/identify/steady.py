@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from scipy.optimize import least_squares
 
+from ocp.errors import ParameterError
 from ocp.identify.candidates import Candidate, all_candidates, candidate
 from ocp.identify.diagnose import DiagnoseOptions, DiagnoseResult, RankEntry, Round, Score, finite
 from ocp.identify.equations import (
@@ -159,8 +160,14 @@ def score(plant: DCMotorPlant, log: Log, rows: np.ndarray, nz: dict[str, float])
 
 def pool(log: Log, opt: DiagnoseOptions, plant: DCMotorPlant) -> list[Candidate]:
     """The candidates :func:`diagnose_points` may name on ``log`` (time effects never; see equations.allowed)."""
-    cands = [candidate(n) for n in opt.candidates] if opt.candidates is not None else all_candidates(
-        opt.include_params)
+    if opt.candidates is not None:  # asked for by name: refused by name when this log cannot judge it
+        cands = [candidate(n) for n in opt.candidates]
+        for c in cands:
+            if not allowed(c.name, c.channel, log):
+                raise ParameterError(c.name, f"cannot be judged on this log (checked: {list(checked(log))}; "
+                                             "time effects never on a sweep or without the armature voltage)")
+    else:
+        cands = all_candidates(opt.include_params)
     present = {e.name for e in plant.effects}
     return [c for c in cands if c.name not in present and allowed(c.name, c.channel, log)]
 

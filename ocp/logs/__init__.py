@@ -43,7 +43,7 @@ __all__ = ["MIN_SAMPLES", "QUANTITIES", "UNITS", "ColumnSpec", "Log", "LogKind",
            "write_log_csv", "write_reference_mat"]
 
 Format = Literal["auto", "table", "ulog", "dataflash"]
-FLIGHT_SUFFIXES = {".ulg": "ulog", ".bin": "dataflash", ".log": "dataflash"}
+FLIGHT_SUFFIXES = {".ulg": "ulog", ".bin": "dataflash"}  # a DataFlash ".log" is text: not read
 
 
 def read_log(
