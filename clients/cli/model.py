@@ -224,7 +224,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
     print(f"fitted ({d['stage']} stage):")
     for n, p in d["parameters"].items():
         print(f"  {n:28s} {_g(p['value'], '.5g')}  +- {_g(p['stderr'], '.2g')}")
-    print("free-run RMS error   before -> after:")
+    print("free-run RMS error   before -> after:" if d.get("route") != "point-by-point" else
+          "equation residual RMS   before -> after:")
     for ch in d["rms_before"]:
         print(f"  {ch:8s} {_g(d['rms_before'][ch], '.4g')} -> {_g(d['rms_after'][ch], '.4g')}")
     _print_equations(d)

@@ -190,8 +190,10 @@ def noise(log: Log, names: tuple[str, ...], plant: DCMotorPlant) -> dict[str, fl
 
 
 def annotate(answer: dict[str, Any], log: Log) -> dict[str, Any]:
-    """A result's ``to_dict()`` with ``equations`` (checked or not, and why) and ``notes`` (what the reader
-    did) added when the result does not carry them (the dynamic route)."""
+    """A result's ``to_dict()`` with ``route`` (``dynamic``: free run under the armature voltage, or
+    ``point-by-point``), ``equations`` (checked or not, and why) and ``notes`` (what the reader did)."""
+    dynamic = log.complete and log.kind is LogKind.TIME_SERIES
+    answer.setdefault("route", "dynamic" if dynamic else "point-by-point")
     answer.setdefault("equations", [s.to_dict() for s in statuses(log)])
     answer.setdefault("notes", list(log.notes))
     return answer

@@ -23,6 +23,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Literal
 
+from ocp.errors import LogError
 from ocp.logs.assemble import column_specs, command_fraction, log_from_table
 from ocp.logs.model import (
     MIN_SAMPLES,
@@ -63,6 +64,9 @@ def read_log(
     flight = FLIGHT_SUFFIXES.get(p.suffix.lower()) if fmt == "auto" else (fmt if fmt != "table" else None)
     if flight is not None:
         from ocp.logs.flight import read_flight_log
+
+        if opt.columns:
+            raise LogError("columns", "a column map applies to tables (CSV, Parquet, .xlsx, .mat), not to flight logs")
 
         return read_flight_log(p, flight, opt)
     return log_from_table(read_table(p), opt, p.name)
