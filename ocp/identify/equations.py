@@ -171,15 +171,20 @@ def power_residual(p_supply: np.ndarray, p_motor: np.ndarray) -> tuple[np.ndarra
     return p_supply - p0 - a * p_motor, 1.0 / a, p0
 
 
-def noise(log: Log, names: tuple[str, ...], plant: DCMotorPlant) -> dict[str, float]:
-    """Noise level [equation unit] of each equation's measured side: 1 % of its RMS on a sweep, the MAD of
-    second differences / sqrt(6) on a time series (as :func:`ocp.identify.predict.noise_levels`)."""
+def measured_side(log: Log, plant: DCMotorPlant, names: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The measured side (N,) of each equation, in its unit: thrust, torque (cell or ``k_t i``), voltage,
+    supply power ``V I``."""
     side = {"thrust": lambda: log.thrust, "electrical": lambda: log.voltage,
             "power": lambda: log.voltage * log.current,
             "mechanical": lambda: log.torque if log.torque is not None else plant.params.k_t * log.current}
+    return {eq: np.asarray(side[eq](), float) for eq in names}
+
+
+def noise(log: Log, names: tuple[str, ...], plant: DCMotorPlant) -> dict[str, float]:
+    """Noise level [equation unit] of each equation's measured side: 1 % of its RMS on a sweep, the MAD of
+    second differences / sqrt(6) on a time series (as :func:`ocp.identify.predict.noise_levels`)."""
     out = {}
-    for eq in names:
-        y = np.asarray(side[eq](), float)
+    for eq, y in measured_side(log, plant, names).items():
         rms = float(np.sqrt(np.mean(y * y)))
         if log.kind is LogKind.STEADY_STATE or y.size < 10:
             out[eq] = max(0.01 * rms, 1e-12)

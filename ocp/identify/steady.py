@@ -35,6 +35,7 @@ from ocp.identify.equations import (
     EquationStatus,
     allowed,
     checked,
+    measured_side,
     model_load,
     noise,
     power_residual,
@@ -82,7 +83,8 @@ def direction_maps(log: Log) -> dict[str, Any]:
         fwd = _coef(x[masks["forward"]], y[masks["forward"]])
         rev = _coef(x[masks["reverse"]], y[masks["reverse"]])
         ratio = rev / fwd if fwd and rev is not None else None
-        out[name] = {"forward": fwd, "reverse": rev, "ratio_reverse_to_forward": ratio, "units": unit}
+        out[name] = {"forward": None if fwd is None else finite(fwd), "reverse": None if rev is None else finite(rev),
+                     "ratio_reverse_to_forward": None if ratio is None else finite(ratio), "units": unit}
     return out
 
 
@@ -102,13 +104,6 @@ def by_direction(log: Log, res: dict[str, np.ndarray], measured: dict[str, np.nd
         out[eq] = {d: _stats(r[m], float(np.sqrt(np.mean(y[m] ** 2))) if m.any() else 0.0)
                    for d, m in directions(log).items() if d != "at rest"}
     return out
-
-
-def _measured(log: Log, plant: DCMotorPlant, eqs: Sequence[str]) -> dict[str, np.ndarray]:
-    side = {"thrust": lambda: log.thrust, "electrical": lambda: log.voltage,
-            "power": lambda: log.voltage * log.current,
-            "mechanical": lambda: log.torque if log.torque is not None else plant.params.k_t * log.current}
-    return {eq: np.asarray(side[eq](), float) for eq in eqs}
 
 
 @dataclass(frozen=True)
@@ -306,7 +301,7 @@ def check_points(plant: DCMotorPlant, log: Log) -> PointCheck:
     """Residuals of every checkable equation, by direction, the direction maps and (sweeps) every point."""
     eqs = checked(log)
     res = residuals(plant, log, eqs)
-    meas = _measured(log, plant, eqs)
+    meas = measured_side(log, plant, eqs)
     drive: dict[str, float | None] = {}
     if "power" in eqs:
         p = plant.params
