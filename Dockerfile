@@ -9,7 +9,7 @@ COPY pyproject.toml README.md ./
 COPY ocp ./ocp
 COPY service ./service
 COPY clients ./clients
-RUN python -m venv /opt/venv && /opt/venv/bin/pip install --upgrade pip && /opt/venv/bin/pip install '.[parquet]'
+RUN python -m venv /opt/venv && /opt/venv/bin/pip install --upgrade pip && /opt/venv/bin/pip install '.[flightlogs,xlsx]'
 
 FROM python:3.11-slim
 ENV PATH=/opt/venv/bin:$PATH \

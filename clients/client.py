@@ -150,24 +150,29 @@ def _json(obj: BaseModel | Mapping[str, Any]) -> dict[str, Any]:
 #: a log to upload: a local file path, or ``(file name, bytes)``
 LogSource = str | os.PathLike[str] | tuple[str, bytes]
 Form = tuple[dict[str, tuple[str, bytes]], dict[str, str]]
+#: read options of a model-check upload (:class:`ocp.logs.ReadOptions` fields, e.g. ``{"pole_pairs": 7}``)
+ReadFields = Mapping[str, Any] | None
 
 
 def model_check_form(log: LogSource, params: str | Mapping[str, Any], *, columns: Mapping[str, Any] | None = None,
-                     steady_state: bool = False, **fields: Any) -> Form:
+                     steady_state: bool | None = None, read: ReadFields = None, **fields: Any) -> Form:
     """``(files, data)`` of a ``/v1/model-check/*`` upload.
 
     ``params`` is a preset name, the JSON text of a parameter mapping, or the mapping itself (never a
     path: read a local parameter file yourself and pass its mapping). ``fields`` are the extra form
     fields (``effects`` as a comma-separated string or a list of names; ``max_effects``, ``corrections``,
-    ``refine``); ``None`` values are left out.
+    ``refine``; the read options ``pole_pairs``, ``neutral_us``, ``throttle_range_us``, ``electrical``, ``motor``,
+    ``resample`` of :class:`ocp.logs.ReadOptions`); ``None`` values are left out. ``steady_state=None``: the
+    server detects a sweep where the file makes it plain.
     """
     if isinstance(log, tuple):
         name, data = log
     else:
         path = Path(log)
         name, data = path.name, path.read_bytes()
-    form = {"params": params if isinstance(params, str) else json.dumps(dict(params), allow_nan=False),
-            "steady_state": "true" if steady_state else "false"}
+    form = {"params": params if isinstance(params, str) else json.dumps(dict(params), allow_nan=False)}
+    if steady_state is not None:
+        form["steady_state"] = "true" if steady_state else "false"
     if columns is not None:
         form["columns"] = json.dumps(dict(columns))
     for key, value in fields.items():
@@ -289,31 +294,32 @@ class Client:
         return self._request("POST", "/v1/compare", json=_json(mission), params=_qs(qs)).json()
 
     def check(self, log: LogSource, params: str | Mapping[str, Any], *, columns: Mapping[str, Any] | None = None,
-              steady_state: bool = False) -> dict[str, Any]:
+              steady_state: bool | None = None, read: ReadFields = None) -> dict[str, Any]:
         """Model check: where the model fails on ``log`` (see :func:`model_check_form` for the arguments)."""
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state)
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}))
         return self._request("POST", "/v1/model-check/check", files=files, data=data).json()
 
     def check_report(self, log: LogSource, params: str | Mapping[str, Any], *,
-                     columns: Mapping[str, Any] | None = None, steady_state: bool = False) -> str:
+                     columns: Mapping[str, Any] | None = None, steady_state: bool | None = None,
+                     read: ReadFields = None) -> str:
         """The self-contained HTML report of :meth:`check`."""
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state)
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}))
         return self._request("POST", "/v1/model-check/check", files=files, data=data,
                              params={"report": "html"}).text
 
     def diagnose(self, log: LogSource, params: str | Mapping[str, Any], *, columns: Mapping[str, Any] | None = None,
-                 steady_state: bool = False, max_effects: int | None = None,
+                 steady_state: bool | None = None, read: ReadFields = None, max_effects: int | None = None,
                  corrections: bool | None = None) -> dict[str, Any]:
         """Which catalogue effects are missing (``verdict``), candidates ranked by held-out error."""
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state,
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
                                        max_effects=max_effects, corrections=corrections)
         return self._request("POST", "/v1/model-check/diagnose", files=files, data=data).json()
 
     def fit(self, log: LogSource, params: str | Mapping[str, Any], effects: str | Iterable[str], *,
-            columns: Mapping[str, Any] | None = None, steady_state: bool = False,
+            columns: Mapping[str, Any] | None = None, steady_state: bool | None = None, read: ReadFields = None,
             refine: bool | None = None) -> dict[str, Any]:
         """Add ``effects`` and refit; the answer's ``calibrated_params`` is the calibrated parameter mapping."""
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state,
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
                                        effects=effects if isinstance(effects, str) else list(effects), refine=refine)
         return self._request("POST", "/v1/model-check/fit", files=files, data=data).json()
 
@@ -411,27 +417,30 @@ class AsyncClient:
         return await self._json("POST", "/v1/compare", json=_json(mission), params=_qs(qs))
 
     async def check(self, log: LogSource, params: str | Mapping[str, Any], *,
-                    columns: Mapping[str, Any] | None = None, steady_state: bool = False) -> dict[str, Any]:
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state)
+                    columns: Mapping[str, Any] | None = None, steady_state: bool | None = None,
+                    read: ReadFields = None) -> dict[str, Any]:
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}))
         return await self._json("POST", "/v1/model-check/check", files=files, data=data)
 
     async def check_report(self, log: LogSource, params: str | Mapping[str, Any], *,
-                           columns: Mapping[str, Any] | None = None, steady_state: bool = False) -> str:
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state)
+                           columns: Mapping[str, Any] | None = None, steady_state: bool | None = None,
+                           read: ReadFields = None) -> str:
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}))
         return (await self._request("POST", "/v1/model-check/check", files=files, data=data,
                                     params={"report": "html"})).text
 
     async def diagnose(self, log: LogSource, params: str | Mapping[str, Any], *,
-                       columns: Mapping[str, Any] | None = None, steady_state: bool = False,
+                       columns: Mapping[str, Any] | None = None, steady_state: bool | None = None,
+                       read: ReadFields = None,
                        max_effects: int | None = None, corrections: bool | None = None) -> dict[str, Any]:
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state,
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
                                        max_effects=max_effects, corrections=corrections)
         return await self._json("POST", "/v1/model-check/diagnose", files=files, data=data)
 
     async def fit(self, log: LogSource, params: str | Mapping[str, Any], effects: str | Iterable[str], *,
-                  columns: Mapping[str, Any] | None = None, steady_state: bool = False,
+                  columns: Mapping[str, Any] | None = None, steady_state: bool | None = None, read: ReadFields = None,
                   refine: bool | None = None) -> dict[str, Any]:
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state,
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
                                        effects=effects if isinstance(effects, str) else list(effects), refine=refine)
         return await self._json("POST", "/v1/model-check/fit", files=files, data=data)
 

@@ -9,5 +9,5 @@ if [ ! -x "$VENV/bin/python" ]; then
   python3 -m venv "$VENV"
 fi
 "$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e '.[parquet]'  # Parquet log uploads; add ,dask for --dask
+"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e '.[flightlogs,xlsx]'  # flight logs and .xlsx sweeps for the model check; add ,dask for --dask
 exec "$VENV/bin/thrustshape" serve "$@"

@@ -74,6 +74,33 @@ def parse_columns(text: str | None) -> dict[str, Any] | None:
     return data
 
 
+READ_FIELDS = ("pole_pairs", "neutral_us", "throttle_range_us", "electrical", "motor", "resample")
+
+
+def parse_read(**fields: Any) -> dict[str, Any]:
+    """The read options (form fields, ``throttle_range_us`` as ``"min,max"``) validated as
+    :class:`ocp.logs.ReadOptions`; errors name the form field. Returns the non-default fields (JSON-ready)."""
+    from pydantic import ValidationError
+
+    from ocp.logs import ReadOptions
+
+    data = {k: v for k, v in fields.items() if v is not None}
+    text = data.get("throttle_range_us")
+    if isinstance(text, str):
+        try:
+            lo, hi = (float(v) for v in text.split(","))
+        except ValueError:
+            raise LogError("throttle_range_us", f"{text!r} is not 'min,max' in us (e.g. 1100,1900)") from None
+        data["throttle_range_us"] = (lo, hi)
+    try:
+        opt = ReadOptions(**data)
+        opt.half_range_us()
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        raise LogError(str(err["loc"][0]) if err["loc"] else "read", err["msg"]) from None
+    return opt.model_dump(mode="json", exclude_defaults=True)
+
+
 def parse_effects(text: str) -> list[str]:
     """Comma-separated effect names (catalogue names or ``param:<key>`` corrections), at least one."""
     from ocp.identify.candidates import candidate
@@ -95,36 +122,45 @@ def _in(field: str, exc: ThrustshapeError) -> ThrustshapeError:
     return type(exc)(field, reason)
 
 
+#: file suffixes read by ocp.logs (".bin" is too common a name to trust: its content decides), and the
+#: first bytes that give each format away (issue #13)
+LOG_SUFFIXES = {".parquet": ".parquet", ".pq": ".parquet", ".csv": ".csv", ".txt": ".csv", ".xlsx": ".xlsx",
+                ".mat": ".mat", ".ulg": ".ulg"}
+LOG_MAGIC = ((PARQUET_MAGIC, ".parquet"), (b"ULog", ".ulg"), (b"PK\x03\x04", ".xlsx"), (b"MATLAB", ".mat"),
+             (b"\xa3\x95", ".bin"))
+
+
 def log_suffix(filename: str | None, head: bytes) -> str:
-    """``.parquet`` or ``.csv``: by the upload's file name, else by its first bytes."""
+    """The reader's suffix (:data:`LOG_SUFFIXES`): by the upload's file name, else by its first bytes, else CSV."""
     suffix = Path(filename or "").suffix.lower()
-    if suffix in (".parquet", ".pq"):
-        return ".parquet"
-    if suffix in (".csv", ".txt"):
-        return ".csv"
-    return ".parquet" if head.startswith(PARQUET_MAGIC) else ".csv"
+    if suffix in LOG_SUFFIXES:
+        return LOG_SUFFIXES[suffix]
+    return next((sfx for magic, sfx in LOG_MAGIC if head.startswith(magic)), ".csv")
 
 
 def _read_log(payload: Payload) -> Any:
     """The uploaded log (bytes in ``payload["log"]``) as an :class:`ocp.logs.Log`; errors name the column or ``log``."""
-    from ocp.logs import LogKind, read_log
+    from ocp.logs import LogKind, ReadOptions, read_log
 
     data: bytes = payload["log"]
     name = re.sub(r"[^A-Za-z0-9._ -]+", "_", str(payload.get("filename") or "log"))[:120] or "log"
-    kind = LogKind.STEADY_STATE if payload.get("steady_state") else LogKind.TIME_SERIES
+    steady = payload.get("steady_state")
+    kind = None if steady is None else (LogKind.STEADY_STATE if steady else LogKind.TIME_SERIES)
+    options = ReadOptions.model_validate(payload.get("read") or {})
     if not data:
         raise LogError("log", "the uploaded file is empty")
     with tempfile.TemporaryDirectory(prefix="thrustshape-log-") as tmp:
-        path = Path(tmp) / f"upload{log_suffix(name, data[:4])}"
+        path = Path(tmp) / f"upload{log_suffix(name, data[:8])}"
         path.write_bytes(data)
         try:
-            log = read_log(path, payload.get("columns"), kind)
+            log = read_log(path, payload.get("columns"), kind, options=options)
         except LogError as exc:
             if exc.field in (path.name, str(path)):
                 raise LogError("log", exc.reason.replace(str(path), name)) from None
             raise
         except Exception as exc:  # any reader failure (csv, UnicodeDecodeError, pyarrow's errors) is the file's
-            fmt = "Parquet" if path.suffix == ".parquet" else "CSV (UTF-8, header row)"
+            fmt = {".parquet": "Parquet", ".xlsx": "Excel .xlsx", ".mat": "MATLAB .mat", ".ulg": "PX4 ULog",
+                   ".bin": "ArduPilot DataFlash"}.get(path.suffix, "CSV (UTF-8, header row)")
             detail = f"{type(exc).__name__}: {exc}".replace(str(path), name)[:500]
             raise LogError("log", f"cannot be read as {fmt}: {detail}") from None
     if log.n > int(payload["max_samples"]):
@@ -159,17 +195,19 @@ def model_check(payload: Payload) -> Payload:
 
 def _run(op: Op, plant: Any, log: Any, payload: Payload, options: dict[str, Any]) -> Payload:
     from ocp.identify import CheckOptions, DiagnoseOptions, FitOptions, check, diagnose, fit
+    from ocp.identify.equations import annotate as with_equations
 
     if op == "check":
         res = check(plant, log, CheckOptions(**options))
         if payload.get("report"):
             from ocp.identify.report import html_report
 
-            return {"html": html_report(res, log)}
-        return res.to_dict()
+            return {"html": html_report(res, log, plant=plant)}
+        return with_equations(res.to_dict(), log)
     if op == "diagnose":
-        return diagnose(plant, log, DiagnoseOptions(**options)).to_dict()
+        return with_equations(diagnose(plant, log, DiagnoseOptions(**options)).to_dict(), log)
     fitted = fit(plant, log, list(payload["effects"]), FitOptions(**options))
-    out = fitted.to_dict()
+    out = with_equations(fitted.to_dict(), log)
     out.setdefault("calibrated_params", fitted.calibrated())
     return out
+

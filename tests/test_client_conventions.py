@@ -87,14 +87,14 @@ def test_async_wait_batch_rides_out_dropped_connections() -> None:
 def test_packaging_extras_bounds_typing_and_license() -> None:
     meta = tomllib.loads((ROOT / "pyproject.toml").read_text())
     deps = " ".join(meta["project"]["dependencies"])
-    assert "pyarrow" not in deps and "dask" not in deps and "rockit" not in deps  # optional features
+    assert "dask" not in deps and "rockit" not in deps  # optional features (pyarrow reads every CSV log: core)
     for pkg in ("numpy", "scipy", "casadi"):  # the stack behind the benchmark figures: below the next major
         [spec] = [d for d in meta["project"]["dependencies"] if d.startswith(pkg)]
         assert "<" in spec, spec
     extras = meta["project"]["optional-dependencies"]
-    assert {"dask", "parquet", "bench", "dev"} <= set(extras)
+    assert {"dask", "flightlogs", "xlsx", "bench", "dev"} <= set(extras)
     assert any("rockit" in d for d in extras["bench"]) and not any("rockit" in d for d in extras["dev"][1:])
-    assert extras["dev"][0] == "thrustshape[dask,parquet,bench]"
+    assert extras["dev"][0] == "thrustshape[dask,flightlogs,xlsx,bench]"
     for pkg in ("ocp", "service", "clients"):
         assert (ROOT / pkg / "py.typed").is_file() and "py.typed" in meta["tool"]["setuptools"]["package-data"][pkg]
     assert (ROOT / "LICENSE").read_text().startswith("MIT License") and meta["project"]["license"]["text"] == "MIT"

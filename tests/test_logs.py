@@ -74,7 +74,11 @@ def test_tyto_export_takes_the_speed_sign_from_the_esc_command(tmp_path: Path) -
     sign = np.sign(esc - 1500)
     np.testing.assert_allclose(log.omega, sign * rpm * 2 * math.pi / 60, rtol=1e-12)
     np.testing.assert_allclose(log.thrust, 0.01 * 9.80665 * sign, rtol=1e-12)
-    np.testing.assert_allclose(log.voltage, 12.0 * (esc - 1500) / 500, rtol=1e-12)
+    # the export's voltage and current are the supply's (issue #13): kept as measured, flagged, never
+    # turned into an armature voltage by the duty
+    assert log.electrical == "supply"
+    np.testing.assert_allclose(log.voltage, 12.0, rtol=0)
+    np.testing.assert_allclose(log.current, np.abs(esc - 1500) / 400, rtol=1e-12)
 
 
 def test_steady_state_sweep_needs_no_time(tmp_path: Path) -> None:
@@ -89,7 +93,6 @@ def test_steady_state_sweep_needs_no_time(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize(("mutate", "field", "words"), [
-    (lambda c: c.pop("current"), "current", "missing column"),
     (lambda c: c.__setitem__("thrust", np.where(np.arange(N) == 7, np.nan, c["thrust"])), "thrust", "NaN"),
     (lambda c: c.__setitem__("t", c["t"][::-1].copy()), "t", "increasing"),
     (lambda c: [c.__setitem__(k, v[:10]) for k, v in list(c.items())], "t", "too short"),
@@ -109,3 +112,22 @@ def test_unknown_unit_is_an_error_naming_the_column(tmp_path: Path) -> None:
     with pytest.raises(LogError) as err:
         read_log(tmp_path / "u.csv", {"omega": {"column": "omega", "unit": "furlong/s"}})
     assert err.value.field == "omega" and "furlong" in err.value.reason
+
+
+def test_a_missing_current_is_absent_not_an_error(tmp_path: Path) -> None:
+    """Issue #13: a log lacking a channel disables only what needs it (the reader no longer refuses it)."""
+    cols = _si()
+    cols.pop("current")
+    _write_csv(tmp_path / "nocur.csv", cols)
+    log = read_log(tmp_path / "nocur.csv")
+    assert not log.has("current") and log.has("thrust") and log.has("voltage") and not log.complete
+    assert np.all(np.isnan(log.current)) and "current" not in log.columns()
+
+
+def test_irregular_arrays_are_refused_not_integrated_on_a_median_step() -> None:
+    from ocp.logs import log_from_arrays
+
+    t = np.cumsum(np.where(np.arange(N) % 2 == 0, 1e-3, 1.5e-3))
+    with pytest.raises(LogError) as err:
+        log_from_arrays(t, np.ones(N), np.ones(N), np.ones(N), omega=np.ones(N))
+    assert err.value.field == "t" and "irregular" in err.value.reason

@@ -120,16 +120,21 @@ def test_fit_answers_loadable_calibrated_params(http: httpx.Client, rig_csv: byt
 
 def test_log_problems_name_the_column_or_the_log(http: httpx.Client, rig_csv: bytes) -> None:
     header, rest = rig_csv.split(b"\n", 1)
-    renamed = header.replace(b"thrust", b"force") + b"\n" + rest
+    # no speed at all (issue #13: only the speed is needed by every equation; a missing thrust only disables
+    # the thrust equation, below)
+    renamed = header.replace(b"omega", b"speed").replace(b"theta", b"angle") + b"\n" + rest
     p = problem(post(http, CHECK, ("rig.csv", renamed)), 422)
-    assert p["field"] == "thrust" and "missing column" in str(p["reason"])
+    assert p["field"] == "omega" and "missing column" in str(p["reason"])
     assert p["form_field"] == "log"  # where a page shows it
     # ... and the column map fixes it
-    ok = post(http, CHECK, ("rig.csv", renamed), columns=json.dumps({"thrust": {"column": "force", "unit": "N"}}))
+    ok = post(http, CHECK, ("rig.csv", renamed), columns=json.dumps({"omega": {"column": "speed", "unit": "rad/s"}}))
     assert ok.status_code == 200, ok.text[:500]
-    p = problem(post(http, CHECK, ("rig.csv", renamed), columns='{"thrust": {"column": "force", "unit": "furlong"}}'),
+    p = problem(post(http, CHECK, ("rig.csv", renamed), columns='{"omega": {"column": "speed", "unit": "furlong"}}'),
                 422)
     assert p["field"] == "columns" and "furlong" in str(p["reason"])
+    no_thrust = post(http, CHECK, ("rig.csv", header.replace(b"thrust", b"force") + b"\n" + rest)).json()
+    assert {e["equation"]: e["checked"] for e in no_thrust["equations"]} == {
+        "thrust": False, "mechanical": True, "electrical": True, "power": False}
     p = problem(post(http, CHECK, ("rig.csv", rig_csv), columns="[1, 2"), 422)
     assert p["field"] == p["form_field"] == "columns"
     p = problem(post(http, CHECK, None), 422)

@@ -46,7 +46,14 @@ def read_csv_columns(path: str | Path, required: Sequence[str]) -> dict[str, np.
 
 
 def write_csv(columns: dict[str, np.ndarray], out: str | None) -> None:
-    """Write equal-length columns as CSV to ``out`` (a path) or stdout (``None`` or ``-``)."""
+    """Write equal-length columns as CSV to ``out`` (a path) or stdout (``None`` or ``-``); a ``.mat`` path
+    gets a MATLAB file for Simulink instead (:func:`ocp.logs.write_reference_mat`: column vectors and
+    ``ref_ts = [t, ...]``)."""
+    if out and Path(out).suffix.lower() == ".mat":
+        from ocp.logs import write_reference_mat
+
+        write_reference_mat(columns, out)
+        return
     names = list(columns)
     to_file = bool(out) and out != STDIO
     fh = open(out, "w", newline="", encoding="utf-8") if to_file and out else sys.stdout

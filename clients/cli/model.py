@@ -9,29 +9,110 @@ import tempfile
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from clients.cli.help import STDIO, add_command, require_extra
+from clients.cli.help import STDIO, add_command
 from clients.cli.io import fmt_number as _g
 from clients.cli.io import print_json
 from clients.cli.remote import add_server_args, client, params_for_server
 from ocp.errors import LogError, ParameterError
 
 if TYPE_CHECKING:  # the core is imported inside the commands: `thrustshape --help` stays fast
-    from ocp.logs import Log
+    from ocp.logs import Log, ReadOptions
 
-_LOG_DESCRIPTION = ("A log is CSV or Parquet with t, voltage, current, omega and/or theta, thrust in SI "
-                    "(--columns maps\nother names and units: rpm, kgf, gf, mA; Tyto/RCbenchmark exports are "
-                    "recognised).")
+_LOG_DESCRIPTION = ("A log is CSV/Parquet/.xlsx/.mat with headers and units (Tyto/RCbenchmark exports, vendor "
+                    "sweeps,\nor t, voltage, current, omega/theta, thrust in SI; --columns maps other names and "
+                    "units),\na PX4 .ulg or an ArduPilot .bin flight log.")
 
 
 def _log_args(p: argparse.ArgumentParser) -> None:
-    p.add_argument("log", help="CSV/Parquet log (t, voltage, current, omega/theta, thrust; SI) or a Tyto export "
-                               "('-': stdin)")
+    p.add_argument("log", help="log: CSV/Parquet/.xlsx/.mat (headers with units: Tyto/RCbenchmark exports, vendor "
+                               "sweeps, or t, voltage, current, omega/theta, thrust in SI), PX4 .ulg, ArduPilot .bin "
+                               "('-': stdin, CSV or Parquet)")
     p.add_argument("--params", required=True, help="parameter file (JSON/YAML, may hold 'effects') or preset name")
     p.add_argument("--columns", default=None,
                    help='column map as JSON, e.g. \'{"omega": {"column": "speed", "unit": "rpm"}}\'')
-    p.add_argument("--steady-state", action="store_true", help="the log is a steady-state sweep (one row per point)")
+    p.add_argument("--steady-state", nargs="?", const="yes", default="auto", choices=("auto", "yes", "no"),
+                   help="the log is a steady-state sweep (one row per point); default auto: detected where the "
+                        "file makes it plain (no time column, monotone command)")
+    p.add_argument("--pole-pairs", type=int, default=None, help="motor pole pairs, for electrical speed (eRPM)")
+    p.add_argument("--neutral-us", type=float, default=1500.0,
+                   help="ESC neutral pulse [us]; unsigned speed/thrust take sign(command - neutral) (default 1500)")
+    p.add_argument("--throttle-range", default=None, metavar="MIN,MAX",
+                   help="ESC pulse range [us] for the command fraction (default 1100,1900)")
+    p.add_argument("--electrical", choices=("auto", "armature", "supply"), default="auto",
+                   help="whose voltage/current the log holds (auto: the supply's when there is an ESC command)")
+    p.add_argument("--motor", type=int, default=0, help="which motor/ESC of a flight log (default 0)")
+    p.add_argument("--no-resample", action="store_true", help="refuse irregular timestamps instead of resampling")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     add_server_args(p)
+
+
+def _read_fields(args: argparse.Namespace) -> dict[str, Any]:
+    """The read options as the API's form fields (and :class:`ocp.logs.ReadOptions` fields after parsing)."""
+    out: dict[str, Any] = {"pole_pairs": args.pole_pairs, "neutral_us": args.neutral_us,
+                           "throttle_range_us": args.throttle_range, "electrical": args.electrical,
+                           "motor": args.motor, "resample": "refuse" if args.no_resample else "auto"}
+    return {k: v for k, v in out.items() if v is not None}
+
+
+def _read_options(args: argparse.Namespace) -> ReadOptions:
+    from pydantic import ValidationError
+
+    from ocp.logs import ReadOptions
+
+    fields = _read_fields(args)
+    text = fields.pop("throttle_range_us", None)
+    if text is not None:
+        try:
+            lo, hi = (float(v) for v in str(text).split(","))
+        except ValueError:
+            raise LogError("--throttle-range", f"{text!r} is not MIN,MAX in us (e.g. 1100,1900)") from None
+        fields["throttle_range_us"] = (lo, hi)
+    try:
+        return ReadOptions(**fields)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        name = str(err["loc"][0]) if err["loc"] else "options"
+        raise LogError(f"--{name.replace('_', '-')}", err["msg"]) from None
+
+
+def _steady(args: argparse.Namespace) -> bool | None:
+    return None if args.steady_state == "auto" else args.steady_state == "yes"
+
+
+def _annotate(d: dict[str, Any], log: Log) -> dict[str, Any]:
+    from ocp.identify.equations import annotate
+
+    return annotate(d, log)
+
+
+def _print_points(d: dict[str, Any]) -> None:
+    """A point-by-point check: residual RMS per equation, forward and reverse (text output)."""
+    print(f"{d['one_step']['label']}, RMS by direction:")
+    for eq, dirs in d["breakdown"]["direction"].items():
+        unit = d["one_step"]["units"][eq]
+        parts = [f"{k} {_g(v['rms'], '.4g')} {unit} ({_g(v['relative_rms'], '.1%')} of measured, n={v['n']})"
+                 for k, v in dirs.items()]
+        print(f"  {eq:10s} " + "; ".join(parts))
+    drive = d.get("drive") or {}
+    if drive:
+        print(f"  drive: efficiency {_g(drive.get('efficiency'), '.3f')}, "
+              f"idle power {_g(drive.get('idle_power_W'), '.3g')} W")
+
+
+def _print_equations(d: dict[str, Any]) -> None:
+    """The equations checked and those that could not be, with why (text output)."""
+    for note in d.get("notes", []):
+        print(f"  read: {note}")
+    print("equations:")
+    for e in d.get("equations", []):
+        mark = "checked    " if e["checked"] else "not checked"
+        print(f"  {mark} {e['equation']:10s} {e.get('uses') or e.get('reason')}")
+    for name, m in (d.get("maps") or {}).items():
+        print(f"  {name} map per direction: forward {_g(m['forward'], '.4g')}, reverse {_g(m['reverse'], '.4g')} "
+              f"{m['units']}; reverse/forward {_g(m['ratio_reverse_to_forward'], '.3f')}")
+    ratio = (d.get("fitted_maps") or {}).get("thrust_ratio_reverse_to_forward")
+    if ratio is not None:
+        print(f"  fitted plant: reverse/forward thrust coefficient {_g(ratio, '.3f')}")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -94,18 +175,15 @@ def _stdin_log(args: argparse.Namespace) -> tuple[str, bytes]:
 def _load_log(args: argparse.Namespace) -> Log:
     from ocp.logs import LogKind, read_log
 
-    kind = LogKind.STEADY_STATE if args.steady_state else LogKind.TIME_SERIES
+    steady = _steady(args)
+    kind = None if steady is None else (LogKind.STEADY_STATE if steady else LogKind.TIME_SERIES)
     if args.log != STDIO:
-        if Path(args.log).suffix.lower() in (".parquet", ".pq"):
-            require_extra("pyarrow", "parquet", str(args.log))
-        return read_log(args.log, _columns(args), kind)
+        return read_log(args.log, _columns(args), kind, options=_read_options(args))
     name, data = _stdin_log(args)
-    if name.endswith(".parquet"):
-        require_extra("pyarrow", "parquet", "log")
     with tempfile.TemporaryDirectory(prefix="thrustshape-") as tmp:  # the log readers take a path
         path = Path(tmp) / name
         path.write_bytes(data)
-        return read_log(path, _columns(args), kind)
+        return read_log(path, _columns(args), kind, options=_read_options(args))
 
 
 def _upload(args: argparse.Namespace) -> dict[str, Any]:
@@ -116,8 +194,9 @@ def _upload(args: argparse.Namespace) -> dict[str, Any]:
         raise LogError(str(args.log), "no such file")
     else:
         log = args.log
+    _read_options(args)  # checked here, named by the CLI option
     return {"log": log, "params": params_for_server(args.params), "columns": _columns(args),
-            "steady_state": args.steady_state}
+            "steady_state": _steady(args), "read": _read_fields(args)}
 
 
 def cmd_check(args: argparse.Namespace) -> int:
@@ -132,12 +211,17 @@ def cmd_check(args: argparse.Namespace) -> int:
         from ocp.identify.report import write_report
 
         log = _load_log(args)
-        res = check(load_plant(args.params), log, CheckOptions())
+        plant = load_plant(args.params)
+        res = check(plant, log, CheckOptions())
         if args.report:
-            write_report(res, log, args.report)
-        d = res.to_dict()
+            write_report(res, log, args.report, plant=plant)
+        d = _annotate(res.to_dict(), log)
     if args.json:
         print_json(d)
+        return 0
+    if d.get("route") == "point-by-point":
+        _print_points(d)
+        _print_equations(d)
         return 0
     print("free run (model simulated under the measured voltage) RMS error:")
     for ch, v in d["free_run"]["rms"].items():
@@ -145,6 +229,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     print("one-step equation residual RMS:")
     for eq, v in d["one_step"]["rms"].items():
         print(f"  {eq:10s} {_g(v, '.4g')}")
+    _print_equations(d)
     return 0
 
 
@@ -160,7 +245,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
 
         log = _load_log(args)
         opt = DiagnoseOptions(max_effects=args.max_effects, include_params=not args.no_corrections)
-        d = diagnose(load_plant(args.params), log, opt).to_dict()
+        d = _annotate(diagnose(load_plant(args.params), log, opt).to_dict(), log)
     if args.json:
         print_json(d)
         return 0
@@ -171,6 +256,7 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
     for e in d["ranking"][:8]:
         imp = 100 * e["improvement"] if isinstance(e["improvement"], int | float) else None
         print(f"  {e['effect']:18s} {_g(imp, '6.1f'):>6s} %  {'significant' if e['significant'] else ''}")
+    _print_equations(d)
     return 0
 
 
@@ -192,14 +278,16 @@ def cmd_fit(args: argparse.Namespace) -> int:
         res = fit(load_plant(args.params), log, names, FitOptions(refine=not args.no_refine))
         if args.out:
             res.write(args.out)
-        d = res.to_dict()
+        d = _annotate(res.to_dict(), log)
     if args.json:
         print_json(d)
         return 0
     print(f"fitted ({d['stage']} stage):")
     for n, p in d["parameters"].items():
         print(f"  {n:28s} {_g(p['value'], '.5g')}  +- {_g(p['stderr'], '.2g')}")
-    print("free-run RMS error   before -> after:")
+    print("free-run RMS error   before -> after:" if d.get("route") != "point-by-point" else
+          "equation residual RMS   before -> after:")
     for ch in d["rms_before"]:
         print(f"  {ch:8s} {_g(d['rms_before'][ch], '.4g')} -> {_g(d['rms_after'][ch], '.4g')}")
+    _print_equations(d)
     return 0

@@ -32,7 +32,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("mission", help="mission file (JSON or YAML; '-': stdin)")
     p.add_argument("--json", action="store_true", help="print the full result as JSON")
     p.add_argument("--out", default=None, help="write the reference as CSV to this file ('-': stdout; the "
-                                               "summary then goes to stderr)")
+                                               "summary then goes to stderr; FILE.mat: MATLAB/Simulink)")
     p.add_argument("--plot", default=None, metavar="FILE", help="draw thrust, speed, current and voltage with the "
                                                                 "limits (.svg, .png or .pdf)")
     add_server_args(p)

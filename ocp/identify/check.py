@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from ocp.identify.diagnose import finite
+from ocp.identify.diagnose import dynamic, finite
 from ocp.identify.predict import (
     CHANNEL_UNITS,
     CHANNELS,
@@ -37,6 +37,7 @@ from ocp.identify.predict import (
     noise_levels,
     one_step,
 )
+from ocp.identify.steady import PointCheck, check_points
 from ocp.logs import Log, LogKind
 from ocp.plant import DCMotorPlant
 
@@ -144,9 +145,11 @@ def _correlations(res: Residuals, log: Log, max_lag: int) -> dict[str, Any]:
     return out
 
 
-def check(plant: DCMotorPlant, log: Log, options: CheckOptions | None = None) -> CheckResult:
+def check(plant: DCMotorPlant, log: Log, options: CheckOptions | None = None) -> CheckResult | PointCheck:
     """Free-run and one-step errors of ``plant`` on ``log``, broken down by operating condition."""
     opt = options or CheckOptions()
+    if not dynamic(log):  # issue #13 hook: sweeps, ESC rigs, flight logs: equation by equation, point by point
+        return check_points(plant, log)
     fr = free_run(plant, log, opt.segment_s)
     res = one_step(plant, log)
     err = {ch: getattr(log, ch)[fr.idx] - fr.channel(ch) for ch in CHANNELS}

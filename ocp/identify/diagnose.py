@@ -27,6 +27,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.identify.candidates import Candidate, all_candidates, candidate
+from ocp.identify.equations import allowed
 from ocp.identify.estimate import Estimate, equation_error_fit, equation_scales, free_run
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, noise_levels
 from ocp.logs import Log, LogKind
@@ -45,6 +46,11 @@ class DiagnoseOptions(BaseModel):
     max_effects: int = Field(default=3, ge=1, le=10)
     include_params: bool = True
     candidates: tuple[str, ...] | None = None  # None: the whole catalogue (+ corrections)
+
+
+def dynamic(log: Log) -> bool:
+    """Whether the dynamic check (free run under the armature voltage) applies: a complete time series."""
+    return log.complete and log.kind is LogKind.TIME_SERIES
 
 
 def finite(x: float) -> float | None:
@@ -149,10 +155,16 @@ def _try(base: DCMotorPlant, cand: Candidate, log: Log, sp: Split, scales: dict[
 def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None) -> DiagnoseResult:
     """Rank candidate effects by held-out error reduction and say which are missing (module doc)."""
     opt = options or DiagnoseOptions()
+    # --- issue #13 hook: sweeps, ESC rigs and flight logs are checked point by point (no time effect) ---
+    if not dynamic(log):
+        from ocp.identify.steady import diagnose_points
+
+        return diagnose_points(plant, log, opt)
+    # --- end of hook ---
     pool = ([candidate(n) for n in opt.candidates] if opt.candidates is not None
             else all_candidates(opt.include_params))
     present = {e.name for e in plant.effects}
-    pool = [c for c in pool if c.name not in present]
+    pool = [c for c in pool if c.name not in present and allowed(c.name, c.channel, log)]  # issue #13 filter
     noise = noise_levels(log)
     sp = split(log, opt.segment_s, opt.holdout_every)
     current, chosen, verdict, explanations, rounds = plant, [], [], [], []

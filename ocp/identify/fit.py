@@ -25,7 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.effects import plant_to_mapping
 from ocp.identify.candidates import candidate
-from ocp.identify.diagnose import finite
+from ocp.identify.diagnose import dynamic, finite
 from ocp.identify.estimate import Estimate, equation_error_fit, equation_scales, free_run_errors, free_run_fit
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, EQUATION_UNITS, EQUATIONS, free_run, noise_levels, one_step
 from ocp.logs import Log, LogKind
@@ -105,6 +105,10 @@ def _combined(errors: np.ndarray) -> float:
 def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptions | None = None) -> FitResult:
     """Add ``effects`` (catalogue names or ``"param:<key>"``) to ``plant`` and fit them to ``log``."""
     opt = options or FitOptions()
+    if not dynamic(log):  # issue #13 hook: sweeps, ESC rigs, flight logs are fitted point by point
+        from ocp.identify.steady import fit_points
+
+        return fit_points(plant, log, effects)
     cands = [candidate(n) for n in dict.fromkeys(effects)]
     every = np.ones(log.n, dtype=bool)
     scales = equation_scales(plant, log, every)

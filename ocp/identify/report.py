@@ -18,7 +18,9 @@ import numpy as np
 
 from ocp.identify.check import CheckResult
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, EQUATION_UNITS, EQUATIONS
+from ocp.identify.steady import PointCheck
 from ocp.logs import Log
+from ocp.plant import DCMotorPlant
 
 
 def _subplots(nrows: int, ncols: int, figsize: tuple[float, float], **kw: Any) -> tuple[Any, Any]:
@@ -90,8 +92,15 @@ def _table(rows: dict[str, dict[str, object]]) -> str:
     return f"<table><tr>{head}</tr>{body}</table>"
 
 
-def html_report(result: CheckResult, log: Log, title: str = "thrustshape model check") -> str:
+def html_report(result: CheckResult | PointCheck, log: Log, title: str = "thrustshape model check",
+                plant: DCMotorPlant | None = None) -> str:
     """A self-contained HTML page: summary, breakdown tables, embedded figures."""
+    if isinstance(result, PointCheck):  # issue #13: a point-by-point check has its own page
+        from ocp.identify.points_report import points_html
+
+        if plant is None:
+            raise TypeError("a point-by-point report needs the plant")
+        return points_html(result, log, plant, title)
     figs = figures(result, log)
     imgs = "".join(f'<h3>{html.escape(k)}</h3><img alt="{html.escape(k)}" src="data:image/png;base64,'
                    f'{base64.b64encode(v).decode()}">' for k, v in figs.items())
@@ -106,5 +115,6 @@ def html_report(result: CheckResult, log: Log, title: str = "thrustshape model c
             "</body></html>")
 
 
-def write_report(result: CheckResult, log: Log, path: str | Path) -> None:
-    Path(path).write_text(html_report(result, log), encoding="utf-8")
+def write_report(result: CheckResult | PointCheck, log: Log, path: str | Path,
+                 plant: DCMotorPlant | None = None) -> None:
+    Path(path).write_text(html_report(result, log, plant=plant), encoding="utf-8")

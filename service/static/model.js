@@ -4,7 +4,7 @@
 
 import {
   $, $$, FieldError, api, downloadJson, emptied, fetchStatic, fillPresets, fmt, guarded, on, parseJsonField,
-  plotBox, readParams, row, selectTab, syncCustom, td, withUnit,
+  plotBox, readNumber, readParams, row, selectTab, syncCustom, td, withUnit,
 } from "./common.js";
 import { useParams } from "./design.js";
 
@@ -22,8 +22,55 @@ function modelForm(extra) {
   else fd.append("params", JSON.stringify(p));
   const cols = $("#m-columns").value.trim();
   if (cols) { parseJsonField(cols, "columns"); fd.append("columns", cols); }
+  for (const [k, v] of Object.entries(readFields())) fd.append(k, v);
   for (const [k, v] of Object.entries(extra || {})) fd.append(k, v);
   return fd;
+}
+
+/** the ESC-rig / flight-log read options that differ from the server's defaults (form fields of the API) */
+function readFields() {
+  const out = {};
+  const steady = $("#m-steady").value;
+  if (steady) out.steady_state = steady;
+  const pp = readNumber($("#m-pole-pairs"), { optional: true, integer: true });
+  if (pp !== undefined) out.pole_pairs = String(pp);
+  const neutral = readNumber($("#m-neutral"), { optional: true });
+  if (neutral !== undefined) out.neutral_us = String(neutral);
+  const range = $("#m-throttle-range").value.trim();
+  if (range) out.throttle_range_us = range;
+  if ($("#m-electrical").value !== "auto") out.electrical = $("#m-electrical").value;
+  const motor = readNumber($("#m-motor"), { optional: true, integer: true });
+  if (motor !== undefined) out.motor = String(motor);
+  return out;
+}
+
+/** which equations the log could check, and why not the others; what the reader did */
+function showEquations(sel, res) {
+  const box = emptied(sel);
+  const list = document.createElement("ul");
+  for (const e of res.equations || []) {
+    const li = document.createElement("li");
+    li.dataset.equation = e.equation; li.dataset.checked = String(e.checked);
+    li.className = e.checked ? "good" : "muted";
+    li.textContent = `${e.checked ? "checked" : "not checked"}: ${e.label} — ${e.uses || e.reason}`;
+    list.appendChild(li);
+  }
+  box.appendChild(list);
+  const ratio = (res.fitted_maps || {}).thrust_ratio_reverse_to_forward;
+  const maps = res.maps || {};
+  const p = document.createElement("p");
+  const parts = Object.entries(maps).map(([k, m]) => `${k} reverse/forward ${fmt(m.ratio_reverse_to_forward, 3)}`);
+  if (ratio != null) parts.push(`fitted thrust reverse/forward ${fmt(ratio, 3)}`);
+  p.textContent = parts.join("; ");
+  box.appendChild(p);
+  if ((res.notes || []).length) {
+    const d = document.createElement("details");
+    const s = document.createElement("summary");
+    s.textContent = "how the log was read";
+    d.appendChild(s);
+    for (const n of res.notes) { const q = document.createElement("div"); q.className = "muted"; q.textContent = n; d.appendChild(q); }
+    box.appendChild(d);
+  }
 }
 
 function setLog(blob, name, note) {
@@ -70,6 +117,7 @@ function showReportFigures(reportHtml) {
 
 function showCheck(res, reportHtml) {
   $("#m-check-results").hidden = false;
+  showEquations("#m-check-equations", res);
   const fr = res.free_run || {}, os_ = res.one_step || {}, noise = res.noise || {};
   const units = fr.units || CHANNEL_UNITS;
   const eb = emptied("#m-errors tbody");
@@ -99,6 +147,7 @@ function showCheck(res, reportHtml) {
 
 function showDiagnose(res) {
   $("#m-diag-results").hidden = false;
+  showEquations("#m-diag-equations", res);
   const verdict = res.verdict || [];
   const vd = emptied("#m-verdict");
   if (!verdict.length) vd.textContent = "Nothing missing: no candidate effect reduces the held-out error significantly.";

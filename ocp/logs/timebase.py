@@ -1,0 +1,84 @@
+"""Time bases: irregular timestamps are put on a uniform grid (and the answer says so) or refused
+with a reason -- never integrated on a median step as if they were regular.
+
+A log is *regular* when every step is within ``JITTER`` of the median step. Otherwise, without
+gaps longer than ``MAX_GAP`` median steps, every channel is linearly interpolated onto the uniform
+grid ``t0 + k h`` (``h`` the median step); with such a gap the log is refused (split it there).
+Several topics sampled at different rates (flight logs) are merged the same way onto the grid of
+the reference topic, over the span they all cover.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+import numpy as np
+
+from ocp.errors import LogError
+
+JITTER = 0.01  # relative
+MAX_GAP = 5.0  # median steps
+
+
+def steps(t: np.ndarray, name: str = "t") -> tuple[float, float]:
+    """(median step [s], largest relative deviation from it); errors when time does not increase."""
+    d = np.diff(t)
+    bad = np.flatnonzero(d <= 0)
+    if bad.size:
+        raise LogError(name, f"must be strictly increasing (row {int(bad[0]) + 1})")
+    h = float(np.median(d))
+    return h, float(np.max(np.abs(d - h)) / h)
+
+
+def _gap(t: np.ndarray, h: float, name: str) -> None:
+    d = np.diff(t)
+    k = int(np.argmax(d))
+    if d[k] > MAX_GAP * h:
+        raise LogError(name, f"gap of {d[k]:.4g} s at t = {t[k] - t[0]:.4g} s (the median step is {h:.3g} s); "
+                             "split the log at the gap")
+
+
+def uniform(t: np.ndarray, channels: Mapping[str, np.ndarray], resample: bool,
+            name: str = "t") -> tuple[np.ndarray, dict[str, np.ndarray], str | None]:
+    """``(t, channels, note)`` on a uniform grid; ``note`` says what was done (None: already regular)."""
+    h, jitter = steps(t, name)
+    if jitter <= JITTER:
+        return t, dict(channels), None
+    if not resample:
+        raise LogError(name, f"irregular sample times (steps {np.min(np.diff(t)):.3g} to {np.max(np.diff(t)):.3g} s, "
+                             f"median {h:.3g} s); allow resampling or resample to a uniform grid first")
+    _gap(t, h, name)
+    grid = t[0] + h * np.arange(int(np.floor((t[-1] - t[0]) / h + 1e-9)) + 1)
+    out = {k: np.interp(grid, t, v) for k, v in channels.items()}
+    note = (f"{name}: irregular sample times (steps up to {100 * jitter:.0f} % off the median {h:.3g} s): "
+            f"{t.size} samples resampled onto a uniform {h:.3g} s grid by linear interpolation ({grid.size} samples)")
+    return grid, out, note
+
+
+def merge(topics: Mapping[str, tuple[np.ndarray, Mapping[str, np.ndarray]]], reference: str,
+          resample: bool) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
+    """Channels of several topics ``{topic: (t (M_k,), {channel: (M_k,)})}`` on the uniform grid of ``reference``.
+
+    Returns ``(t (N,), {channel: (N,)}, notes)``; errors name the topic with a gap or no overlap.
+    """
+    t_ref, _ = topics[reference]
+    h = steps(t_ref, reference)[0]
+    lo = max(float(tk[0]) for tk, _ in topics.values())
+    hi = min(float(tk[-1]) for tk, _ in topics.values())
+    if hi - lo < 2 * h:
+        raise LogError(reference, f"the topics {sorted(topics)} do not overlap in time")
+    if len(topics) == 1:
+        t, chans, note = uniform(t_ref, topics[reference][1], resample, reference)
+        return t, chans, [note] if note else []
+    if not resample:
+        raise LogError(reference, "channels sampled at different times; allow resampling to merge them")
+    for name, (tk, _) in topics.items():
+        _gap(tk, float(np.median(np.diff(tk))), name)
+    grid = lo + h * np.arange(int(np.floor((hi - lo) / h + 1e-9)) + 1)
+    out: dict[str, np.ndarray] = {}
+    for tk, tchans in topics.values():
+        for c, v in tchans.items():
+            out[c] = np.interp(grid, tk, v)
+    rates = ", ".join(f"{n} {1 / float(np.median(np.diff(tk))):.3g} Hz" for n, (tk, _) in topics.items())
+    return grid, out, [f"topics ({rates}) resampled by linear interpolation onto the {h:.3g} s grid of "
+                       f"{reference}, over the {hi - lo:.3g} s they all cover ({grid.size} samples)"]
