@@ -36,7 +36,8 @@ import asyncio
 import contextlib
 import hmac
 import time
-from typing import Annotated, Any, Literal
+from enum import IntEnum
+from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Query, WebSocket, WebSocketDisconnect
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
@@ -61,6 +62,13 @@ FRAME_TIMEOUT_S = 10.0  # hard, per frame (a frame of MAX_BATCH samples takes a 
 router = APIRouter(tags=["stream"])
 
 
+class ExampleRate(IntEnum):
+    """Sample rates of the example [Hz] (an enum: a ``Literal`` of ints refuses the query string "500")."""
+
+    HZ_500 = 500
+    HZ_1000 = 1000
+
+
 class StreamExample(BaseModel):
     """The paper's Section IV-B reference sampled for streaming: ``t`` [s], ``thrust`` [N]."""
 
@@ -76,7 +84,7 @@ class StreamExample(BaseModel):
             summary="The paper's interaction example (impedance/admittance) as a thrust reference to stream")
 async def example(settings: SettingsDep, pool: PoolDep, law: Law = Law.IMPEDANCE,
                   duration: Annotated[float, Query(ge=0.5, le=EXAMPLE_MAX_DURATION_S)] = 10.0,
-                  rate: Literal[500, 1000] = 1000,
+                  rate: ExampleRate = ExampleRate.HZ_1000,
                   amplitude: Annotated[float, Query(gt=0, le=100)] = 0.4) -> Any:
     """The first ``duration`` seconds of Section IV-B's reference, thrust peak ``amplitude`` [N]. A fixed
     example: ~2 s of ODE integration in a worker the first time per (law, rate), cached in that worker."""
