@@ -6,6 +6,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import re
 import time
 from collections.abc import Iterator
 from typing import Any
@@ -213,3 +214,16 @@ def test_stream_session_frame_overrun_kills_its_process() -> None:
             bad.close()
 
     asyncio.run(run())
+
+
+def test_stream_example_runs_in_the_worker_pool(server: Server) -> None:
+    """The example is a pool task (the task log names it), not computed in the server process."""
+    rid = f"example-{time.time_ns()}"
+    url = server.url + "/v1/stream/example?law=admittance&duration=1&rate=500"
+    got = httpx.get(url, headers={"Authorization": f"Bearer {KEY}", "X-Request-ID": rid}, timeout=60)
+    assert got.status_code == 200 and len(got.json()["t"]) == 501, got.text
+    pattern = rf"task id=[0-9a-f]{{12}} kind=stream_example duration_ms=\S+ outcome=ok request_id={rid}$"
+    deadline = time.monotonic() + 10
+    while not re.search(pattern, server.log.read_text(), re.M) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert re.search(pattern, server.log.read_text(), re.M), server.log.read_text()[-2000:]
