@@ -103,8 +103,13 @@ class StreamSession:
         ctx = mp.get_context("spawn")
         self._conn, child = ctx.Pipe()
         self._proc = ctx.Process(target=_session_main, args=(child, start), daemon=True, name="thrustshape-stream")
-        self._proc.start()
-        child.close()
+        try:
+            self._proc.start()
+        except OSError as exc:  # no process to be had (limits): the session is refused, the server goes on
+            self._proc = None
+            raise TaskFailed(f"could not start the session's process: {exc}") from None
+        finally:
+            child.close()
         return await self._answer(timeout)
 
     async def push(self, frame: Payload, timeout: float) -> str:
@@ -113,7 +118,8 @@ class StreamSession:
         try:
             self._conn.send(frame)
         except (OSError, BrokenPipeError):
-            raise TaskFailed(self._died()) from None
+            detail = await asyncio.get_running_loop().run_in_executor(self._waiter, self._died)
+            raise TaskFailed(detail) from None
         return str((await self._answer(timeout))["text"])
 
     async def _answer(self, timeout: float) -> Payload:

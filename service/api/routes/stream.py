@@ -6,11 +6,11 @@ Protocol (JSON text frames)::
     client -> {"params": "paper-rig" | {J, B, ...}, "current": 1.0, "voltage": 12.0,
                "regularity": "continuous-voltage", "delay": 0.1, "dt": 0.001, "bandwidth": 20,
                "api_key": "..."}                                   # first frame: the session
-    server -> {"type": "ready", "preview": 100, "delay": 0.1, "dt": 0.001, "max_samples": ..., ...}
+    server -> {"type": "ready", "preview": 100, "delay": 0.1, "dt": 0.001, "max_samples": ..., "pid": ...}
     client -> {"t": [...], "thrust": [...]}                        # 1..MAX_BATCH samples per frame
     server -> {"type": "samples", "t": [...], "desired": [...], "thrust": [...], "omega": [...],
                "current": [...], "voltage": [...], "saturated": [...]}
-    server -> {"type": "error", "field": ..., "reason": ...}       # then the socket closes (1008 / 1007)
+    server -> {"type": "error", "field": ..., "reason": ...}       # then the socket closes (1008 / 1007 / 1011)
 
 Browsers cannot set headers on a WebSocket, so the key may come as ``Authorization: Bearer`` or as the
 first frame's ``api_key``. ``params`` is a preset name or a mapping: never a path (the server reads no
@@ -209,8 +209,8 @@ async def stream(ws: WebSocket) -> None:
         await _session(ws, session)
     except _Refused as exc:
         refusal = (exc.field, exc.reason, exc.code)
-    except TaskTimeout as exc:  # a frame overran: its process was killed
-        refusal = ("session", f"a frame took longer than {exc.timeout:g} s; the session's process was stopped", 1011)
+    except TaskTimeout as exc:  # the shaper overran: its process was killed
+        refusal = ("session", f"the session's process did not answer within {exc.timeout:g} s and was stopped", 1011)
     except TaskFailed as exc:
         refusal = ("session", exc.detail, 1011)
     except TimeoutError:
