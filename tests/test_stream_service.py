@@ -3,8 +3,11 @@ bound (key, frame, rate, sessions, bad samples, file paths) is enforced with the
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import json
+import re
+import time
 from collections.abc import Iterator
 from typing import Any
 
@@ -12,10 +15,13 @@ import httpx
 import numpy as np
 import pytest
 
+from ocp.errors import ThrustshapeError
 from ocp.gallery.interaction import Law, interaction_reference
 from ocp.params import MotorParams
 from ocp.stream import shape_profile, stream_options
 from service.api.routes.stream import MAX_BATCH, MAX_SESSIONS
+from service.streams import StreamSession
+from service.workers import TaskTimeout
 from tests.test_service_support import Server, start_server
 
 ws_client = pytest.importorskip("websockets.sync.client", reason="the websockets package is not installed")
@@ -140,3 +146,84 @@ def test_stream_example_is_the_papers_impedance_reference(server: Server) -> Non
     bad = httpx.get(server.url + "/v1/stream/example?duration=50", headers={"Authorization": f"Bearer {KEY}"},
                     timeout=60)
     assert bad.status_code == 422 and "duration" in bad.text
+
+
+def test_stream_session_runs_in_its_own_process_and_its_death_is_reported(server: Server) -> None:
+    """The shaper runs in a child of the server, not in it; killing that child closes the session with the
+    reason (1011), the server lives on, and the next session gets a fresh process."""
+    psutil = pytest.importorskip("psutil")
+    server_proc = psutil.Process(server.proc.pid)
+    frame = {"t": [0.0, 0.001], "thrust": [0.1, 0.1]}
+    with _connect(server) as ws:
+        ws.send(json.dumps({**START, "api_key": KEY}))
+        ready = json.loads(ws.recv(timeout=30))
+        pid = ready["pid"]
+        assert pid != server.proc.pid and pid in {p.pid for p in server_proc.children(recursive=True)}
+        ws.send(json.dumps(frame))
+        assert json.loads(ws.recv(timeout=30))["type"] == "samples"
+        psutil.Process(pid).kill()
+        assert _gone(psutil, pid)
+        ws.send(json.dumps({"t": [0.002], "thrust": [0.1]}))
+        msg, code = _refusal(ws)
+    assert msg["field"] == "session" and "process ended" in msg["reason"] and code == 1011, (msg, code)
+    assert server.proc.poll() is None
+    with _connect(server) as ws:
+        ws.send(json.dumps({**START, "api_key": KEY}))
+        again = json.loads(ws.recv(timeout=30))
+        assert again["type"] == "ready" and again["pid"] not in (pid, server.proc.pid)
+        ws.send(json.dumps(frame))
+        assert json.loads(ws.recv(timeout=30))["type"] == "samples"
+    assert _gone(psutil, again["pid"])  # the client left: its process is stopped
+
+
+def _gone(psutil: Any, pid: int, timeout: float = 10.0) -> bool:
+    """The process ``pid`` ended within ``timeout`` [s] (exited, or a zombie its parent has not reaped yet)."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            if psutil.Process(pid).status() == psutil.STATUS_ZOMBIE:
+                return True
+        except psutil.NoSuchProcess:
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def test_stream_session_frame_overrun_kills_its_process() -> None:
+    """A frame past its hard timeout raises TaskTimeout and the session's process is killed; the shaper's own
+    errors come back as the same ThrustshapeError leaf with field and reason."""
+    psutil = pytest.importorskip("psutil")
+    start = {**START, "bandwidth": 20.0}
+
+    async def run() -> None:
+        slow = StreamSession()
+        try:
+            assert (await slow.open(start, 60.0))["type"] == "ready"
+            n = MAX_BATCH
+            with pytest.raises(TaskTimeout):  # 200 samples cannot be shaped in 10 us
+                await slow.push({"t": list(np.arange(n) * 1e-3), "thrust": [0.1] * n}, 1e-5)
+            assert slow.pid is not None and _gone(psutil, slow.pid)
+        finally:
+            slow.close()
+        bad = StreamSession()
+        try:
+            with pytest.raises(ThrustshapeError) as err:
+                await bad.open({**start, "delay": 5.0}, 60.0)
+            assert err.value.field == "delay"
+        finally:
+            bad.close()
+
+    asyncio.run(run())
+
+
+def test_stream_example_runs_in_the_worker_pool(server: Server) -> None:
+    """The example is a pool task (the task log names it), not computed in the server process."""
+    rid = f"example-{time.time_ns()}"
+    url = server.url + "/v1/stream/example?law=admittance&duration=1&rate=500"
+    got = httpx.get(url, headers={"Authorization": f"Bearer {KEY}", "X-Request-ID": rid}, timeout=60)
+    assert got.status_code == 200 and len(got.json()["t"]) == 501, got.text
+    pattern = rf"task id=[0-9a-f]{{12}} kind=stream_example duration_ms=\S+ outcome=ok request_id={rid}$"
+    deadline = time.monotonic() + 10
+    while not re.search(pattern, server.log.read_text(), re.M) and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert re.search(pattern, server.log.read_text(), re.M), server.log.read_text()[-2000:]

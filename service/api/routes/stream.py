@@ -6,11 +6,11 @@ Protocol (JSON text frames)::
     client -> {"params": "paper-rig" | {J, B, ...}, "current": 1.0, "voltage": 12.0,
                "regularity": "continuous-voltage", "delay": 0.1, "dt": 0.001, "bandwidth": 20,
                "api_key": "..."}                                   # first frame: the session
-    server -> {"type": "ready", "preview": 100, "delay": 0.1, "dt": 0.001, "max_samples": ..., ...}
+    server -> {"type": "ready", "preview": 100, "delay": 0.1, "dt": 0.001, "max_samples": ..., "pid": ...}
     client -> {"t": [...], "thrust": [...]}                        # 1..MAX_BATCH samples per frame
     server -> {"type": "samples", "t": [...], "desired": [...], "thrust": [...], "omega": [...],
                "current": [...], "voltage": [...], "saturated": [...]}
-    server -> {"type": "error", "field": ..., "reason": ...}       # then the socket closes (1008 / 1007)
+    server -> {"type": "error", "field": ..., "reason": ...}       # then the socket closes (1008 / 1007 / 1011)
 
 Browsers cannot set headers on a WebSocket, so the key may come as ``Authorization: Bearer`` or as the
 first frame's ``api_key``. ``params`` is a preset name or a mapping: never a path (the server reads no
@@ -20,10 +20,14 @@ Bounds, all checked before the work they guard: sessions per server (:data:`MAX_
 per session (:data:`MAX_SAMPLES`), samples per frame (:data:`MAX_BATCH`), sample rate (a token bucket
 of :data:`MAX_RATE` samples/s with a burst of :data:`MAX_BURST`), an idle timeout and the frame size.
 
-The shaper's step costs ~40 us in Python (``bench/stream.py``); a frame of at most MAX_BATCH samples
-is a few milliseconds of CPU, run with ``asyncio.to_thread`` so the event loop keeps serving other
-requests meanwhile. A stateful stream cannot live in the worker processes (every frame would ship the
-state back and forth); the bounds above cap what one client can take from the server process.
+No shaping runs in the server process. Each live session gets its own spawned child process
+(:class:`service.streams.StreamSession`) that builds and keeps the session's :class:`~ocp.stream.StreamShaper`;
+the server parses and bounds each frame, then forwards it over a pipe (waited on in the session's own thread,
+so the event loop keeps serving). The session cap therefore also caps these processes. A frame has a hard
+timeout (:data:`FRAME_TIMEOUT_S`): past it the child is killed and the socket closes with 1011 and the reason;
+a child that dies is reported the same way and never takes the server down. The child is killed on
+disconnect, idle timeout and every refusal. ``GET /v1/stream/example`` runs as a task in the worker pool
+(:func:`service.streams.stream_example`, cached per worker).
 """
 
 from __future__ import annotations
@@ -31,21 +35,19 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import hmac
-import json
 import time
-from functools import lru_cache
-from typing import Annotated, Any, Literal
+from enum import IntEnum
+from typing import Annotated, Any
 
-import numpy as np
 from fastapi import APIRouter, Depends, Query, WebSocket, WebSocketDisconnect
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from ocp.errors import MissionError, ThrustshapeError, validation_location
-from ocp.gallery.interaction import InteractionSetup, Law, interaction_reference
-from ocp.params import PRESETS, MotorParams, load_params
-from ocp.stream import StreamShaper, stream_options
+from ocp.errors import ThrustshapeError, validation_location
+from ocp.gallery.interaction import Law
 from ocp.theory import ReversalRegularity
-from service.api.deps import require_api_key
+from service.api.deps import PoolDep, SettingsDep, require_api_key
+from service.streams import EXAMPLE_MAX_DURATION_S, StreamSession, stream_example
+from service.workers import TaskFailed, TaskTimeout
 
 MAX_SESSIONS = 4
 MAX_SAMPLES = 600_000  # per session: 10 min at 1 kHz
@@ -54,10 +56,17 @@ MAX_RATE = 5_000.0  # samples/s, sustained
 MAX_BURST = 2_000  # samples
 IDLE_S = 30.0
 MAX_FRAME_CHARS = 64 * 1024
-
-EXAMPLE_MAX_DURATION_S = 10.0
+OPEN_TIMEOUT_S = 60.0  # the session's process: spawn, imports, the shaper's design
+FRAME_TIMEOUT_S = 10.0  # hard, per frame (a frame of MAX_BATCH samples takes a few ms)
 
 router = APIRouter(tags=["stream"])
+
+
+class ExampleRate(IntEnum):
+    """Sample rates of the example [Hz] (an enum: a ``Literal`` of ints refuses the query string "500")."""
+
+    HZ_500 = 500
+    HZ_1000 = 1000
 
 
 class StreamExample(BaseModel):
@@ -71,34 +80,16 @@ class StreamExample(BaseModel):
     crossings: list[float]  # sample times just before each sign change [s]
 
 
-@lru_cache(maxsize=4)
-def _example_full(law: Law, rate: float) -> tuple[np.ndarray, np.ndarray]:
-    """Section IV-B's impedance or admittance reference (M_I = 0.65, B_I = 3.5, K_I = 5.0, ...) over the
-    longest example, normalised: (t, x2d). At most four of these exist (two laws, two rates)."""
-    ref = interaction_reference(law, InteractionSetup(duration=EXAMPLE_MAX_DURATION_S), rate=rate)
-    return ref.t, ref.x2d
-
-
-def _example(law: Law, duration: float, rate: float, amplitude: float) -> StreamExample:
-    """The first ``duration`` seconds (the paper's normalised time read as seconds), the thrust scaled to a
-    peak of ``amplitude`` [N] (the paper's example is normalised; a rig needs newtons)."""
-    t, x2d = _example_full(law, rate)
-    n = round(duration * rate) + 1
-    t, x2d = t[:n], x2d[:n]
-    scale = amplitude / float(np.max(np.abs(x2d)))
-    crossings = t[:-1][x2d[:-1] * x2d[1:] < 0]
-    return StreamExample(law=law, rate=rate, amplitude=amplitude, t=t.tolist(), thrust=(x2d * scale).tolist(),
-                         crossings=crossings.tolist())
-
-
 @router.get("/v1/stream/example", response_model=StreamExample, dependencies=[Depends(require_api_key)],
             summary="The paper's interaction example (impedance/admittance) as a thrust reference to stream")
-async def example(law: Law = Law.IMPEDANCE,
+async def example(settings: SettingsDep, pool: PoolDep, law: Law = Law.IMPEDANCE,
                   duration: Annotated[float, Query(ge=0.5, le=EXAMPLE_MAX_DURATION_S)] = 10.0,
-                  rate: Literal[500, 1000] = 1000,
-                  amplitude: Annotated[float, Query(gt=0, le=100)] = 0.4) -> StreamExample:
-    # a fixed example: ~2 s of ODE integration the first time per (law, rate), in a thread, cached after
-    return await asyncio.to_thread(_example, law, duration, float(rate), amplitude)
+                  rate: ExampleRate = ExampleRate.HZ_1000,
+                  amplitude: Annotated[float, Query(gt=0, le=100)] = 0.4) -> Any:
+    """The first ``duration`` seconds of Section IV-B's reference, thrust peak ``amplitude`` [N]. A fixed
+    example: ~2 s of ODE integration in a worker the first time per (law, rate), cached in that worker."""
+    payload = {"law": law.value, "duration": duration, "rate": float(rate), "amplitude": amplitude}
+    return await pool.run(stream_example, payload, settings.task_timeout_s)
 
 
 class StreamStart(BaseModel):
@@ -150,23 +141,6 @@ def _key_ok(ws: WebSocket, start: StreamStart) -> bool:
     return hmac.compare_digest(given.encode(), key)
 
 
-def _params(start: StreamStart) -> MotorParams:
-    if isinstance(start.params, str) and start.params not in PRESETS:
-        raise MissionError("params", f"a preset name {list(PRESETS)} or a mapping of parameters")
-    return load_params(start.params)
-
-
-def _run(shaper: StreamShaper, batch: StreamBatch) -> dict[str, Any]:
-    """Push a frame through the shaper (runs in a thread); columns of the output samples."""
-    if len(batch.t) != len(batch.thrust):
-        raise MissionError("thrust", f"{len(batch.thrust)} values for {len(batch.t)} times")
-    rows = [shaper.push(a, b) for a, b in zip(batch.t, batch.thrust, strict=True)]
-    out: dict[str, Any] = {"type": "samples"}
-    for name in ("t", "desired", "thrust", "omega", "current", "voltage", "saturated"):
-        out[name] = [getattr(r, name) for r in rows]
-    return out
-
-
 class _Bucket:
     """Token bucket: ``MAX_RATE`` samples/s sustained, ``MAX_BURST`` at once."""
 
@@ -193,31 +167,29 @@ async def _receive(ws: WebSocket) -> str:
     return str(text)
 
 
-async def _session(ws: WebSocket) -> None:
+async def _session(ws: WebSocket, session: StreamSession) -> None:
     start = _parse(StreamStart, await _receive(ws))
     if not _key_ok(ws, start):
         raise _Refused("api_key", "missing or wrong API key (Authorization: Bearer or the first frame's api_key)")
     try:
-        opts = stream_options(current=start.current, voltage=start.voltage, regularity=start.regularity,
-                              delay=start.delay, dt=start.dt, bandwidth=start.bandwidth)
-        shaper = await asyncio.to_thread(StreamShaper, _params(start), opts)
+        ready = await session.open(start.model_dump(mode="json", exclude={"api_key"}), OPEN_TIMEOUT_S)
     except ThrustshapeError as exc:
         raise _Refused(exc.field, exc.reason, 1007) from None
-    await ws.send_json({"type": "ready", "preview": opts.preview, "delay": opts.delay, "dt": opts.dt,
-                        "regularity": opts.regularity.value, "current": opts.current, "voltage": opts.voltage,
-                        "max_samples": MAX_SAMPLES, "max_batch": MAX_BATCH, "max_rate": MAX_RATE})
+    await ws.send_json({**ready, "max_samples": MAX_SAMPLES, "max_batch": MAX_BATCH, "max_rate": MAX_RATE})
     bucket, total = _Bucket(), 0
     while True:
         batch = _parse(StreamBatch, await _receive(ws))
+        if len(batch.t) != len(batch.thrust):
+            raise _Refused("thrust", f"{len(batch.thrust)} values for {len(batch.t)} times", 1007)
         total += len(batch.t)
         if total > MAX_SAMPLES:
             raise _Refused("t", f"a session carries at most {MAX_SAMPLES} samples")
         bucket.take(len(batch.t))
         try:
-            out = await asyncio.to_thread(_run, shaper, batch)
+            text = await session.push(batch.model_dump(), FRAME_TIMEOUT_S)
         except ThrustshapeError as exc:
             raise _Refused(exc.field, exc.reason, 1007) from None
-        await ws.send_text(json.dumps(out, allow_nan=False))
+        await ws.send_text(text)
 
 
 @router.websocket("/v1/stream")
@@ -232,17 +204,23 @@ async def stream(ws: WebSocket) -> None:
         return
     state.stream_sessions = active + 1
     refusal: tuple[str, str, int] | None = None
+    session = StreamSession()
     try:
-        await _session(ws)
+        await _session(ws, session)
     except _Refused as exc:
         refusal = (exc.field, exc.reason, exc.code)
+    except TaskTimeout as exc:  # the shaper overran: its process was killed
+        refusal = ("session", f"the session's process did not answer within {exc.timeout:g} s and was stopped", 1011)
+    except TaskFailed as exc:
+        refusal = ("session", exc.detail, 1011)
     except TimeoutError:
         refusal = ("session", f"idle for {IDLE_S:g} s", 1001)
     except WebSocketDisconnect:
         pass
     finally:
-        # the slot is free once the work is over, not after the closing handshake (a slow client
-        # must not hold it)
+        # the slot (and the process) is free once the work is over, not after the closing handshake
+        # (a slow client must not hold it)
+        session.close()
         state.stream_sessions -= 1
     if refusal is not None:
         await _goodbye(ws, *refusal)
