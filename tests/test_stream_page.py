@@ -73,9 +73,9 @@ def test_stream_tab_plays_the_impedance_example(page: Any) -> None:
     assert _value(page, "limits") == "yes"
     assert int(_value(page, "reversals")) >= 9  # the impedance example crosses zero about twice a second
     assert float(_value(page, "tracking")) < 10.0
-    paths = page.locator("#s-plot-thrust path.series")
-    assert paths.count() == 2 and int(paths.nth(1).get_attribute("data-n")) == 6001
-    assert page.locator("#s-plot-current line.limit").count() == 2
+    series = page.locator("#s-plot-thrust .series")  # uPlot's plot (plot.js) keeps one marker per series
+    assert series.count() == 2 and int(series.nth(1).get_attribute("data-n")) == 6001
+    assert page.locator("#s-plot-current .limit").count() == 2
     out = ROOT / "test-artifacts"
     out.mkdir(exist_ok=True)
     page.screenshot(path=str(out / "stream-tab.png"), full_page=True)
