@@ -19,8 +19,10 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import importlib
+import logging
 import multiprocessing as mp
 import signal
+import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from multiprocessing.connection import Connection
@@ -31,8 +33,13 @@ import ocp.errors as errors
 Payload = dict[str, Any]
 TaskFn = Callable[[Payload], Payload]
 Outcome = tuple[Literal["ok", "user-error", "crash"], Any]
+Phase = Literal["queue", "start-up", "run"]
 
 _STARTUP_TIMEOUT_S = 120.0
+#: what a task was waiting for when its deadline ran out
+PHASES: dict[str, str] = {"queue": "waiting for a free worker", "start-up": "waiting for a worker process to start",
+                          "run": "computing"}
+log = logging.getLogger("thrustshape.workers")
 
 
 class QueueFull(Exception):
@@ -44,11 +51,13 @@ class QueueFull(Exception):
 
 
 class TaskTimeout(Exception):
-    """A task exceeded its hard timeout; its process was killed (or, on Dask, the task abandoned)."""
+    """A task ran out of time; ``phase`` says where: waiting for a free worker (``queue``), waiting for a
+    new worker process to start (``start-up``, e.g. after a respawn) or computing (``run``: its process was
+    killed, or on Dask the task abandoned)."""
 
-    def __init__(self, timeout: float) -> None:
-        self.timeout = timeout
-        super().__init__(f"task exceeded its {timeout:g} s timeout")
+    def __init__(self, timeout: float, phase: Phase = "run") -> None:
+        self.timeout, self.phase = timeout, phase
+        super().__init__(f"the {timeout:.3g} s deadline ran out while {PHASES[phase]} ({phase})")
 
 
 class TaskFailed(Exception):
@@ -118,36 +127,53 @@ class _Worker:
         child.close()
         self.conn, self._ready = parent, False
 
-    def _await_ready(self) -> None:
+    def _await_ready(self, timeout: float = _STARTUP_TIMEOUT_S) -> None:
+        """Wait up to ``timeout`` [s] for a (re)spawned process; a process that is merely slow keeps starting
+        (:class:`TaskTimeout` ``start-up``), one that died or never starts is replaced."""
         if self._ready:
             return
-        if not self.conn.poll(_STARTUP_TIMEOUT_S):
+        if not self.conn.poll(min(timeout, _STARTUP_TIMEOUT_S)):
+            if timeout < _STARTUP_TIMEOUT_S and self.proc.is_alive():
+                raise TaskTimeout(timeout, "start-up")
+            log.error("worker %s did not start within %g s; respawning", self.proc.pid, _STARTUP_TIMEOUT_S)
             self.restart()
             raise TaskFailed("worker process did not start")
         try:
             self.conn.recv()
-        except EOFError:
+        except (EOFError, OSError):
+            log.error("worker %s died while starting (exit code %s); respawning", self.proc.pid, self.proc.exitcode)
             self.restart()
             raise TaskFailed("worker process died while starting") from None
         self._ready = True
 
     def call(self, fn: TaskFn, payload: Payload, timeout: float) -> Outcome:
-        """Blocking: run one task, kill + respawn the process on timeout or death."""
-        self._await_ready()
+        """Blocking: run one task within ``timeout`` [s] (start-up of a respawned process included); kill +
+        respawn the process on timeout or death."""
+        start = time.monotonic()
+        self._await_ready(timeout)
+        budget = timeout - (time.monotonic() - start)
+        if budget <= 0:
+            raise TaskTimeout(timeout, "start-up")
         try:
             self.conn.send((fn, payload))
-            if not self.conn.poll(timeout):
+            if not self.conn.poll(budget):
+                log.warning("worker %s: %s exceeded its %.3g s budget; killing and respawning", self.proc.pid,
+                            getattr(fn, "__name__", fn), budget)
                 self.restart()
-                raise TaskTimeout(timeout)
+                raise TaskTimeout(timeout, "run")
             return self.conn.recv()
         except (EOFError, OSError, BrokenPipeError):
             code = self.proc.exitcode
+            log.error("worker %s died during %s (exit code %s); respawning", self.proc.pid,
+                      getattr(fn, "__name__", fn), code)
             self.restart()
             raise TaskFailed(f"worker process died (exit code {code})") from None
 
     def restart(self) -> None:
+        old = self.proc.pid
         self.kill()
         self._spawn()
+        log.info("worker %s replaced by %s", old, self.proc.pid)
 
     def kill(self) -> None:
         if self.proc.is_alive():
@@ -191,19 +217,29 @@ class WorkerPool:
         """Run ``fn(payload)`` in a worker with a hard ``timeout`` [s].
 
         ``wait=True`` waits for a free worker instead of raising :class:`QueueFull`; ``deadline`` (event
-        loop time) also counts the wait for a worker: the task gets what is left of it.
+        loop time; default ``timeout`` from now unless ``wait``) also counts the wait for a worker and the
+        start-up of a respawned one: the task gets what is left of it.
         """
         if not wait and self._pending >= self.capacity:
             raise QueueFull(self.retry_after)
         self._pending += 1
+        loop = asyncio.get_running_loop()
+        if deadline is None and not wait:
+            deadline = loop.time() + timeout
         try:
-            worker = await self._idle.get()
-            loop = asyncio.get_running_loop()
-            if deadline is not None:
-                timeout = min(timeout, deadline - loop.time())
+            if deadline is None:
+                worker = await self._idle.get()
+            else:
+                try:
+                    worker = await asyncio.wait_for(self._idle.get(), max(deadline - loop.time(), 0.0))
+                except TimeoutError:
+                    log.warning("%s: deadline ran out after waiting %.3g s for a free worker",
+                                getattr(fn, "__name__", fn), timeout)
+                    raise TaskTimeout(timeout, "queue") from None
+                timeout = deadline - loop.time()
                 if timeout <= 0:
                     self._idle.put_nowait(worker)
-                    raise TaskTimeout(0.0)
+                    raise TaskTimeout(0.0, "queue")
             fut = loop.run_in_executor(self._threads, self._call_and_release, loop, worker, fn, payload, timeout)
             return unwrap(await asyncio.shield(fut))
         finally:
@@ -219,6 +255,10 @@ class WorkerPool:
 
     def pids(self) -> list[int]:
         return [w.proc.pid for w in self._workers]
+
+    def alive(self) -> int:
+        """Worker processes currently alive (a killed one counts until it is replaced)."""
+        return sum(1 for w in self._workers if w.proc.is_alive())
 
     def close(self) -> None:
         for w in self._workers:
@@ -257,6 +297,7 @@ class DaskRunner:
             outcome = await asyncio.wait_for(fut, timeout)
         except TimeoutError:
             await self._client.cancel(fut)
+            log.warning("dask task %s abandoned after %g s", getattr(fn, "__name__", fn), timeout)
             raise TaskTimeout(timeout) from None
         return unwrap(outcome)
 

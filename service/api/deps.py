@@ -13,7 +13,7 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from starlette.exceptions import HTTPException
 
 from ocp.errors import MissionError
-from ocp.mission import Mission, segment_samples
+from ocp.mission import OUTPUT_RATE, Mission, segment_samples
 from service.batches import BatchRunner
 from service.jobs import JobStore
 from service.settings import Settings
@@ -62,7 +62,8 @@ async def require_api_key(settings: SettingsDep,
 
 
 def check_mission_limits(mission: Mission, settings: Settings, prefix: str = "") -> None:
-    """Server caps beyond the core's: profile samples and collocation intervals (422 naming the field)."""
+    """Server caps beyond the core's: profile samples, returned samples and collocation intervals (422 naming
+    the field), checked before any work starts."""
     n = len(mission.profile.t) if mission.profile is not None else 0
     if n > settings.max_profile_samples:
         raise MissionError(f"{prefix}profile.t",
@@ -72,6 +73,12 @@ def check_mission_limits(mission: Mission, settings: Settings, prefix: str = "")
         if n > settings.max_profile_samples:
             raise MissionError(f"{prefix}segments", f"sample to {n} points; this server accepts at most "
                                                     f"{settings.max_profile_samples}")
+    out = mission.span() * mission.retiming.max_stretch * OUTPUT_RATE + 1.0  # returned samples, at most
+    if out > settings.max_reference_samples:
+        raise MissionError(f"{prefix}retiming.max_stretch", f"a {mission.span():.4g} s profile stretched up to "
+                                                            f"{mission.retiming.max_stretch:g}x gives {out:.4g} "
+                                                            f"samples; this server returns at most "
+                                                            f"{settings.max_reference_samples}")
     if mission.collocation.intervals > settings.max_intervals:
         raise MissionError(f"{prefix}collocation.intervals", f"{mission.collocation.intervals} intervals; this "
                                                              f"server accepts at most {settings.max_intervals}")
