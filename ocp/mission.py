@@ -227,7 +227,10 @@ class Mission(_Strict):
     def _params_ok(cls, v: str | dict[str, Any], info: ValidationInfo) -> str | dict[str, Any]:
         if isinstance(v, str) and v not in PRESETS and not (info.context or {}).get("allow_files", cls.allow_files):
             raise ParameterError("params", f"must be a preset {list(PRESETS)} or a mapping; files are not read here")
-        load_params(v)  # raises ParameterError naming the key
+        if isinstance(v, dict) and v.get("effects") is not None:
+            load_plant(v)  # the effects block too: ranges checked before any work (ParameterError names the key)
+        else:
+            load_params(v)  # raises ParameterError naming the key
         return v
 
     @model_validator(mode="after")

@@ -12,6 +12,7 @@ Run with ``thrustshape serve`` or ``uvicorn --factory service.app:app_from_env``
 
 from __future__ import annotations
 
+import asyncio
 import logging
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
@@ -62,11 +63,14 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
             attempts=settings.batch_attempts)
         app.state.settings, app.state.tasks, app.state.store = settings, tasks, store
         app.state.pool, app.state.batches, app.state.fallback_pool = pool, batch_runner, fallback_pool
+        warming = [asyncio.create_task(p.warm()) for p in (pool, fallback_pool)]  # start-up off the first requests
         if batch_runner is not None:
             batch_runner.start()
         try:
             yield
         finally:
+            for w in warming:
+                w.cancel()
             if batch_runner is not None:
                 await batch_runner.close()
             if dask is not None:

@@ -287,6 +287,7 @@ class RunnerPublic(_Strict):
 class WorkersPublic(_Strict):
     size: int = Field(description="solver worker processes")
     alive: int = Field(description="of which alive now (a killed one is replaced on its next task)")
+    ready: int = Field(description="of which started (imports done); the others are still starting")
     pending: int = Field(description="requests running or waiting for a worker")
 
 
@@ -295,6 +296,7 @@ class Health(_Strict):
     store: StorePublic | None = None
     runner: RunnerPublic | None = None
     workers: WorkersPublic | None = None
+    fallback_workers: WorkersPublic | None = Field(default=None, description="processes of the analytic fallback")
 
 
 class Problem(_Open):

@@ -127,6 +127,10 @@ class _Worker:
         child.close()
         self.conn, self._ready = parent, False
 
+    @property
+    def ready(self) -> bool:
+        return self._ready
+
     def _await_ready(self, timeout: float = _STARTUP_TIMEOUT_S) -> None:
         """Wait up to ``timeout`` [s] for a (re)spawned process; a process that is merely slow keeps starting
         (:class:`TaskTimeout` ``start-up``), one that died or never starts is replaced."""
@@ -252,6 +256,23 @@ class WorkerPool:
         finally:
             if not loop.is_closed():
                 loop.call_soon_threadsafe(self._idle.put_nowait, worker)
+
+    async def warm(self) -> None:
+        """Wait for every process to finish starting (one at a time, each taken off the idle queue meanwhile,
+        so a request never shares a worker with its start-up)."""
+        loop = asyncio.get_running_loop()
+        for _ in range(self.size):
+            worker = await self._idle.get()
+            try:
+                await loop.run_in_executor(self._threads, worker._await_ready)
+            except (TaskFailed, TaskTimeout) as exc:
+                log.error("worker did not start: %s", exc)
+            finally:
+                self._idle.put_nowait(worker)
+
+    def ready(self) -> int:
+        """Worker processes that finished starting (imports done, answering)."""
+        return sum(1 for w in self._workers if w.ready)
 
     def pids(self) -> list[int]:
         return [w.proc.pid for w in self._workers]

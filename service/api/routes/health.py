@@ -29,8 +29,10 @@ async def healthz(request: Request, response: Response) -> Health:
     if getattr(state, "batches", None) is not None:
         h = state.batches.health()
         runner = RunnerPublic(state=h.state, unsaved=h.unsaved, inflight=h.inflight, last_error=h.last_error)
-    workers = WorkersPublic(size=state.pool.size, alive=state.pool.alive(), pending=state.pool.pending)
+    workers, fallback = (WorkersPublic(size=p.size, alive=p.alive(), ready=p.ready(), pending=p.pending)
+                         for p in (state.pool, state.fallback_pool))
     ok = store.ok and (runner is None or runner.state == "running")
     if not ok:
         response.status_code = 503
-    return Health(status="ok" if ok else "degraded", store=store, runner=runner, workers=workers)
+    return Health(status="ok" if ok else "degraded", store=store, runner=runner, workers=workers,
+                  fallback_workers=fallback)

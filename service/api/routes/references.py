@@ -44,7 +44,7 @@ class DeadlineExceeded(TaskTimeout):
 
 
 _SOLVER_OUT = {"queue": "no solver worker was free within {:.3g} s (queue)",
-               "start-up": "a respawned solver worker was still starting after {:.3g} s (start-up)",
+               "start-up": "the solver worker process was still starting after {:.3g} s (start-up)",
                "run": "the solver did not finish within {:.3g} s (run)"}
 
 
