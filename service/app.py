@@ -55,7 +55,7 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         pool = WorkerPool(settings.workers, settings.queue_size, settings.retry_after_s, preload=preload)
         # the analytic fallback runs in its own processes: killable, and never queued behind the solves
         fallback_pool = WorkerPool(settings.fallback_workers, settings.queue_size + settings.workers,
-                                   settings.retry_after_s, preload=preload)
+                                   settings.retry_after_s, preload=("ocp.analytic", "ocp.fallback", "ocp.result"))
         dask = await DaskRunner.connect(settings.dask_address) if settings.dask_address else None
         runner: Runner = dask if dask is not None else pool
         batch_runner = None if tasks.batch_item is None else BatchRunner(

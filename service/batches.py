@@ -3,7 +3,8 @@
 Runs as one asyncio task in the app lifespan. At most ``concurrency`` items are in flight; each runs
 on the :class:`~service.workers.Runner` (local worker processes or Dask) with a hard timeout. A
 core error (bad mission, infeasible problem) fails the item at once; a timeout or a crashed worker
-is retried up to ``attempts`` times. Outcomes are written by :class:`~service.jobs.JobStore`, whose
+is retried up to ``attempts`` times (a worker that died before reaching the item costs no attempt).
+Outcomes are written by :class:`~service.jobs.JobStore`, whose
 state guard makes each result land exactly once.
 
 The store may fail for a while (locked by another process past its busy timeout, disk full, file
@@ -160,7 +161,8 @@ class BatchRunner:
         except (TaskTimeout, TaskFailed) as exc:
             error = {"type": type(exc).__name__, "field": None, "reason": str(exc)}
             log.warning("batch %s item %d attempt %d: %s", item.batch_id, item.index, item.attempts, exc)
-            return self._failer(item, error, item.attempts < self._attempts)
+            blameless = isinstance(exc, TaskFailed) and exc.startup  # a worker died before reaching the item
+            return self._failer(item, error, blameless or item.attempts < self._attempts)
         return lambda: self._store.finish(item.batch_id, item.index, result)
 
     def _failer(self, item: Item, error: dict[str, Any], retry: bool) -> Callable[[], Any]:

@@ -61,10 +61,11 @@ class TaskTimeout(Exception):
 
 
 class TaskFailed(Exception):
-    """A task raised an unexpected exception or its process died; ``detail`` says what happened."""
+    """A task raised an unexpected exception or its process died; ``detail`` says what happened;
+    ``startup``: the process died before the task reached it (the task is not to blame)."""
 
-    def __init__(self, detail: str) -> None:
-        self.detail = detail
+    def __init__(self, detail: str, startup: bool = False) -> None:
+        self.detail, self.startup = detail, startup
         super().__init__(detail)
 
 
@@ -141,13 +142,13 @@ class _Worker:
                 raise TaskTimeout(timeout, "start-up")
             log.error("worker %s did not start within %g s; respawning", self.proc.pid, _STARTUP_TIMEOUT_S)
             self.restart()
-            raise TaskFailed("worker process did not start")
+            raise TaskFailed("worker process did not start", startup=True)
         try:
             self.conn.recv()
         except (EOFError, OSError):
             log.error("worker %s died while starting (exit code %s); respawning", self.proc.pid, self.proc.exitcode)
             self.restart()
-            raise TaskFailed("worker process died while starting") from None
+            raise TaskFailed("worker process died while starting", startup=True) from None
         self._ready = True
 
     def call(self, fn: TaskFn, payload: Payload, timeout: float) -> Outcome:
