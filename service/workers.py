@@ -211,6 +211,7 @@ class WorkerPool:
         for w in self._workers:
             self._idle.put_nowait(w)
         self._pending = 0
+        self._urgent = 0  # deadline-bound calls waiting for a worker (background calls yield to them)
 
     @property
     def pending(self) -> int:
@@ -232,15 +233,20 @@ class WorkerPool:
         if deadline is None and not wait:
             deadline = loop.time() + timeout
         try:
-            if deadline is None:
+            if wait:
+                worker = await self._yielding_get()
+            elif deadline is None:
                 worker = await self._idle.get()
             else:
+                self._urgent += 1
                 try:
                     worker = await asyncio.wait_for(self._idle.get(), max(deadline - loop.time(), 0.0))
                 except TimeoutError:
                     log.warning("%s: deadline ran out after waiting %.3g s for a free worker",
                                 getattr(fn, "__name__", fn), timeout)
                     raise TaskTimeout(timeout, "queue") from None
+                finally:
+                    self._urgent -= 1
                 timeout = deadline - loop.time()
                 if timeout <= 0:
                     self._idle.put_nowait(worker)
@@ -249,6 +255,16 @@ class WorkerPool:
             return unwrap(await asyncio.shield(fut))
         finally:
             self._pending -= 1
+
+    async def _yielding_get(self) -> _Worker:
+        """A free worker for a background call (``wait=True``, e.g. a batch item), after every request with a
+        deadline that is waiting for one: a batch never makes an interactive request miss its deadline."""
+        while True:
+            worker = await self._idle.get()
+            if not self._urgent:
+                return worker
+            self._idle.put_nowait(worker)  # a deadline-bound getter waits behind this one: hand it over
+            await asyncio.sleep(0.02)
 
     def _call_and_release(self, loop: asyncio.AbstractEventLoop, worker: _Worker, fn: TaskFn, payload: Payload,
                           timeout: float) -> Outcome:

@@ -68,6 +68,10 @@ def test_1_a_huge_profile_span_is_refused_before_any_work(http: httpx.Client) ->
     assert p["field"] == "profile.t" and "100 s" in p["reason"] and time.monotonic() - t0 < 2.0
     stretched = {**mission("long", duration=60.0), "retiming": {"max_stretch": 4.0}}  # 60 s x 4 > 200 s
     assert problem(http.post("/v1/references/optimize", json=stretched), 422)["field"] == "retiming.max_stretch"
+    # 300 reversals need 2408 collocation intervals (8 a phase): refused before a solver is built for them
+    sines = {"name": "sines", "segments": [{"kind": "sine", "duration": 15.0, "amplitude": 0.5, "period": 0.1}]}
+    p = problem(http.post("/v1/batches", json={"missions": [mission("ok"), sines]}), 422)
+    assert p["field"] == "missions.1.segments" and "reversals need at least 8" in p["reason"], p
     assert http.get("/healthz").status_code == 200
 
 

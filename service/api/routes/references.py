@@ -72,9 +72,16 @@ async def optimize(mission: MissionRequest, request: Request, settings: Settings
     except TaskFailed as exc:
         reason = f"solver process failed: {exc.detail}"
     fallbacks: WorkerPool = request.app.state.fallback_pool
-    try:
-        return await fallbacks.run(tasks.fallback, {"mission": payload, "reason": reason}, total,
-                                   deadline=start + total)
-    except TaskTimeout as exc:
-        raise DeadlineExceeded(total, f"{reason}; then the fallback ran out while "
-                                      f"{PHASES[exc.phase]} ({exc.phase})") from None
+    detail = ""
+    for _ in range(2):  # a fallback process that dies (killed, out of memory) gets one more try
+        try:
+            return await fallbacks.run(tasks.fallback, {"mission": payload, "reason": reason}, total,
+                                       deadline=start + total)
+        except TaskTimeout as exc:
+            raise DeadlineExceeded(total, f"{reason}; then the fallback ran out while "
+                                          f"{PHASES[exc.phase]} ({exc.phase})") from None
+        except TaskFailed as exc:
+            detail = exc.detail
+            if loop.time() >= start + total:
+                break
+    raise TaskFailed(f"{reason}; then the fallback process failed twice: {detail}")
