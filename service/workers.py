@@ -219,12 +219,14 @@ class WorkerPool:
         return self._pending
 
     async def run(self, fn: TaskFn, payload: Payload, timeout: float, *, wait: bool = False,
-                  deadline: float | None = None) -> Payload:
+                  deadline: float | None = None, min_run: float = 0.0) -> Payload:
         """Run ``fn(payload)`` in a worker with a hard ``timeout`` [s].
 
         ``wait=True`` waits for a free worker instead of raising :class:`QueueFull`; ``deadline`` (event
         loop time; default ``timeout`` from now unless ``wait``) also counts the wait for a worker and the
-        start-up of a respawned one: the task gets what is left of it.
+        start-up of a respawned one: the task gets what is left of it. When less than ``min_run`` [s] is left
+        once a worker is free, the task is not started (:class:`TaskTimeout` ``queue``): starting it would only
+        get its process killed and respawned, which costs the next calls a start-up.
         """
         if not wait and self._pending >= self.capacity:
             raise QueueFull(self.retry_after)
@@ -248,9 +250,9 @@ class WorkerPool:
                 finally:
                     self._urgent -= 1
                 timeout = deadline - loop.time()
-                if timeout <= 0:
+                if timeout <= max(min_run, 0.0):
                     self._idle.put_nowait(worker)
-                    raise TaskTimeout(0.0, "queue")
+                    raise TaskTimeout(max(timeout, 0.0), "queue")
             fut = loop.run_in_executor(self._threads, self._call_and_release, loop, worker, fn, payload, timeout)
             return unwrap(await asyncio.shield(fut))
         finally:

@@ -66,7 +66,8 @@ async def optimize(mission: MissionRequest, request: Request, settings: Settings
     solve_budget = max(total - settings.fallback_reserve_s, 0.0)
     payload = mission.model_dump(mode="json")
     try:
-        return await pool.run(tasks.optimize, payload, solve_budget, deadline=start + solve_budget)
+        return await pool.run(tasks.optimize, payload, solve_budget, deadline=start + solve_budget,
+                              min_run=min(1.0, 0.5 * solve_budget))
     except TaskTimeout as exc:
         reason = "deadline: " + _SOLVER_OUT[exc.phase].format(solve_budget)
     except TaskFailed as exc:
