@@ -149,6 +149,7 @@ async def _fault_clients(url: str, concurrency: int, seconds: float) -> dict[str
     codes: Counter[int] = Counter()
     sources: Counter[str] = Counter()
     bad: list[str] = []
+    details: list[str] = []
     end = time.monotonic() + seconds
     missions = [OPTIMIZE, *ADVERSARIAL]
 
@@ -165,10 +166,12 @@ async def _fault_clients(url: str, concurrency: int, seconds: float) -> dict[str
                     bad.append(f"{m['name']}: over its limits")
             elif r.status_code == 422 and r.json().get("code") != "infeasible":
                 bad.append(f"{m['name']}: 422 {r.json().get('field')}")
+            elif r.status_code >= 500 and len(details) < 3:
+                details.append(f"{r.status_code} {m['name']}: {r.json().get('detail')}")
 
     async with httpx.AsyncClient(base_url=url, timeout=120) as http:
         await asyncio.gather(*(client(http, k) for k in range(concurrency)))
-    return {"codes": dict(codes), "sources": dict(sources), "bad": bad}
+    return {"codes": dict(codes), "sources": dict(sources), "bad": bad, "5xx_examples": details}
 
 
 def _batch_check(url: str, batch: str, missions: list[dict[str, Any]]) -> list[str]:
@@ -226,6 +229,8 @@ def run_faults(workers: int, seconds: float, as_json: bool) -> int:
         print(f"  optimise answers {out['codes']} sources {out['sources']}")
         print(f"  5xx: {fives}  over limits / unexpected 422: {len(out['bad'])}  batch problems: "
               f"{out['batch_problems'] or 'none'} (24 items)")
+        for d in out["5xx_examples"]:
+            print(f"  e.g. {d}")
         print("PASS" if ok else f"FAIL {out['bad'][:5]}")
     return 0 if ok else 1
 

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Annotated, Any, ClassVar, Literal
 
@@ -331,6 +332,17 @@ def mission_from_mapping(data: Any, allow_files: bool = True) -> Mission:
         raise MissionError(field or "mission", reason) from None
 
 
+class YamlLoader(yaml.SafeLoader):
+    """Safe YAML with YAML 1.2 floats: ``1e-3`` is a number, not a string (missions take strict numbers)."""
+
+
+YamlLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?(?:[eE][-+]?[0-9]+)?|\.[0-9_]+(?:[eE][-+]?[0-9]+)?"
+               r"|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$"),
+    list("-+0123456789."))
+
+
 def load_mission(path: str | Path) -> Mission:
     """Read a mission from a JSON or YAML file."""
     p = Path(path)
@@ -338,7 +350,7 @@ def load_mission(path: str | Path) -> Mission:
         raise MissionError("mission", f"no such file: {p}")
     text = p.read_text(encoding="utf-8")
     try:
-        data = json.loads(text) if p.suffix.lower() == ".json" else yaml.safe_load(text)
+        data = json.loads(text) if p.suffix.lower() == ".json" else yaml.load(text, Loader=YamlLoader)
     except (json.JSONDecodeError, yaml.YAMLError) as exc:
         raise MissionError("mission", f"{p.name} is not valid JSON/YAML: {exc}") from None
     return mission_from_mapping(data)

@@ -50,7 +50,7 @@ def guarded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     srv = start_server(tmp, {"TS_TEST_TASKS": "slow-batch", "TS_TEST_ITEM_SECONDS": "6", "THRUSTSHAPE_API_KEY": KEY,
                              "THRUSTSHAPE_DB_PATH": str(tmp / "jobs.db"),
                              "THRUSTSHAPE_OPTIMIZE_DEADLINE_S": str(DEADLINE), "THRUSTSHAPE_FALLBACK_RESERVE_S": "2"},
-                       warm=True)
+                       warm=True, timeout=180)
     yield srv
     srv.stop()
 
@@ -164,7 +164,7 @@ def hanging(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     tmp = tmp_path_factory.mktemp("hang-both")
     srv = start_server(tmp, {"TS_TEST_TASKS": "hang-both", "THRUSTSHAPE_DB_PATH": str(tmp / "jobs.db"),
                              "THRUSTSHAPE_OPTIMIZE_DEADLINE_S": "3", "THRUSTSHAPE_FALLBACK_RESERVE_S": "1"},
-                       warm=True)
+                       warm=True, timeout=180)
     yield srv
     srv.stop()
 
@@ -189,7 +189,7 @@ def faulty(tmp_path: Path) -> Iterator[tuple[Server, Path]]:
     data = tmp_path / "data"
     srv = start_server(tmp_path, {"TS_TEST_TASKS": "slow-batch", "TS_TEST_ITEM_SECONDS": "1.0",
                                   "THRUSTSHAPE_DB_PATH": str(data / "jobs.db"),
-                                  "THRUSTSHAPE_STORE_BUSY_TIMEOUT_S": "0.2"}, warm=True)
+                                  "THRUSTSHAPE_STORE_BUSY_TIMEOUT_S": "0.2"}, warm=True, timeout=180)
     yield srv, data / "jobs.db"
     srv.stop()
 
