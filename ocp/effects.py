@@ -510,14 +510,16 @@ def make_effect(name: str, values: Mapping[str, Any] | None = None) -> EffectBas
             raise ParameterError(f"effects.{name}.{key}", f"unknown parameter; {name} has {allowed}")
         if isinstance(val, bool) or not isinstance(val, int | float) or not math.isfinite(val):
             raise ParameterError(f"effects.{name}.{key}", f"must be a finite number, got {val!r}")
-        _check_range(name, key, float(val))
         kwargs[key] = float(val)
     try:
-        return cls(**kwargs)
+        effect = cls(**kwargs)  # the class's own checks first (they name "<effect>.<key>")
     except ParameterError:
         raise
     except (TypeError, ValueError) as exc:
         raise ParameterError(f"effects.{name}", str(exc)) from None
+    for key, val in kwargs.items():
+        _check_range(name, key, val)
+    return effect
 
 
 def effects_from_mapping(block: Any) -> tuple[EffectBase, ...]:
