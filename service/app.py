@@ -36,6 +36,9 @@ from service.workers import DaskRunner, Runner, WorkerPool
 
 log = logging.getLogger("thrustshape.service")
 
+#: the small fallback each fallback worker runs once at start-up
+_WARM_FALLBACK = {"reason": "warm-up", "mission": {"name": "warm-up", "segments": [
+    {"kind": "hold", "duration": 0.1, "thrust": 0.2}, {"kind": "reversal", "duration": 0.2, "to": -0.2}]}}
 _FORM_SLACK = 512 * 1024  # multipart framing and the non-file fields of a model-check upload [bytes]
 
 
@@ -51,11 +54,12 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         recovered = store.recover()
         if recovered:
             log.info("resuming %d batch items left running by a previous server", recovered)
-        preload = ("ocp.analytic", "ocp.fallback", "ocp.mission", *tasks.extra_preload)
+        preload = ("ocp.analytic", "ocp.fallback", "ocp.mission", "service.tasks", *tasks.extra_preload)
         pool = WorkerPool(settings.workers, settings.queue_size, settings.retry_after_s, preload=preload)
         # the analytic fallback runs in its own processes: killable, and never queued behind the solves
         fallback_pool = WorkerPool(settings.fallback_workers, settings.queue_size + settings.workers,
-                                   settings.retry_after_s, preload=("ocp.analytic", "ocp.fallback", "ocp.result"))
+                                   settings.retry_after_s,
+                                   preload=("ocp.analytic", "ocp.fallback", "ocp.result", "service.tasks"))
         dask = await DaskRunner.connect(settings.dask_address) if settings.dask_address else None
         runner: Runner = dask if dask is not None else pool
         batch_runner = None if tasks.batch_item is None else BatchRunner(
@@ -63,7 +67,10 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
             attempts=settings.batch_attempts)
         app.state.settings, app.state.tasks, app.state.store = settings, tasks, store
         app.state.pool, app.state.batches, app.state.fallback_pool = pool, batch_runner, fallback_pool
-        warming = [asyncio.create_task(p.warm()) for p in (pool, fallback_pool)]  # start-up off the first requests
+        # start-up off the first requests; a fallback worker also runs one small fallback (imports, caches)
+        warming = [asyncio.create_task(pool.warm()),
+                   asyncio.create_task(fallback_pool.warm(tasks.fallback, _WARM_FALLBACK) if tasks.fallback
+                                       else fallback_pool.warm())]
         if batch_runner is not None:
             batch_runner.start()
         try:

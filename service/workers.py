@@ -276,14 +276,17 @@ class WorkerPool:
             if not loop.is_closed():
                 loop.call_soon_threadsafe(self._idle.put_nowait, worker)
 
-    async def warm(self) -> None:
+    async def warm(self, task: TaskFn | None = None, payload: Payload | None = None) -> None:
         """Wait for every process to finish starting (one at a time, each taken off the idle queue meanwhile,
-        so a request never shares a worker with its start-up)."""
+        so a request never shares a worker with its start-up); with ``task``, run it once on each with
+        ``payload`` so its first real call finds its imports and caches ready."""
         loop = asyncio.get_running_loop()
         for _ in range(self.size):
             worker = await self._idle.get()
             try:
                 await loop.run_in_executor(self._threads, worker._await_ready)
+                if task is not None:
+                    await loop.run_in_executor(self._threads, worker.call, task, payload or {}, _STARTUP_TIMEOUT_S)
             except (TaskFailed, TaskTimeout) as exc:
                 log.error("worker did not start: %s", exc)
             finally:
