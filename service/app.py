@@ -31,7 +31,7 @@ from service.api.routes import batches, compare, health, info, model_check, page
 from service.batches import BatchRunner
 from service.jobs import JobStore, StoreLocked, lock_store
 from service.settings import Settings
-from service.tasks import TaskSet, available_tasks
+from service.tasks import TaskSet, available_tasks, fallback_mission
 from service.workers import DaskRunner, Runner, WorkerPool
 
 log = logging.getLogger("thrustshape.service")
@@ -69,7 +69,7 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         app.state.pool, app.state.batches, app.state.fallback_pool = pool, batch_runner, fallback_pool
         # start-up off the first requests; a fallback worker also runs one small fallback (imports, caches)
         warming = [asyncio.create_task(pool.warm()),
-                   asyncio.create_task(fallback_pool.warm(tasks.fallback, _WARM_FALLBACK) if tasks.fallback
+                   asyncio.create_task(fallback_pool.warm(fallback_mission, _WARM_FALLBACK) if tasks.fallback
                                        else fallback_pool.warm())]
         if batch_runner is not None:
             batch_runner.start()

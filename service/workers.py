@@ -36,6 +36,7 @@ Outcome = tuple[Literal["ok", "user-error", "crash"], Any]
 Phase = Literal["queue", "start-up", "run"]
 
 _STARTUP_TIMEOUT_S = 120.0
+_WARM_UP_TIMEOUT_S = 30.0
 #: what a task was waiting for when its deadline ran out
 PHASES: dict[str, str] = {"queue": "waiting for a free worker", "start-up": "waiting for a worker process to start",
                           "run": "computing"}
@@ -286,7 +287,7 @@ class WorkerPool:
             try:
                 await loop.run_in_executor(self._threads, worker._await_ready)
                 if task is not None:
-                    await loop.run_in_executor(self._threads, worker.call, task, payload or {}, _STARTUP_TIMEOUT_S)
+                    await loop.run_in_executor(self._threads, worker.call, task, payload or {}, _WARM_UP_TIMEOUT_S)
             except (TaskFailed, TaskTimeout) as exc:
                 log.error("worker did not start: %s", exc)
             finally:
