@@ -5,7 +5,13 @@ optimise requests drives it with ``c = 1x`` and ``2x`` the worker count of concu
 one overload round far past workers + queue) for a fixed number of requests each, and reports
 throughput, p50/p95 latency and the status codes seen. At overload the only errors allowed are 503.
 
-    python bench/load.py [--workers 2] [--requests 40] [--json]
+``--faults`` adds the issue #12 run: 2x overload of optimise requests (normal and adversarial missions:
+hundreds of reversals, a 0.05 A limit) while a batch runs, with faults injected -- a worker process
+SIGKILLed every few seconds and the database locked by another process past the store's busy timeout.
+It passes when no answer is a 5xx, every 200 is within its limits (``verification`` peaks), every 422
+is ``infeasible`` naming a limit, and every batch item finishes exactly once (none lost, none twice).
+
+    python bench/load.py [--workers 2] [--requests 40] [--json] [--faults [--fault-seconds 60]]
 """
 
 from __future__ import annotations
@@ -15,11 +21,15 @@ import asyncio
 import contextlib
 import json
 import os
+import random
+import signal
 import socket
+import sqlite3
 import statistics
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from collections import Counter
 from pathlib import Path
@@ -41,9 +51,9 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def _start(workers: int, queue: int, db: Path) -> tuple[subprocess.Popen[bytes], str]:
+def _start(workers: int, queue: int, db: Path, **extra: str) -> tuple[subprocess.Popen[bytes], str]:
     port = _free_port()
-    env = {**os.environ, "THRUSTSHAPE_QUEUE_SIZE": str(queue)}
+    env = {**os.environ, "THRUSTSHAPE_QUEUE_SIZE": str(queue), **extra}
     proc = subprocess.Popen([sys.executable, "-m", "clients.cli", "serve", "--port", str(port), "--workers",
                              str(workers), "--db", str(db), "--log-level", "warning"], cwd=ROOT, env=env)
     url = f"http://127.0.0.1:{port}"
@@ -84,12 +94,157 @@ async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, to
             "p95_ms": 1e3 * q[18], "codes": dict(codes), "sources": dict(sources)}
 
 
+# ---------------------------------------------------------------------------------------------
+# 2x overload with faults (issue #12)
+
+LIMIT_TOL = 1.0 + 1e-3  # ocp.result.PATH_TOLERANCE
+ADVERSARIAL = [
+    {**OPTIMIZE, "name": "tiny-current", "limits": {"current": 0.05}},
+    {**OPTIMIZE, "name": "60-reversals", "time_limit_s": 2.0,
+     "segments": [{"kind": "sine", "duration": 6.0, "amplitude": 0.6, "period": 0.2}]},
+    {**OPTIMIZE, "name": "fast-sine-1A", "time_limit_s": 2.0, "limits": {"voltage": 12.0, "current": 1.0},
+     "segments": [{"kind": "sine", "duration": 4.0, "amplitude": 0.5, "period": 0.2}]},
+]
+
+
+def _workers(pid: int) -> list[int]:
+    """Worker processes of the server ``pid`` (spawned children; not multiprocessing's resource tracker)."""
+    kids = [int(c) for task in Path(f"/proc/{pid}/task").iterdir() for c in (task / "children").read_text().split()]
+    out = []
+    for k in kids:
+        with contextlib.suppress(OSError):
+            if b"spawn_main" in Path(f"/proc/{k}/cmdline").read_bytes():
+                out.append(k)
+    return out
+
+
+def _inject(server_pid: int, db: Path, stop: threading.Event, log: list[str]) -> None:
+    """Every 8 s SIGKILL one worker process (solver or fallback); every 7 s hold the database for 2 s (past the
+    store's busy timeout)."""
+    rng, tick = random.Random(12), 0
+    while not stop.wait(1.0):
+        tick += 1
+        if tick % 8 == 0 and (kids := _workers(server_pid)):
+            victim = rng.choice(kids)
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(victim, signal.SIGKILL)
+                log.append(f"kill {victim}")
+        if tick % 7 == 0:
+            conn = sqlite3.connect(db, isolation_level=None)
+            conn.execute("BEGIN EXCLUSIVE")
+            log.append("lock db")
+            stop.wait(2.0)
+            conn.execute("ROLLBACK")
+            conn.close()
+
+
+def _over_limits(body: dict[str, Any], mission: dict[str, Any]) -> bool:
+    lim = {"voltage": 12.0, "current": 2.0, **mission.get("limits", {})}
+    v = body["verification"]
+    return not (v["path_ok"] and v["max_abs_current"] <= lim["current"] * LIMIT_TOL
+                and v["max_abs_voltage"] <= lim["voltage"] * LIMIT_TOL)
+
+
+async def _fault_clients(url: str, concurrency: int, seconds: float) -> dict[str, Any]:
+    codes: Counter[int] = Counter()
+    sources: Counter[str] = Counter()
+    bad: list[str] = []
+    details: list[str] = []
+    end = time.monotonic() + seconds
+    missions = [OPTIMIZE, *ADVERSARIAL]
+
+    async def client(http: httpx.AsyncClient, k: int) -> None:
+        n = k
+        while time.monotonic() < end:
+            m = missions[n % len(missions)]
+            n += 1
+            r = await http.post("/v1/references/optimize", json=m)
+            codes[r.status_code] += 1
+            if r.status_code == 200:
+                sources[r.json()["source"]] += 1
+                if _over_limits(r.json(), m):
+                    bad.append(f"{m['name']}: over its limits")
+            elif r.status_code == 422 and r.json().get("code") != "infeasible":
+                bad.append(f"{m['name']}: 422 {r.json().get('field')}")
+            elif r.status_code >= 500 and len(details) < 3:
+                details.append(f"{r.status_code} {m['name']}: {r.json().get('detail')}")
+
+    async with httpx.AsyncClient(base_url=url, timeout=120) as http:
+        await asyncio.gather(*(client(http, k) for k in range(concurrency)))
+    return {"codes": dict(codes), "sources": dict(sources), "bad": bad, "5xx_examples": details}
+
+
+def _batch_check(url: str, batch: str, missions: list[dict[str, Any]]) -> list[str]:
+    """Wait for the batch; every item finished once, in order, within its limits."""
+    end = time.monotonic() + 600
+    with httpx.Client(base_url=url, timeout=60) as http:
+        while time.monotonic() < end:
+            with contextlib.suppress(httpx.HTTPError):
+                if http.get(f"/v1/batches/{batch}").json()["status"] in ("done", "failed"):
+                    break
+            time.sleep(0.5)
+        items = http.get(f"/v1/batches/{batch}/results").json()["results"]
+    problems = [] if [it["index"] for it in items] == list(range(len(missions))) else ["items lost or duplicated"]
+    for it, m in zip(items, missions, strict=False):
+        if it["status"] == "done" and _over_limits(it["result"], m):
+            problems.append(f"batch item {it['index']} over its limits")
+        elif it["status"] not in ("done", "failed"):
+            problems.append(f"batch item {it['index']} never finished ({it['status']})")
+    return problems
+
+
+def run_faults(workers: int, seconds: float, as_json: bool) -> int:
+    """2x overload of optimise requests plus a batch, with worker kills and database locks; see the doc."""
+    concurrency, queue = 2 * workers, 2 * workers  # capacity 3x workers: the clients plus the batch items
+    # batch items: the normal mission and the 0.05 A one (a many-reversal build takes minutes under load)
+    missions = [{**(ADVERSARIAL[0] if i % 4 == 0 else OPTIMIZE), "name": f"item-{i}"} for i in range(24)]
+    with tempfile.TemporaryDirectory() as tmp:
+        db = Path(tmp) / "jobs.sqlite3"
+        proc, url = _start(workers, queue, db, THRUSTSHAPE_STORE_BUSY_TIMEOUT_S="0.5")
+        stop, log = threading.Event(), []
+        try:
+            asyncio.run(_round(url, "/v1/references/optimize", OPTIMIZE, 1, 2))  # warm the solver caches
+            batch = httpx.post(url + "/v1/batches", json={"missions": missions}, timeout=60).json()["id"]
+            injector = threading.Thread(target=_inject, args=(proc.pid, db, stop, log), daemon=True)
+            injector.start()
+            t0 = time.perf_counter()
+            out = asyncio.run(_fault_clients(url, concurrency, seconds))
+            stop.set()
+            injector.join(10)
+            out["batch_problems"] = _batch_check(url, batch, missions)
+            out["wall_s"] = time.perf_counter() - t0
+        finally:
+            stop.set()
+            proc.terminate()
+            proc.wait(30)
+    fives = sum(n for c, n in out["codes"].items() if c >= 500)
+    ok = not fives and not out["bad"] and not out["batch_problems"]
+    summary = {"workers": workers, "concurrency": concurrency, "seconds": seconds, "faults": Counter(
+        f.split()[0] for f in log), **out, "ok": ok}
+    if as_json:
+        print(json.dumps(summary, indent=1))
+    else:
+        print(f"2x overload with faults: workers={workers} clients={concurrency} {seconds:g} s, "
+              f"faults {dict(summary['faults'])}")
+        print(f"  optimise answers {out['codes']} sources {out['sources']}")
+        print(f"  5xx: {fives}  over limits / unexpected 422: {len(out['bad'])}  batch problems: "
+              f"{out['batch_problems'] or 'none'} (24 items)")
+        for d in out["5xx_examples"]:
+            print(f"  e.g. {d}")
+        print("PASS" if ok else f"FAIL {out['bad'][:5]}")
+    return 0 if ok else 1
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--requests", type=int, default=40, help="requests per round")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--faults", action="store_true", help="only the 2x overload run with injected faults")
+    ap.add_argument("--fault-seconds", type=float, default=60.0, help="length of the fault run [s]")
     args = ap.parse_args(argv)
+    if args.faults:
+        return run_faults(args.workers, args.fault_seconds, args.json)
     queue = args.workers  # capacity = 2x workers: the 2x round fits, the overload round does not
     rows: list[dict[str, Any]] = []
     with tempfile.TemporaryDirectory() as tmp:

@@ -27,6 +27,10 @@ from ocp.reference import Reference
 from ocp.theory import UNBOUNDED, crossing_class, sin_family_order
 
 _SNAP = 8.0 * np.finfo(float).eps
+#: bounds of a sine-power profile (beyond them the closed forms overflow or lose every digit of the angle)
+MAX_AMPLITUDE = 1e6  # N
+MIN_PERIOD, MAX_PERIOD = 1e-6, 1e6  # s
+MAX_PHASE = 1e3  # rad
 
 
 @dataclass(frozen=True)
@@ -48,14 +52,14 @@ class SinProfile:
     phase: float = 0.0
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.amplitude) and self.amplitude != 0):
-            raise MissionError("amplitude", "must be a finite non-zero thrust [N]")
-        if not (math.isfinite(self.period) and self.period > 0):
-            raise MissionError("period", "must be a finite positive time [s]")
+        if not (0 < abs(self.amplitude) <= MAX_AMPLITUDE):
+            raise MissionError("amplitude", f"must be a non-zero thrust [N] of magnitude at most {MAX_AMPLITUDE:g}")
+        if not (MIN_PERIOD <= self.period <= MAX_PERIOD):
+            raise MissionError("period", f"must be a time [s] in [{MIN_PERIOD:g}, {MAX_PERIOD:g}]")
         if not (isinstance(self.q, int) and 0 <= self.q <= 20):
             raise MissionError("q", "must be an integer in 0..20")
-        if not math.isfinite(self.phase):
-            raise MissionError("phase", "must be finite")
+        if not abs(self.phase) <= MAX_PHASE:
+            raise MissionError("phase", f"must be an angle [rad] of magnitude at most {MAX_PHASE:g}")
 
     @property
     def p(self) -> int:

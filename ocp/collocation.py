@@ -228,18 +228,20 @@ def layout(P: int, N: int, nx: int) -> Layout:
 
 _CACHE: dict[tuple[Structure, tuple[tuple[str, object], ...]], Program] = {}
 _CACHE_LOCK = threading.Lock()
-CACHE_SIZE = 32
+CACHE_SIZE = 8  # built programs kept per process (tens of MB each), least recently used evicted
 
 
 def solver_for(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Program:
-    """The cached :class:`Program` for this structure and options (built on first use)."""
+    """The cached :class:`Program` for this structure and options (built on first use; LRU of CACHE_SIZE)."""
     key = (st, tuple(sorted((k, str(v)) for k, v in ipopt_options.items())))
     with _CACHE_LOCK:
-        prog = _CACHE.get(key)
+        prog = _CACHE.pop(key, None)
+        if prog is not None:
+            _CACHE[key] = prog  # most recently used last
     if prog is None:
         prog = build(plant, st, ipopt_options)
         with _CACHE_LOCK:
-            if len(_CACHE) >= CACHE_SIZE:
+            while len(_CACHE) >= CACHE_SIZE:
                 _CACHE.pop(next(iter(_CACHE)))
             _CACHE[key] = prog
     return prog

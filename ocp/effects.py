@@ -81,6 +81,27 @@ class EffectBase:
 
 
 
+#: accepted range of each effect parameter given in a parameter mapping (SI; inclusive); smoothing widths,
+#: time constants and delays are bounded away from 0 (a zero would divide, a tiny one make the plant too
+#: stiff to simulate) and from the absurd; any other parameter is bounded by DEFAULT_RANGE
+RANGES: dict[str, tuple[float, float]] = {
+    "omega_eps": (1e-3, 1e3),  # rad/s
+    "stribeck.omega_s": (1e-2, 1e4),  # rad/s
+    "input_delay.delay": (1e-5, 1.0),  # s
+    "thrust_lag.tau": (1e-5, 100.0),  # s
+    "cogging.periods": (1e-2, 1e3),  # 1/rev
+    "brush_drop.i_eps": (1e-6, 1e3),  # A
+    "voltage_deadband.v_db": (0.0, 1e3),  # V
+}
+DEFAULT_RANGE = (-1e3, 1e3)
+
+
+def _check_range(name: str, key: str, value: float) -> None:
+    lo, hi = RANGES.get(f"{name}.{key}", RANGES.get(key, DEFAULT_RANGE))
+    if not lo <= value <= hi:
+        raise ParameterError(f"effects.{name}.{key}", f"must be in [{lo:g}, {hi:g}], got {value:g}")
+
+
 def _positive(key: str, value: float) -> None:
     if not value > 0:
         raise ParameterError(key, f"must be > 0, got {value}")
@@ -491,11 +512,14 @@ def make_effect(name: str, values: Mapping[str, Any] | None = None) -> EffectBas
             raise ParameterError(f"effects.{name}.{key}", f"must be a finite number, got {val!r}")
         kwargs[key] = float(val)
     try:
-        return cls(**kwargs)
+        effect = cls(**kwargs)  # the class's own checks first (they name "<effect>.<key>")
     except ParameterError:
         raise
     except (TypeError, ValueError) as exc:
         raise ParameterError(f"effects.{name}", str(exc)) from None
+    for key, val in kwargs.items():
+        _check_range(name, key, val)
+    return effect
 
 
 def effects_from_mapping(block: Any) -> tuple[EffectBase, ...]:

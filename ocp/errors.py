@@ -5,6 +5,7 @@
     ThrustshapeError                 root: catch this to catch everything we raise on purpose
     ├── ParameterError(ValueError)   a parameter file or value is wrong (names the key)
     ├── MissionError(ValueError)     a mission / profile / request is wrong (names the field)
+    │   └── InfeasibleError          no reference within the limits exists (names the binding limit)
     ├── LogError(ValueError)         a measurement log is unusable (names the column)
     └── SolverError(RuntimeError)    a numerical solve failed in a way the caller must see
 
@@ -37,6 +38,11 @@ class ParameterError(ThrustshapeError, ValueError):
 
 class MissionError(ThrustshapeError, ValueError):
     """A mission, profile or reference request is invalid."""
+
+
+class InfeasibleError(MissionError):
+    """Nothing within the mission's limits reproduces it, not even the analytic fallback with its hold
+    levels lowered and its time stretched; ``field`` names the binding limit (e.g. ``limits.current``)."""
 
 
 class LogError(ThrustshapeError, ValueError):

@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
 from typing import Annotated, Any, ClassVar, Literal
 
@@ -58,9 +59,27 @@ from ocp.theory import ReversalRegularity
 MAX_PROFILE_SAMPLES = 100_000
 MAX_INTERVALS = 2_000
 SEGMENT_RATE = 1000.0  # Hz at which segments are sampled into a profile
+OUTPUT_RATE = 1000.0  # Hz of the returned reference arrays
+#: longest desired profile [s] (sampled profile span or sum of segment durations): the fallback and the
+#: verification work on a 1 kHz grid over it, so its length drives memory and time
+MAX_SPAN_S = MAX_PROFILE_SAMPLES / SEGMENT_RATE
+#: longest returned reference [s]: the desired span times the largest stretch the retiming allows
+MAX_OUTPUT_S = 2.0 * MAX_SPAN_S
+#: largest thrust magnitude [N] anywhere in a mission (a propeller, not a rocket)
+MAX_THRUST = 1e3
+#: largest magnitude of a profile time stamp [s]
+MAX_TIME = 1e6
 
-Finite = Annotated[float, Field(allow_inf_nan=False)]
-PositiveFinite = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+# strict numbers: JSON numbers only -- "12" and true are refused, ints are taken as floats
+Finite = Annotated[float, Field(strict=True, allow_inf_nan=False)]
+PositiveFinite = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
+Thrust = Annotated[float, Field(strict=True, ge=-MAX_THRUST, le=MAX_THRUST, allow_inf_nan=False)]
+Duration = Annotated[float, Field(strict=True, gt=0, le=MAX_SPAN_S, allow_inf_nan=False)]
+
+
+def _limit(unit: str, top: float, what: str, example: float) -> Any:
+    return Field(strict=True, gt=0, le=top, allow_inf_nan=False, description=f"{what} [{unit}], at most {top:g}",
+                 examples=[example])
 
 
 class _Strict(BaseModel):
@@ -70,18 +89,20 @@ class _Strict(BaseModel):
 class Limits(_Strict):
     """Actuator limits (symmetric, magnitudes). ``None`` = unconstrained."""
 
-    voltage: PositiveFinite = 12.0
-    current: PositiveFinite = 2.0
-    voltage_rate: PositiveFinite | None = None
-    speed: PositiveFinite | None = None
-    torque: PositiveFinite | None = None
+    voltage: Annotated[float, _limit("V", 1e4, "armature voltage limit |V|", 12.0)] = 12.0
+    current: Annotated[float, _limit("A", 1e4, "armature current limit |i|", 2.0)] = 2.0
+    voltage_rate: Annotated[float, _limit("V/s", 1e9, "voltage slew limit |dV/dt|", 2000.0)] | None = None
+    speed: Annotated[float, _limit("rad/s", 1e6, "rotor speed limit |omega|", 400.0)] | None = None
+    torque: Annotated[float, _limit("N m", 1e4, "torque limit of the torque channel", 0.02)] | None = None
 
 
 class Retiming(_Strict):
     """Each phase may last between ``min_stretch`` and ``max_stretch`` times its desired duration."""
 
-    min_stretch: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)] = 1.0
-    max_stretch: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False)] = 1.5
+    min_stretch: Annotated[float, Field(strict=True, gt=0, le=100, allow_inf_nan=False, examples=[1.0],
+                                        description="shortest phase duration / desired duration [1]")] = 1.0
+    max_stretch: Annotated[float, Field(strict=True, gt=0, le=100, allow_inf_nan=False, examples=[1.5],
+                                        description="longest phase duration / desired duration [1]")] = 1.5
 
     @model_validator(mode="after")
     def _ordered(self) -> Retiming:
@@ -93,14 +114,18 @@ class Retiming(_Strict):
 class Collocation(_Strict):
     """Discretisation: total collocation intervals, split over phases by duration."""
 
-    intervals: Annotated[int, Field(ge=8, le=MAX_INTERVALS)] = 120
+    intervals: Annotated[int, Field(strict=True, ge=8, le=MAX_INTERVALS, examples=[120],
+                                    description="collocation intervals over the whole horizon [1]")] = 120
 
 
 class Profile(_Strict):
     """Sampled desired thrust: ``t`` [s] strictly increasing, ``thrust`` [N], equal lengths."""
 
-    t: list[Finite] = Field(min_length=2, max_length=MAX_PROFILE_SAMPLES)
-    thrust: list[Finite] = Field(min_length=2, max_length=MAX_PROFILE_SAMPLES)
+    t: list[Annotated[float, Field(strict=True, ge=-MAX_TIME, le=MAX_TIME, allow_inf_nan=False)]] = Field(
+        min_length=2, max_length=MAX_PROFILE_SAMPLES, examples=[[0.0, 0.5, 1.0]],
+        description=f"sample times [s], strictly increasing, spanning at most {MAX_SPAN_S:g} s")
+    thrust: list[Thrust] = Field(min_length=2, max_length=MAX_PROFILE_SAMPLES, examples=[[0.3, 0.0, -0.3]],
+                                 description=f"desired thrust at each sample [N], |thrust| <= {MAX_THRUST:g}")
 
     @model_validator(mode="after")
     def _consistent(self) -> Profile:
@@ -108,41 +133,52 @@ class Profile(_Strict):
             raise ValueError(f"t has {len(self.t)} samples but thrust has {len(self.thrust)}")
         if any(b <= a for a, b in zip(self.t, self.t[1:], strict=False)):
             raise ValueError("t must be strictly increasing")
+        if self.t[-1] - self.t[0] > MAX_SPAN_S:
+            raise MissionError("t", f"spans {self.t[-1] - self.t[0]:.4g} s; at most {MAX_SPAN_S:g} s")
         return self
 
 
+def _duration() -> Any:
+    return Field(description=f"segment length [s], at most {MAX_SPAN_S:g}", examples=[0.5])
+
+
 class Hold(_Strict):
+    """Constant thrust ``thrust`` for ``duration``."""
+
     kind: Literal["hold"]
-    duration: PositiveFinite
-    thrust: Finite
+    duration: Duration = _duration()
+    thrust: Thrust = Field(description=f"held thrust [N], |thrust| <= {MAX_THRUST:g}", examples=[0.4])
 
 
 class Ramp(_Strict):
     """Linear change from the previous level to ``to``."""
 
     kind: Literal["ramp"]
-    duration: PositiveFinite
-    to: Finite
+    duration: Duration = _duration()
+    to: Thrust = Field(description="thrust at the end [N]", examples=[0.2])
 
 
 class Reversal(_Strict):
     """Change from the previous level to ``to`` (opposite sign); ``shape`` of the naive request."""
 
     kind: Literal["reversal"]
-    duration: PositiveFinite
-    to: Finite
-    shape: Literal["cosine", "ramp", "step"] = "cosine"
+    duration: Duration = _duration()
+    to: Thrust = Field(description="thrust at the end [N], opposite in sign to the previous level",
+                       examples=[-0.4])
+    shape: Literal["cosine", "ramp", "step"] = Field(default="cosine", description="naive shape of the change")
 
 
 class Sine(_Strict):
     """``offset + amplitude sin(2 pi t/period + phase)`` for ``duration``."""
 
     kind: Literal["sine"]
-    duration: PositiveFinite
-    amplitude: Finite
-    period: PositiveFinite
-    offset: Finite = 0.0
-    phase: Finite = 0.0
+    duration: Duration = _duration()
+    amplitude: Thrust = Field(description="thrust amplitude [N]", examples=[0.3])
+    period: Annotated[float, Field(strict=True, ge=1e-3, le=1e4, allow_inf_nan=False)] = Field(
+        description="period [s], 1e-3 to 1e4", examples=[2.0])
+    offset: Thrust = Field(default=0.0, description="thrust offset [N]", examples=[0.0])
+    phase: Annotated[float, Field(strict=True, ge=-1e3, le=1e3, allow_inf_nan=False)] = Field(
+        default=0.0, description="phase [rad], |phase| <= 1000", examples=[0.0])
 
 
 Segment = Annotated[Hold | Ramp | Reversal | Sine, Field(discriminator="kind")]
@@ -151,18 +187,27 @@ Segment = Annotated[Hold | Ramp | Reversal | Sine, Field(discriminator="kind")]
 class Mission(_Strict):
     """A reference request; see the module doc."""
 
-    name: Annotated[str, Field(min_length=1, max_length=200)] = "mission"
-    params: str | dict[str, Any] = "paper-rig"
-    plant: Literal["dc-motor", "torque"] = "dc-motor"
-    limits: Limits = Limits()
-    regularity: ReversalRegularity = ReversalRegularity.BOUNDED
-    min_crossing_order: Literal[2, 6] | None = None
-    objective: Literal["track", "min-time"] = "track"
-    retiming: Retiming = Retiming()
-    collocation: Collocation = Collocation()
-    time_limit_s: Annotated[float, Field(gt=0, le=600, allow_inf_nan=False)] = 10.0
-    profile: Profile | None = None
-    segments: list[Segment] | None = Field(default=None, min_length=1, max_length=1000)
+    name: Annotated[str, Field(min_length=1, max_length=200, description="label echoed in the answer",
+                               examples=["reversal-1"])] = "mission"
+    params: str | dict[str, Any] = Field(default="paper-rig", examples=["paper-rig"], description=(
+        "motor constants: a preset name or a mapping {J [kg m^2], B [N m s/rad], c_tau [N m s^2/rad^2], "
+        "c_f [N s^2/rad^2], k_t [N m/A], k_e [V s/rad], R [ohm], L [H], effects?}"))
+    plant: Literal["dc-motor", "torque"] = Field(default="dc-motor", description="voltage-driven DC motor or "
+                                                 "torque-controlled channel")
+    limits: Limits = Field(default=Limits(), description="actuator limits (V, A, V/s, rad/s, N m)")
+    regularity: ReversalRegularity = Field(default=ReversalRegularity.BOUNDED,
+                                           description="smoothness of the command through a reversal")
+    min_crossing_order: Literal[2, 6] | None = Field(default=None, description="local thrust exponent g at "
+                                                     "each reversal [1]; null: from the regularity")
+    objective: Literal["track", "min-time"] = Field(default="track", description="track the profile or "
+                                                    "reach its end as fast as the limits allow")
+    retiming: Retiming = Field(default=Retiming(), description="bounds on each phase's stretch [1]")
+    collocation: Collocation = Field(default=Collocation(), description="discretisation")
+    time_limit_s: Annotated[float, Field(strict=True, gt=0, le=600, allow_inf_nan=False)] = Field(
+        default=10.0, description="solver wall-time budget [s], at most 600", examples=[10.0])
+    profile: Profile | None = Field(default=None, description="sampled desired thrust (t [s], thrust [N])")
+    segments: list[Segment] | None = Field(default=None, min_length=1, max_length=1000,
+                                           description="desired thrust as hold/ramp/reversal/sine pieces")
     # parsed once per source object (see motor() and desired())
     #: whether ``params`` may name a parameter file; a validation context ``{"allow_files": ...}`` overrides
     allow_files: ClassVar[bool] = True
@@ -183,16 +228,29 @@ class Mission(_Strict):
     def _params_ok(cls, v: str | dict[str, Any], info: ValidationInfo) -> str | dict[str, Any]:
         if isinstance(v, str) and v not in PRESETS and not (info.context or {}).get("allow_files", cls.allow_files):
             raise ParameterError("params", f"must be a preset {list(PRESETS)} or a mapping; files are not read here")
-        load_params(v)  # raises ParameterError naming the key
+        if isinstance(v, dict) and v.get("effects") is not None:
+            load_plant(v)  # the effects block too: ranges checked before any work (ParameterError names the key)
+        else:
+            load_params(v)  # raises ParameterError naming the key
         return v
 
     @model_validator(mode="after")
     def _one_profile(self) -> Mission:
         if (self.profile is None) == (self.segments is None):
             raise ValueError("give exactly one of 'profile' and 'segments'")
-        if self.segments is not None and sum(s.duration for s in self.segments) * SEGMENT_RATE > MAX_PROFILE_SAMPLES:
-            raise ValueError(f"segments last longer than {MAX_PROFILE_SAMPLES / SEGMENT_RATE:.0f} s")
+        if self.segments is not None and sum(s.duration for s in self.segments) > MAX_SPAN_S:
+            raise MissionError("segments", f"last longer than {MAX_SPAN_S:g} s")
+        if self.span() * self.retiming.max_stretch > MAX_OUTPUT_S:
+            raise MissionError("retiming.max_stretch", f"a {self.span():.4g} s profile stretched "
+                                                       f"{self.retiming.max_stretch:g}x would last longer than "
+                                                       f"{MAX_OUTPUT_S:g} s")
         return self
+
+    def span(self) -> float:
+        """Length of the desired profile [s] (counted, nothing sampled)."""
+        if self.profile is not None:
+            return float(self.profile.t[-1] - self.profile.t[0])
+        return float(sum(s.duration for s in self.segments or []))
 
     def motor(self) -> MotorParams:
         """The motor parameters (parsed once: a mapping is validated, a file read, on the first call)."""
@@ -274,6 +332,17 @@ def mission_from_mapping(data: Any, allow_files: bool = True) -> Mission:
         raise MissionError(field or "mission", reason) from None
 
 
+class YamlLoader(yaml.SafeLoader):
+    """Safe YAML with YAML 1.2 floats: ``1e-3`` is a number, not a string (missions take strict numbers)."""
+
+
+YamlLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?(?:[eE][-+]?[0-9]+)?|\.[0-9_]+(?:[eE][-+]?[0-9]+)?"
+               r"|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$"),
+    list("-+0123456789."))
+
+
 def load_mission(path: str | Path) -> Mission:
     """Read a mission from a JSON or YAML file."""
     p = Path(path)
@@ -281,7 +350,7 @@ def load_mission(path: str | Path) -> Mission:
         raise MissionError("mission", f"no such file: {p}")
     text = p.read_text(encoding="utf-8")
     try:
-        data = json.loads(text) if p.suffix.lower() == ".json" else yaml.safe_load(text)
+        data = json.loads(text) if p.suffix.lower() == ".json" else yaml.load(text, Loader=YamlLoader)
     except (json.JSONDecodeError, yaml.YAMLError) as exc:
         raise MissionError("mission", f"{p.name} is not valid JSON/YAML: {exc}") from None
     return mission_from_mapping(data)

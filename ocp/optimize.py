@@ -13,6 +13,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
+import casadi as ca
 import numpy as np
 
 from ocp import collocation as col
@@ -128,13 +129,63 @@ def problem_for(mission: Mission) -> Problem:
     return Problem(mission=mission, plant=plant, structure=st, t_desired=t, f_desired=f, phases=phases)
 
 
-def ipopt_options(time_limit: float) -> dict[str, object]:
+#: IPOPT's own wall-time cap [s]: a backstop equal to the largest ``time_limit_s``; a mission's own limit is
+#: enforced per call by :class:`_Deadline`, so one built solver serves every time limit
+MAX_WALL_TIME_S = 600.0
+
+
+def ipopt_options(time_limit: float | None = None) -> dict[str, object]:
+    """IPOPT options; ``time_limit`` [s] sets ``max_wall_time`` (fixed when the solver is built, so the cached
+    solvers leave it at :data:`MAX_WALL_TIME_S` and stop at the mission's limit through :class:`_Deadline`)."""
     return {
         "ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
         "ipopt.tol": 1e-7, "ipopt.acceptable_tol": 1e-4, "ipopt.acceptable_iter": 5,
-        "ipopt.max_iter": 1000, "ipopt.max_wall_time": float(time_limit),
+        "ipopt.max_iter": 1000, "ipopt.max_wall_time": float(time_limit or MAX_WALL_TIME_S),
         "ipopt.mu_strategy": "adaptive", "ipopt.linear_solver": "mumps",
     }
+
+
+class _Deadline(ca.Callback):
+    """IPOPT iteration callback that asks IPOPT to stop (``User_Requested_Stop``) once ``perf_counter()``
+    passes ``until`` [s]. Its inputs are empty (0x0): no iterate is copied, and one instance serves every
+    problem size, so the solver cache is not keyed by the time limit."""
+
+    def __init__(self) -> None:
+        ca.Callback.__init__(self)
+        self.until = math.inf
+        self.construct("deadline", {})
+
+    def get_n_in(self) -> int:
+        return int(ca.nlpsol_n_out())
+
+    def get_n_out(self) -> int:
+        return 1
+
+    def get_name_in(self, i: int) -> str:
+        return str(ca.nlpsol_out(i))
+
+    def get_name_out(self, i: int) -> str:
+        return "stop"
+
+    def get_sparsity_in(self, i: int) -> ca.Sparsity:
+        return ca.Sparsity(0, 0)
+
+    def eval(self, arg: Any) -> list[float]:
+        return [1.0 if time.perf_counter() > self.until else 0.0]
+
+
+_DEADLINE: list[_Deadline] = []  # one per process, built on the first solve (nothing is built at import)
+
+
+def _deadline() -> _Deadline:
+    if not _DEADLINE:
+        _DEADLINE.append(_Deadline())
+    return _DEADLINE[0]
+
+
+def solver_options() -> dict[str, object]:
+    """Options of the cached collocation solvers: :func:`ipopt_options` and the deadline callback."""
+    return {**ipopt_options(), "iteration_callback": _deadline()}
 
 
 def optimize(mission: Mission, warm: bool = False) -> OptimizeResult:
@@ -190,8 +241,10 @@ def optimize_mesh(mission: Mission, warm: bool = False, previous: OptimizeResult
         backoff[over] /= 1.0 + 1.2 * (excess[over] - 1.0)
         data = problem_data(problem, backoff)
         # a min-time round restarts from the analytic guess: warm, it kept a worse local optimum
-        # (51.47 vs 51.29 ms on the continuous-voltage reversal at 960 intervals)
-        result = solve_problem(problem, data, warm=mission.objective != "min-time")
+        # (51.47 vs 51.29 ms on the continuous-voltage reversal at 960 intervals); every back-off
+        # round shares the mission's time limit
+        left = max(mission.time_limit_s - totals["solve_time_s"], 1e-3)
+        result = solve_problem(problem, data, warm=mission.objective != "min-time", time_limit=left)
         rounds += 1
         for k in totals:
             totals[k] += result.solver.get(k, 0)
@@ -463,11 +516,15 @@ def _analytic_guess(problem: Problem, lay: col.Layout, guess: np.ndarray, sc: Sc
     return np.clip(out, lbx, ubx)
 
 
-def solve_problem(problem: Problem, data: dict[str, np.ndarray], warm: bool) -> OptimizeResult:
+def solve_problem(problem: Problem, data: dict[str, np.ndarray], warm: bool,
+                  time_limit: float | None = None) -> OptimizeResult:
+    """Solve the cached program; IPOPT stops after ``time_limit`` [s] of solving (default the mission's
+    ``time_limit_s``; building the program is not counted, as with IPOPT's own ``max_wall_time``)."""
     m = problem.mission
     build_start = time.perf_counter()
-    prog = col.solver_for(problem.plant, problem.structure, ipopt_options(m.time_limit_s))
+    prog = col.solver_for(problem.plant, problem.structure, solver_options())
     build_time = time.perf_counter() - build_start
+    budget = m.time_limit_s if time_limit is None else time_limit
     args: dict[str, Any] = {"x0": data["x0"], "p": data["p"], "lbx": data["lbx"], "ubx": data["ubx"],
                             "lbg": 0.0, "ubg": 0.0}
     with prog.lock:
@@ -475,7 +532,11 @@ def solve_problem(problem: Problem, data: dict[str, np.ndarray], warm: bool) -> 
             args["x0"] = np.clip(prog.last["x"], data["lbx"], data["ubx"])
             args["lam_x0"], args["lam_g0"] = prog.last["lam_x"], prog.last["lam_g"]
         t0 = time.perf_counter()
-        sol = prog.solver(**args)
+        _deadline().until = t0 + budget
+        try:
+            sol = prog.solver(**args)
+        finally:
+            _deadline().until = math.inf
         solve_time = time.perf_counter() - t0
         stats = prog.solver.stats()
         x = np.asarray(sol["x"]).ravel()
@@ -486,7 +547,8 @@ def solve_problem(problem: Problem, data: dict[str, np.ndarray], warm: bool) -> 
     solver_info = {"status": status, "iterations": int(stats.get("iter_count", -1)), "solve_time_s": solve_time,
                    "build_time_s": build_time, "objective": float(sol["f"]), "constraint_violation": g_viol}
     if not ok:
-        reason = ("solver time limit reached" if "Wall" in status or "CPU" in status else f"IPOPT: {status}")
+        reason = ("solver time limit reached" if "Wall" in status or "CPU" in status or status == "User_Requested_Stop"
+                  else f"IPOPT: {status}")
         return analytic_fallback(m, reason, solver_info)
     t0 = time.perf_counter()
     result = finish_result(problem, prog, x, data, solver_info)

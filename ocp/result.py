@@ -19,16 +19,15 @@ from scipy.integrate import cumulative_trapezoid
 from ocp import collocation as col
 from ocp.analytic import reference
 from ocp.equilibrium import equilibrium
-from ocp.errors import MissionError
-from ocp.fallback import channel_torque, design_reversals, design_sin
-from ocp.mission import Mission
+from ocp.errors import InfeasibleError, MissionError
+from ocp.fallback import DESIGN_STEPS, DriveLimits, channel_torque, design_sin, hold_limit, plan_reversals
+from ocp.mission import MAX_OUTPUT_S, OUTPUT_RATE, Mission
 from ocp.plant import CASADI, DCMotorPlant, Plant, TorquePlant
 from ocp.simulate import rk4
 
 if TYPE_CHECKING:
     from ocp.optimize import Problem
 
-OUTPUT_RATE = 1000.0  # Hz of the returned arrays
 PATH_TOLERANCE = 1e-3  # relative excess over a limit accepted as rounding
 SIM_STEP = 2.5e-4  # s, longest verification step (two RK4 sub-steps each)
 RK4_STIFFNESS = 0.32  # largest |h lambda| of an RK4 sub-step: RK4 is stable to 2.78, its error ~ (h lambda)^5 / 120
@@ -249,6 +248,10 @@ def _channels(m: Mission, resp: Response) -> dict[str, np.ndarray]:
 
 
 def _output_grid(total: float) -> np.ndarray:
+    """Output times [s] at OUTPUT_RATE over ``total``; a horizon over MAX_OUTPUT_S (a min-time solve's
+    free horizon) is refused rather than sampled."""
+    if not total <= MAX_OUTPUT_S:
+        raise MissionError("retiming", f"the reference would last {total:.4g} s; at most {MAX_OUTPUT_S:g} s")
     n = max(2, math.ceil(total * OUTPUT_RATE) + 1)
     return np.linspace(0.0, total, n)
 
@@ -377,27 +380,106 @@ def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[st
 # fallback
 
 
+
+
 def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | None = None) -> OptimizeResult:
     """Analytic reference within the mission's limits: hold levels joined by local polynomial reversals
     of the order the regularity needs (``alpha (t - t_s)^p chi``), or, for a profile that never
     reverses, the ``A sin^(2q+1)`` design at the mission's peak thrust. For the torque channel the
-    reversals are sized to its torque bound and the plant is driven by the torque."""
+    reversals are sized to its torque bound and the plant is driven by the torque.
+
+    Never over the limits: hold levels are capped at what the motor holds in steady state, a reversal
+    without room is first given the room of the longest retiming (``retiming.max_stretch``), then its
+    levels are lowered; the mission's plant (effects included) is simulated and the design redone with
+    lower levels until the simulated response stays within the limits on the integration grid.
+
+    Raises :class:`~ocp.errors.InfeasibleError` naming the binding limit when nothing within the limits
+    is found.
+    """
+    params, lim = m.motor(), m.limits
+    last: OptimizeResult | None = None
+    error: InfeasibleError | None = None
+    stretches = sorted({m.retiming.min_stretch, m.retiming.max_stretch})
+    for margin, shrink in DESIGN_STEPS:
+        drive = DriveLimits(margin * lim.current, margin * lim.voltage,
+                            None if m.plant == "dc-motor" else margin * m.torque_limit())
+        cap = shrink * hold_limit(params, drive, None if lim.speed is None else margin * lim.speed)
+        best: tuple[float, OptimizeResult] | None = None
+        for stretch in stretches:  # the shortest retiming unless it needs lower levels than the longest
+            try:
+                res, lowered = _fallback_try(m, drive, cap, stretch, reason, solver_info)
+            except InfeasibleError as exc:
+                error = exc
+                continue
+            if not res.path_ok:
+                last = res
+                continue
+            if lowered >= 0.999:
+                return res
+            if best is None or lowered > best[0]:
+                best = (lowered, res)
+        if best is not None:
+            return best[1]
+    if last is None and error is not None:
+        raise error
+    field = _binding(m, last)
+    raise InfeasibleError(field, f"no reference within the limits: even the analytic fallback with lowered hold "
+                                 f"levels and stretched time exceeds {field}")
+
+
+def _binding(m: Mission, res: OptimizeResult | None) -> str:
+    """The limit field the (failed) fallback exceeds most."""
+    if res is None:
+        return "limits"
+    v = res.verification
+    if "max_abs_torque" in v:
+        return "limits.torque"
+    ratios = {"limits.current": v["max_abs_current"] / m.limits.current,
+              "limits.voltage": v["max_abs_voltage"] / m.limits.voltage}
+    if m.limits.speed is not None:
+        ratios["limits.speed"] = v["max_abs_speed"] / m.limits.speed
+    return max(ratios, key=lambda k: ratios[k] if math.isfinite(ratios[k]) else math.inf)
+
+
+def _fallback_try(m: Mission, drive: DriveLimits, cap: float, stretch: float, reason: str,
+                  solver_info: dict[str, Any] | None) -> tuple[OptimizeResult, float]:
+    """One fallback design with hold levels capped at ``cap`` [N] and time stretched ``stretch`` x, simulated
+    and verified; returns it and the smallest level / desired level."""
     params = m.motor()
     t_d, f_d = m.desired()
-    t_d = t_d - t_d[0]
+    t_d = (t_d - t_d[0]) * stretch
     dc = m.plant == "dc-motor"
-    torque_limit = None if dc else m.torque_limit()
     t = _output_grid(float(t_d[-1]))
-    lim = (params, m.limits.current, m.limits.voltage, m.regularity)
-    prof: Any = design_reversals(params, t_d, f_d, m.limits.current, m.limits.voltage, m.regularity, dc,
-                                 torque_limit)
-    if prof is None:
-        amp = max(float(np.max(np.abs(f_d))), 1e-6)
+    design = plan_reversals(params, t_d, f_d, drive.current, drive.voltage, m.regularity, dc, drive.torque,
+                            level_cap=cap)
+    lowered, notes = 1.0, []
+    prof: Any
+    if design is not None:
+        prof, lowered = design.profile, design.lowered
+    else:
+        amp = min(max(float(np.max(np.abs(f_d))), 1e-6), cap)
+        lim = (params, drive.current, drive.voltage, m.regularity)
         try:
-            prof = design_sin(*lim, amplitude=amp, voltage_driven=dc, torque_limit=torque_limit).profile
+            prof = design_sin(*lim, amplitude=amp, voltage_driven=dc, torque_limit=drive.torque).profile
         except MissionError:
-            prof = design_sin(*lim, period=2.0 * float(t_d[-1]), voltage_driven=dc, torque_limit=torque_limit).profile
-            reason += f"; amplitude reduced to {prof.amplitude:.4g} N to meet the limits"
+            try:
+                prof = design_sin(*lim, period=2.0 * float(t_d[-1]), voltage_driven=dc,
+                                  torque_limit=drive.torque).profile
+            except MissionError as exc:
+                raise InfeasibleError("limits", f"no analytic reference fits the limits: {exc.reason}") from None
+        lowered = abs(prof.amplitude) / max(float(np.max(np.abs(f_d))), 1e-6)
+    if lowered < 0.999:
+        notes.append(f"hold levels lowered to {100 * lowered:.3g} % of the desired thrust to meet the limits")
+    if stretch != 1.0:
+        notes.append(f"time stretched {stretch:g}x (retiming)")
+    return _fallback_result(m, prof, t, t_d, f_d, "; ".join([reason, *notes]), solver_info), lowered
+
+
+def _fallback_result(m: Mission, prof: Any, t: np.ndarray, t_d: np.ndarray, f_d: np.ndarray, reason: str,
+                     solver_info: dict[str, Any] | None) -> OptimizeResult:
+    """Closed-form reference of ``prof`` on ``t`` (M,), simulated on the mission's plant and verified."""
+    params = m.motor()
+    dc = m.plant == "dc-motor"
     ref = reference(prof, params, t)
     arrays = {"t": t, "thrust": ref.thrust, "thrust_desired": np.interp(t, t_d, f_d), "omega": ref.omega,
               "theta": ref.theta}

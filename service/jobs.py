@@ -9,13 +9,19 @@ A batch submitted with an idempotency key is stored under that key (unique); res
 body returns the stored batch, a different body under the same key is refused.
 
 Thread-safe (one connection behind a lock); call it from a thread, not the event loop, when the
-latency matters (``asyncio.to_thread``). One server per database file.
+latency matters (``asyncio.to_thread``). One server per database file: :func:`lock_store` takes an
+exclusive lock on ``<db>.lock`` for the server's lifetime and a second server refuses to start. Every
+transaction first checks that the database file is still the one opened: SQLite would go on writing
+into a deleted file and answer as if all were well; here a vanished file is :class:`StoreUnavailable`.
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import hashlib
 import json
+import os
 import sqlite3
 import threading
 import time
@@ -24,7 +30,7 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import IO, Any, Literal
 
 ItemState = Literal["queued", "running", "done", "failed"]
 BatchState = Literal["queued", "running", "done", "failed"]
@@ -51,6 +57,35 @@ CREATE TABLE IF NOT EXISTS items (
 );
 CREATE INDEX IF NOT EXISTS items_by_state ON items (state, batch_id, idx);
 """
+
+
+class StoreUnavailable(Exception):
+    """The job store cannot be used right now (file vanished, disk error, locked past the busy timeout)."""
+
+
+class StoreLocked(RuntimeError):
+    """Another server holds the database's lock file."""
+
+
+def lock_store(db_path: Path) -> IO[str]:
+    """Exclusive lock on ``<db_path>.lock`` (held while the returned file stays open); raises
+    :class:`StoreLocked` naming the other server's pid when it is taken."""
+    db_path.parent.mkdir(parents=True, exist_ok=True)
+    lock_path = db_path.with_name(db_path.name + ".lock")
+    fh = open(lock_path, "a+", encoding="utf-8")
+    try:
+        fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        fh.seek(0)
+        other = fh.read().strip() or "?"
+        fh.close()
+        raise StoreLocked(f"another thrustshape server (pid {other}) is using the job store {db_path}; one server "
+                          f"per database: stop it, or give this one another THRUSTSHAPE_DB_PATH") from None
+    fh.seek(0)
+    fh.truncate()
+    fh.write(str(os.getpid()))
+    fh.flush()
+    return fh
 
 
 class IdempotencyConflict(Exception):
@@ -112,11 +147,13 @@ def body_digest(missions: Sequence[dict[str, Any]]) -> str:
 class JobStore:
     """The batch tables in one SQLite file; see the module doc."""
 
-    def __init__(self, path: Path) -> None:
+    def __init__(self, path: Path, busy_timeout: float = 10.0) -> None:
+        """``busy_timeout`` [s]: how long a write waits for another connection's lock before failing."""
         path.parent.mkdir(parents=True, exist_ok=True)
         self.path = path
         self._lock = threading.Lock()
-        self._db = sqlite3.connect(path, check_same_thread=False, isolation_level=None, timeout=10.0)
+        self._db = sqlite3.connect(path, check_same_thread=False, isolation_level=None, timeout=busy_timeout)
+        self._identity = _identity(path)
         self._db.execute("PRAGMA journal_mode=WAL")
         self._db.execute("PRAGMA synchronous=FULL")
         self._db.execute("PRAGMA foreign_keys=ON")
@@ -124,16 +161,41 @@ class JobStore:
             for stmt in filter(str.strip, _SCHEMA.split(";")):
                 db.execute(stmt)
 
+    def check(self) -> None:
+        """Raise :class:`StoreUnavailable` unless the database file is still the one this store opened."""
+        now = _identity(self.path)
+        if now != self._identity:
+            raise StoreUnavailable(f"the job store file {self.path.name} vanished or was replaced while the server "
+                                   "ran (data directory deleted?); restart the server")
+
+    def ping(self) -> None:
+        """Health check: the file is in place and answers a read (raises :class:`StoreUnavailable`)."""
+        self.check()
+        try:
+            with self._lock:
+                self._db.execute("SELECT COUNT(*) FROM batches").fetchone()
+        except sqlite3.Error as exc:
+            raise StoreUnavailable(f"the job store does not answer: {exc}") from None
+
     @contextmanager
     def _tx(self) -> Iterator[sqlite3.Connection]:
+        """One ``BEGIN IMMEDIATE`` transaction; SQLite errors (locked past the busy timeout, disk full, I/O)
+        become :class:`StoreUnavailable` after a rollback."""
+        self.check()
         with self._lock:
-            self._db.execute("BEGIN IMMEDIATE")
+            try:
+                self._db.execute("BEGIN IMMEDIATE")
+            except sqlite3.Error as exc:
+                raise StoreUnavailable(f"the job store is not writable: {exc}") from None
             try:
                 yield self._db
-            except BaseException:
-                self._db.execute("ROLLBACK")
+                self._db.execute("COMMIT")
+            except BaseException as exc:
+                with contextlib.suppress(sqlite3.Error):
+                    self._db.execute("ROLLBACK")
+                if isinstance(exc, sqlite3.Error):
+                    raise StoreUnavailable(f"the job store write failed: {exc}") from None
                 raise
-            self._db.execute("COMMIT")
 
     def close(self) -> None:
         with self._lock:
@@ -159,6 +221,7 @@ class JobStore:
         return batch_id, True
 
     def counts(self, batch_id: str) -> BatchCounts | None:
+        self.check()
         with self._lock:
             head = self._db.execute("SELECT created_at, size FROM batches WHERE id = ?", (batch_id,)).fetchone()
             if head is None:
@@ -171,6 +234,7 @@ class JobStore:
 
     def items(self, batch_id: str) -> list[Item]:
         """A batch's items for status and result reads (``mission`` not loaded: it can be large)."""
+        self.check()
         with self._lock:
             rows = self._db.execute(
                 "SELECT batch_id, idx, name, state, attempts, NULL, result, error FROM items "
@@ -214,6 +278,14 @@ class JobStore:
         with self._tx() as db:
             cur = db.execute("UPDATE items SET state = 'queued' WHERE state = 'running'")
         return cur.rowcount
+
+
+def _identity(path: Path) -> tuple[int, int] | None:
+    try:
+        st = os.stat(path)
+    except OSError:
+        return None
+    return st.st_dev, st.st_ino
 
 
 def _item(r: tuple[Any, ...]) -> Item:

@@ -140,7 +140,7 @@ def log_suffix(filename: str | None, head: bytes) -> str:
 
 def _read_log(payload: Payload) -> Any:
     """The uploaded log (bytes in ``payload["log"]``) as an :class:`ocp.logs.Log`; errors name the column or ``log``."""
-    from ocp.logs import LogKind, ReadOptions, read_log
+    from ocp.logs import LogKind, ReadOptions, check_parquet_size, read_log
 
     data: bytes = payload["log"]
     name = re.sub(r"[^A-Za-z0-9._ -]+", "_", str(payload.get("filename") or "log"))[:120] or "log"
@@ -153,6 +153,9 @@ def _read_log(payload: Payload) -> Any:
         path = Path(tmp) / f"upload{log_suffix(name, data[:8])}"
         path.write_bytes(data)
         try:
+            if path.suffix == ".parquet":  # footer only: refuse a decompression bomb before decoding it
+                max_rows = int(payload["max_samples"])
+                check_parquet_size(path, max_rows=max_rows, max_bytes=max_rows * 8 * 64)
             log = read_log(path, payload.get("columns"), kind, options=options)
         except LogError as exc:
             if exc.field in (path.name, str(path)):
@@ -183,14 +186,42 @@ def model_check(payload: Payload) -> Payload:
     try:
         plant = load_plant(source)
     except ThrustshapeError as exc:
-        raise _in("params", exc) from None
+        raise _in_params(exc) from None
     options = dict(payload.get("options") or {})
     try:
         return _run(op, plant, log, payload, options)
-    except ThrustshapeError:
+    except ThrustshapeError as exc:
+        if exc.field.startswith("effects.") and op != "fit":  # the params' effects block, not a fit candidate
+            raise _in_params(exc) from None
         raise
     except (ArithmeticError, ValueError, RuntimeError) as exc:  # numerics on a degenerate log (e.g. constant)
-        raise SolverError("log", f"the model check failed on this log: {type(exc).__name__}: {exc}"[:500]) from None
+        raise _blame(plant, log, exc) from None
+
+
+def _in_params(exc: ThrustshapeError) -> ThrustshapeError:
+    """A parameter-mapping error under ``params`` (``effects.x.y`` -> ``params.effects.x.y``)."""
+    if exc.field.startswith("effects"):
+        return type(exc)(f"params.{exc.field}", exc.reason)
+    return _in("params", exc)
+
+
+def _blame(plant: Any, log: Any, exc: BaseException) -> ThrustshapeError:
+    """A numerical failure of the model check: ``params.effects`` when the plant has effects and the nominal
+    plant (the same constants without them) checks this log fine, else ``log``."""
+    from ocp.identify import CheckOptions, check
+    from ocp.plant import DCMotorPlant
+
+    detail = f"{type(exc).__name__}: {exc}"[:400]
+    if plant.effects:
+        try:
+            check(DCMotorPlant(plant.params), log, CheckOptions())
+        except Exception:  # the log fails without the effects too: it is the log
+            pass
+        else:
+            names = ", ".join(e.name for e in plant.effects)
+            return SolverError("params.effects", f"the model check fails with the effects of params ({names}) "
+                                                 f"and works without them: {detail}")
+    return SolverError("log", f"the model check failed on this log: {detail}")
 
 
 def _run(op: Op, plant: Any, log: Any, payload: Payload, options: dict[str, Any]) -> Payload:

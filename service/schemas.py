@@ -13,12 +13,15 @@ from typing import Annotated, Any, ClassVar, Literal
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
 
 from ocp.errors import ParameterError
-from ocp.mission import Limits, Mission
+from ocp.mission import MAX_SPAN_S, MAX_THRUST, Limits, Mission
 from ocp.params import PRESETS, load_params
 from ocp.theory import ReversalRegularity
 
-Finite = Annotated[float, Field(allow_inf_nan=False)]
-PositiveFinite = Annotated[float, Field(gt=0, allow_inf_nan=False)]
+# strict numbers: "12" and true are not numbers
+Finite = Annotated[float, Field(strict=True, allow_inf_nan=False)]
+PositiveFinite = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
+Amplitude = Annotated[float, Field(strict=True, ge=-MAX_THRUST, le=MAX_THRUST, allow_inf_nan=False)]
+Period = Annotated[float, Field(strict=True, ge=1e-3, le=1e4, allow_inf_nan=False)]
 #: a sample of a reference channel: a number, or "inf"/"-inf" where the ideal command is unbounded
 Sample = float | Literal["inf", "-inf"]
 
@@ -61,8 +64,10 @@ class MissionRequest(Mission):
 class _ParamsMixin(_Strict):
     params: str | dict[str, Any] = Field(default="paper-rig", description=f"preset ({', '.join(PRESETS)}) "
                                          "or mapping {J, B, c_tau, c_f, k_t, k_e, R, L[, units]}")
-    duration: PositiveFinite | None = Field(default=None, description="length [s]; default one period")
-    rate: PositiveFinite = Field(default=1000.0, description="sampling rate [Hz]")
+    duration: Annotated[float, Field(strict=True, gt=0, le=MAX_SPAN_S, allow_inf_nan=False)] | None = Field(
+        default=None, description=f"length [s], at most {MAX_SPAN_S:g}; default one period", examples=[2.0])
+    rate: Annotated[float, Field(strict=True, gt=0, le=1e6, allow_inf_nan=False)] = Field(
+        default=1000.0, description="sampling rate [Hz]", examples=[1000.0])
 
     @field_validator("params", mode="before")
     @classmethod
@@ -82,10 +87,12 @@ class SinRequest(_ParamsMixin):
     model_config = ConfigDict(json_schema_extra={"examples": [SIN_EXAMPLE]})
 
     kind: Literal["sin"] = "sin"
-    amplitude: Finite = Field(description="thrust amplitude A [N], non-zero")
-    period: PositiveFinite = Field(description="period T [s]")
-    q: Annotated[int, Field(ge=0, le=20, description="thrust ~ sin^(2q+1)")]
-    phase: Finite = Field(default=0.0, description="phase phi [rad]")
+    amplitude: Amplitude = Field(description=f"thrust amplitude A [N], non-zero, |A| <= {MAX_THRUST:g}",
+                                 examples=[0.5])
+    period: Period = Field(description="period T [s], 1e-3 to 1e4", examples=[2.0])
+    q: Annotated[int, Field(strict=True, ge=0, le=20, description="thrust ~ sin^(2q+1)", examples=[2])]
+    phase: Annotated[float, Field(strict=True, ge=-1e3, le=1e3, allow_inf_nan=False)] = Field(
+        default=0.0, description="phase phi [rad], |phi| <= 1000", examples=[0.0])
 
     @field_validator("amplitude")
     @classmethod
@@ -104,8 +111,9 @@ class DesignRequest(_ParamsMixin):
     kind: Literal["design"] = "design"
     limits: Limits = Limits()
     regularity: ReversalRegularity = ReversalRegularity.CONTINUOUS_VOLTAGE
-    amplitude: Finite | None = Field(default=None, description="thrust amplitude [N] (or give period)")
-    period: PositiveFinite | None = Field(default=None, description="period [s] (or give amplitude)")
+    amplitude: Amplitude | None = Field(default=None, description="thrust amplitude [N] (or give period)",
+                                        examples=[0.4])
+    period: Period | None = Field(default=None, description="period [s] (or give amplitude)")
 
     @model_validator(mode="after")
     def _one_of(self) -> DesignRequest:
@@ -281,8 +289,32 @@ class InfoPublic(_Strict):
     batch_backend: Literal["local", "dask"]
 
 
+class StorePublic(_Strict):
+    ok: bool = Field(description="the job store file is in place and answers")
+    detail: str | None = Field(default=None, description="what is wrong with it")
+
+
+class RunnerPublic(_Strict):
+    state: Literal["running", "retrying", "stopped"] = Field(description="retrying: store writes fail, outcomes "
+                                                             "are kept in memory and retried with backoff")
+    unsaved: int = Field(description="batch outcomes computed but not yet stored")
+    inflight: int = Field(description="batch items being computed")
+    last_error: str | None = Field(default=None, description="the last store error, null once a write succeeds")
+
+
+class WorkersPublic(_Strict):
+    size: int = Field(description="solver worker processes")
+    alive: int = Field(description="of which alive now (a killed one is replaced on its next task)")
+    ready: int = Field(description="of which started (imports done); the others are still starting")
+    pending: int = Field(description="requests running or waiting for a worker")
+
+
 class Health(_Strict):
-    status: Literal["ok"] = "ok"
+    status: Literal["ok", "degraded"] = "ok"
+    store: StorePublic | None = None
+    runner: RunnerPublic | None = None
+    workers: WorkersPublic | None = None
+    fallback_workers: WorkersPublic | None = Field(default=None, description="processes of the analytic fallback")
 
 
 class Problem(_Open):

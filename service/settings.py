@@ -24,10 +24,16 @@ class Settings(BaseSettings):
     port: Annotated[int, Field(ge=0, le=65535)] = 8000
     #: local solver processes (each keeps its own solver cache)
     workers: Annotated[int, Field(ge=1, le=256)] = 2
+    #: processes for the analytic fallback of /v1/references/optimize (no IPOPT; they keep the fallback
+    #: off the solver queue and out of the server process)
+    fallback_workers: Annotated[int, Field(ge=1, le=64)] = 2
     #: requests allowed to wait for a busy worker before new ones get 503 + Retry-After
     queue_size: Annotated[int, Field(ge=0, le=10_000)] = 8
-    #: SQLite job store (WAL); created with its directory on start
+    #: SQLite job store (WAL); created with its directory on start; ``<db_path>.lock`` keeps a second
+    #: server off the same database
     db_path: Path = DEFAULT_DB
+    #: how long a job-store write waits for another connection's lock before it counts as a store error [s]
+    store_busy_timeout_s: Annotated[float, Field(gt=0, le=600)] = 10.0
     #: ``tcp://HOST:PORT`` of a Dask scheduler: batch items run there instead of on local workers
     dask_address: str | None = None
     #: bearer token; when set every route except ``/healthz`` requires ``Authorization: Bearer <key>``
@@ -50,7 +56,7 @@ class Settings(BaseSettings):
     #: added to a mission's time_limit_s for building and verifying the solution [s]
     optimize_grace_s: Annotated[float, Field(ge=0, le=600)] = 5.0
     #: share of the deadline kept for the analytic fallback when the solver overruns [s]
-    fallback_reserve_s: Annotated[float, Field(gt=0, le=60)] = 1.0
+    fallback_reserve_s: Annotated[float, Field(gt=0, le=60)] = 2.0
     #: hard timeout of any other worker task (analytic, compare, model check) [s]
     task_timeout_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
     #: hard timeout of one batch item [s]; the item is retried up to ``batch_attempts`` times

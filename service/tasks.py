@@ -64,10 +64,11 @@ def optimize_mission(payload: Payload) -> Payload:
 
 
 def fallback_mission(payload: Payload) -> Payload:
-    """``{"mission": ..., "reason": ...}`` -> the analytic fallback answer (cheap, no IPOPT)."""
+    """``{"mission": ..., "reason": ...}`` -> the analytic fallback answer (cheap, no IPOPT; within the limits or
+    :class:`~ocp.errors.InfeasibleError`)."""
     from ocp.mission import Mission
 
-    analytic_fallback = importlib.import_module("ocp.optimize").analytic_fallback
+    analytic_fallback = importlib.import_module("ocp.result").analytic_fallback
     mission = Mission.model_validate(payload["mission"])
     return analytic_fallback(mission, str(payload["reason"])).to_dict()
 

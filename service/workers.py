@@ -19,8 +19,10 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import importlib
+import logging
 import multiprocessing as mp
 import signal
+import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from multiprocessing.connection import Connection
@@ -31,8 +33,14 @@ import ocp.errors as errors
 Payload = dict[str, Any]
 TaskFn = Callable[[Payload], Payload]
 Outcome = tuple[Literal["ok", "user-error", "crash"], Any]
+Phase = Literal["queue", "start-up", "run"]
 
 _STARTUP_TIMEOUT_S = 120.0
+_WARM_UP_TIMEOUT_S = 30.0
+#: what a task was waiting for when its deadline ran out
+PHASES: dict[str, str] = {"queue": "waiting for a free worker", "start-up": "waiting for a worker process to start",
+                          "run": "computing"}
+log = logging.getLogger("thrustshape.workers")
 
 
 class QueueFull(Exception):
@@ -44,18 +52,21 @@ class QueueFull(Exception):
 
 
 class TaskTimeout(Exception):
-    """A task exceeded its hard timeout; its process was killed (or, on Dask, the task abandoned)."""
+    """A task ran out of time; ``phase`` says where: waiting for a free worker (``queue``), waiting for a
+    new worker process to start (``start-up``, e.g. after a respawn) or computing (``run``: its process was
+    killed, or on Dask the task abandoned)."""
 
-    def __init__(self, timeout: float) -> None:
-        self.timeout = timeout
-        super().__init__(f"task exceeded its {timeout:g} s timeout")
+    def __init__(self, timeout: float, phase: Phase = "run") -> None:
+        self.timeout, self.phase = timeout, phase
+        super().__init__(f"the {timeout:.3g} s deadline ran out while {PHASES[phase]} ({phase})")
 
 
 class TaskFailed(Exception):
-    """A task raised an unexpected exception or its process died; ``detail`` says what happened."""
+    """A task raised an unexpected exception or its process died; ``detail`` says what happened;
+    ``startup``: the process died before the task reached it (the task is not to blame)."""
 
-    def __init__(self, detail: str) -> None:
-        self.detail = detail
+    def __init__(self, detail: str, startup: bool = False) -> None:
+        self.detail, self.startup = detail, startup
         super().__init__(detail)
 
 
@@ -118,36 +129,57 @@ class _Worker:
         child.close()
         self.conn, self._ready = parent, False
 
-    def _await_ready(self) -> None:
+    @property
+    def ready(self) -> bool:
+        return self._ready
+
+    def _await_ready(self, timeout: float = _STARTUP_TIMEOUT_S) -> None:
+        """Wait up to ``timeout`` [s] for a (re)spawned process; a process that is merely slow keeps starting
+        (:class:`TaskTimeout` ``start-up``), one that died or never starts is replaced."""
         if self._ready:
             return
-        if not self.conn.poll(_STARTUP_TIMEOUT_S):
+        if not self.conn.poll(min(timeout, _STARTUP_TIMEOUT_S)):
+            if timeout < _STARTUP_TIMEOUT_S and self.proc.is_alive():
+                raise TaskTimeout(timeout, "start-up")
+            log.error("worker %s did not start within %g s; respawning", self.proc.pid, _STARTUP_TIMEOUT_S)
             self.restart()
-            raise TaskFailed("worker process did not start")
+            raise TaskFailed("worker process did not start", startup=True)
         try:
             self.conn.recv()
-        except EOFError:
+        except (EOFError, OSError):
+            log.error("worker %s died while starting (exit code %s); respawning", self.proc.pid, self.proc.exitcode)
             self.restart()
-            raise TaskFailed("worker process died while starting") from None
+            raise TaskFailed("worker process died while starting", startup=True) from None
         self._ready = True
 
     def call(self, fn: TaskFn, payload: Payload, timeout: float) -> Outcome:
-        """Blocking: run one task, kill + respawn the process on timeout or death."""
-        self._await_ready()
+        """Blocking: run one task within ``timeout`` [s] (start-up of a respawned process included); kill +
+        respawn the process on timeout or death."""
+        start = time.monotonic()
+        self._await_ready(timeout)
+        budget = timeout - (time.monotonic() - start)
+        if budget <= 0:
+            raise TaskTimeout(timeout, "start-up")
         try:
             self.conn.send((fn, payload))
-            if not self.conn.poll(timeout):
+            if not self.conn.poll(budget):
+                log.warning("worker %s: %s exceeded its %.3g s budget; killing and respawning", self.proc.pid,
+                            getattr(fn, "__name__", fn), budget)
                 self.restart()
-                raise TaskTimeout(timeout)
+                raise TaskTimeout(timeout, "run")
             return self.conn.recv()
         except (EOFError, OSError, BrokenPipeError):
             code = self.proc.exitcode
+            log.error("worker %s died during %s (exit code %s); respawning", self.proc.pid,
+                      getattr(fn, "__name__", fn), code)
             self.restart()
             raise TaskFailed(f"worker process died (exit code {code})") from None
 
     def restart(self) -> None:
+        old = self.proc.pid
         self.kill()
         self._spawn()
+        log.info("worker %s replaced by %s", old, self.proc.pid)
 
     def kill(self) -> None:
         if self.proc.is_alive():
@@ -180,6 +212,7 @@ class WorkerPool:
         for w in self._workers:
             self._idle.put_nowait(w)
         self._pending = 0
+        self._urgent = 0  # deadline-bound calls waiting for a worker (background calls yield to them)
 
     @property
     def pending(self) -> int:
@@ -187,27 +220,54 @@ class WorkerPool:
         return self._pending
 
     async def run(self, fn: TaskFn, payload: Payload, timeout: float, *, wait: bool = False,
-                  deadline: float | None = None) -> Payload:
+                  deadline: float | None = None, min_run: float = 0.0) -> Payload:
         """Run ``fn(payload)`` in a worker with a hard ``timeout`` [s].
 
         ``wait=True`` waits for a free worker instead of raising :class:`QueueFull`; ``deadline`` (event
-        loop time) also counts the wait for a worker: the task gets what is left of it.
+        loop time; default ``timeout`` from now unless ``wait``) also counts the wait for a worker and the
+        start-up of a respawned one: the task gets what is left of it. When less than ``min_run`` [s] is left
+        once a worker is free, the task is not started (:class:`TaskTimeout` ``queue``): starting it would only
+        get its process killed and respawned, which costs the next calls a start-up.
         """
         if not wait and self._pending >= self.capacity:
             raise QueueFull(self.retry_after)
         self._pending += 1
+        loop = asyncio.get_running_loop()
+        if deadline is None and not wait:
+            deadline = loop.time() + timeout
         try:
-            worker = await self._idle.get()
-            loop = asyncio.get_running_loop()
-            if deadline is not None:
-                timeout = min(timeout, deadline - loop.time())
-                if timeout <= 0:
+            if wait:
+                worker = await self._yielding_get()
+            elif deadline is None:
+                worker = await self._idle.get()
+            else:
+                self._urgent += 1
+                try:
+                    worker = await asyncio.wait_for(self._idle.get(), max(deadline - loop.time(), 0.0))
+                except TimeoutError:
+                    log.warning("%s: deadline ran out after waiting %.3g s for a free worker",
+                                getattr(fn, "__name__", fn), timeout)
+                    raise TaskTimeout(timeout, "queue") from None
+                finally:
+                    self._urgent -= 1
+                timeout = deadline - loop.time()
+                if timeout <= max(min_run, 0.0):
                     self._idle.put_nowait(worker)
-                    raise TaskTimeout(0.0)
+                    raise TaskTimeout(max(timeout, 0.0), "queue")
             fut = loop.run_in_executor(self._threads, self._call_and_release, loop, worker, fn, payload, timeout)
             return unwrap(await asyncio.shield(fut))
         finally:
             self._pending -= 1
+
+    async def _yielding_get(self) -> _Worker:
+        """A free worker for a background call (``wait=True``, e.g. a batch item), after every request with a
+        deadline that is waiting for one: a batch never makes an interactive request miss its deadline."""
+        while True:
+            worker = await self._idle.get()
+            if not self._urgent:
+                return worker
+            self._idle.put_nowait(worker)  # a deadline-bound getter waits behind this one: hand it over
+            await asyncio.sleep(0.02)
 
     def _call_and_release(self, loop: asyncio.AbstractEventLoop, worker: _Worker, fn: TaskFn, payload: Payload,
                           timeout: float) -> Outcome:
@@ -217,8 +277,32 @@ class WorkerPool:
             if not loop.is_closed():
                 loop.call_soon_threadsafe(self._idle.put_nowait, worker)
 
+    async def warm(self, task: TaskFn | None = None, payload: Payload | None = None) -> None:
+        """Wait for every process to finish starting (one at a time, each taken off the idle queue meanwhile,
+        so a request never shares a worker with its start-up); with ``task``, run it once on each with
+        ``payload`` so its first real call finds its imports and caches ready."""
+        loop = asyncio.get_running_loop()
+        for _ in range(self.size):
+            worker = await self._idle.get()
+            try:
+                await loop.run_in_executor(self._threads, worker._await_ready)
+                if task is not None:
+                    await loop.run_in_executor(self._threads, worker.call, task, payload or {}, _WARM_UP_TIMEOUT_S)
+            except (TaskFailed, TaskTimeout) as exc:
+                log.error("worker did not start: %s", exc)
+            finally:
+                self._idle.put_nowait(worker)
+
+    def ready(self) -> int:
+        """Worker processes that finished starting (imports done, answering)."""
+        return sum(1 for w in self._workers if w.ready)
+
     def pids(self) -> list[int]:
         return [w.proc.pid for w in self._workers]
+
+    def alive(self) -> int:
+        """Worker processes currently alive (a killed one counts until it is replaced)."""
+        return sum(1 for w in self._workers if w.proc.is_alive())
 
     def close(self) -> None:
         for w in self._workers:
@@ -257,6 +341,7 @@ class DaskRunner:
             outcome = await asyncio.wait_for(fut, timeout)
         except TimeoutError:
             await self._client.cancel(fut)
+            log.warning("dask task %s abandoned after %g s", getattr(fn, "__name__", fn), timeout)
             raise TaskTimeout(timeout) from None
         return unwrap(outcome)
 

@@ -33,7 +33,9 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
 
 
 def test_healthz_and_info(http: httpx.Client) -> None:
-    assert http.get("/healthz").json() == {"status": "ok"}
+    health = http.get("/healthz").json()
+    assert health["status"] == "ok" and health["store"] == {"ok": True, "detail": None}
+    assert health["runner"]["state"] == "running" and health["workers"]["alive"] == health["workers"]["size"] == 1
     info = http.get("/v1/info").json()
     assert info["presets"] == ["paper-rig", "paper-rig-revs"]
     assert "continuous-voltage" in info["regularities"]

@@ -8,8 +8,10 @@ from __future__ import annotations
 import io
 import json
 from collections.abc import Iterator
+from pathlib import Path
 
 import httpx
+import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
@@ -176,4 +178,32 @@ def test_size_limits(http: httpx.Client) -> None:
     rows = "\n".join(f"{k * 1e-3:.3f},1,0,1,0" for k in range(LOG_ROWS_LIMIT + 1))
     p = problem(post(http, CHECK, ("long.csv", f"t,voltage,current,omega,thrust\n{rows}\n".encode())), 422)
     assert p["field"] == "log" and str(LOG_ROWS_LIMIT) in str(p["reason"])
-    assert http.get("/healthz").json() == {"status": "ok"}
+    assert http.get("/healthz").json()["status"] == "ok"
+
+
+def _children(pid: int) -> list[int]:
+    return [int(c) for task in Path(f"/proc/{pid}/task").iterdir()
+            for c in (task / "children").read_text().split()]
+
+
+def _peak_rss_mb(pid: int) -> float:
+    """Peak resident memory [MB] of a process so far (VmHWM from /proc)."""
+    for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) / 1024.0
+    raise AssertionError("no VmHWM")
+
+
+def test_parquet_bomb_is_refused_from_its_footer(http: httpx.Client, server: Server) -> None:
+    """Issue #12, finding 4: 69 KB of Parquet announcing 3 M rows (120 MB decoded) is refused from its metadata,
+    before decoding: the reason quotes the announced row count and no worker's peak memory grows by 50 MB."""
+    zeros = np.zeros(3_000_000)
+    buf = io.BytesIO()
+    pq.write_table(pa.table({c: zeros for c in ("t", "voltage", "current", "omega", "thrust")}), buf,
+                   compression="zstd")
+    assert len(buf.getvalue()) < UPLOAD_LIMIT
+    workers = _children(server.proc.pid)
+    before = {w: _peak_rss_mb(w) for w in workers}
+    p = problem(post(http, CHECK, ("bomb.parquet", buf.getvalue())), 422)
+    assert p["field"] == "log" and "announces 3000000 rows" in p["reason"], p
+    assert all(_peak_rss_mb(w) - before[w] < 50.0 for w in workers if Path(f"/proc/{w}").exists())

@@ -66,11 +66,14 @@ def slow_item(mission: dict[str, Any]) -> dict[str, Any]:
 
 
 def task_set(kind: str) -> TaskSet:
-    """Task sets the factory can serve: ``real`` (installed backends), ``slow-batch``, ``hang-optimize``."""
+    """Task sets the factory can serve: ``real`` (installed backends), ``slow-batch``, ``hang-optimize``,
+    ``hang-both`` (solver and fallback never return)."""
     real = available_tasks()
     if kind == "slow-batch":
         return TaskSet(analytic=analytic_reference, optimize=real.optimize, fallback=real.fallback,
                        compare=real.compare, batch_item=slow_item, model_check=real.model_check)
+    if kind == "hang-both":
+        return TaskSet(analytic=analytic_reference, optimize=hang, fallback=hang, batch_item=slow_item)
     if kind == "hang-optimize":
         return TaskSet(analytic=analytic_reference, optimize=hang, fallback=real.fallback, batch_item=slow_item)
     return real
@@ -112,8 +115,9 @@ class Server:
 
 
 def start_server(tmp: Path, env: dict[str, str], *, port: int | None = None, factory: bool = True,
-                 timeout: float = 90.0) -> Server:
-    """A real uvicorn server on 127.0.0.1 (``thrustshape serve`` when ``factory`` is False)."""
+                 timeout: float = 90.0, warm: bool = False) -> Server:
+    """A real uvicorn server on 127.0.0.1 (``thrustshape serve`` when ``factory`` is False); ``warm``: also
+    wait until /healthz says every worker process has started."""
     port = port or free_port()
     full_env = {**os.environ, "THRUSTSHAPE_WORKERS": "1", **env}
     log = tmp / f"server-{port}-{time.time_ns()}.log"
@@ -130,7 +134,10 @@ def start_server(tmp: Path, env: dict[str, str], *, port: int | None = None, fac
         if proc.poll() is not None:
             raise RuntimeError(f"server exited with {proc.returncode}:\n{log.read_text()}")
         with contextlib.suppress(httpx.TransportError):
-            if httpx.get(url + "/healthz", timeout=1.0).status_code == 200:
+            r = httpx.get(url + "/healthz", timeout=1.0)
+            if r.status_code == 200 and (not warm or all(
+                    w is None or w["ready"] == w["size"] for w in (r.json().get("workers"),
+                                                                  r.json().get("fallback_workers")))):
                 return Server(proc, url, log)
         time.sleep(0.1)
     proc.kill()

@@ -70,7 +70,7 @@ def hanging(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     tmp = tmp_path_factory.mktemp("hang")
     srv = start_server(tmp, {"TS_TEST_TASKS": "hang-optimize", "THRUSTSHAPE_DB_PATH": str(tmp / "jobs.db"),
                              "THRUSTSHAPE_OPTIMIZE_DEADLINE_S": "3", "THRUSTSHAPE_FALLBACK_RESERVE_S": "1",
-                             "THRUSTSHAPE_QUEUE_SIZE": "0", "THRUSTSHAPE_RETRY_AFTER_S": "2"})
+                             "THRUSTSHAPE_QUEUE_SIZE": "0", "THRUSTSHAPE_RETRY_AFTER_S": "2"}, warm=True)
     yield srv
     srv.stop()
 

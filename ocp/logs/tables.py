@@ -24,10 +24,29 @@ def _is_number(type_name: str) -> bool:
     return type_name.startswith(("int", "uint", "float", "double", "halffloat"))
 
 
-def _read_parquet(p: Path) -> dict[str, np.ndarray]:
-    """Numeric columns of a Parquet file."""
+#: what a Parquet log may announce in its footer before any of it is decoded (a small file can expand to GBs)
+PARQUET_LIMITS = {"rows": 10_000_000, "columns": 1_000, "bytes": 1 << 30}
+
+
+def check_parquet_size(path: str | Path, max_rows: int = PARQUET_LIMITS["rows"],
+                       max_columns: int = PARQUET_LIMITS["columns"], max_bytes: int = PARQUET_LIMITS["bytes"]) -> None:
+    """Refuse (:class:`LogError` ``log``) a Parquet file whose metadata announces more than ``max_rows`` rows,
+    ``max_columns`` columns or ``max_bytes`` uncompressed bytes: only the footer is read, nothing decoded."""
     import pyarrow.parquet as pq
 
+    meta = pq.ParquetFile(path).metadata
+    size = sum(meta.row_group(i).total_byte_size for i in range(meta.num_row_groups))
+    for what, n, top in (("rows", meta.num_rows, max_rows), ("columns", meta.num_columns, max_columns),
+                         ("uncompressed bytes", size, max_bytes)):
+        if n > top:
+            raise LogError("log", f"the Parquet file announces {n} {what}; at most {top} accepted")
+
+
+def _read_parquet(p: Path) -> dict[str, np.ndarray]:
+    """Numeric columns of a Parquet file (its footer checked first: :func:`check_parquet_size`)."""
+    import pyarrow.parquet as pq
+
+    check_parquet_size(p)
     tab = pq.read_table(p)
     return {str(c): np.asarray(tab.column(c).to_numpy(zero_copy_only=False), dtype=float)
             for c in tab.column_names if tab.schema.field(c).type.num_fields == 0

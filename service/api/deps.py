@@ -12,14 +12,18 @@ from fastapi import Depends, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from starlette.exceptions import HTTPException
 
+from ocp.crossings import sign_change_times
 from ocp.errors import MissionError
-from ocp.mission import Mission, segment_samples
+from ocp.mission import OUTPUT_RATE, Mission, segment_samples
 from service.api.logging import TaskLog
 from service.batches import BatchRunner
 from service.jobs import JobStore
 from service.settings import Settings
 from service.tasks import TaskSet
 from service.workers import WorkerPool
+
+#: fewest collocation intervals the optimiser gives one phase (ocp.optimize.MIN_INTERVALS_PER_PHASE, lower one)
+MIN_INTERVALS_PER_PHASE = 8
 
 _bearer = HTTPBearer(auto_error=False, description="API key from THRUSTSHAPE_API_KEY (only when the server sets one)")
 
@@ -64,7 +68,8 @@ async def require_api_key(settings: SettingsDep,
 
 
 def check_mission_limits(mission: Mission, settings: Settings, prefix: str = "") -> None:
-    """Server caps beyond the core's: profile samples and collocation intervals (422 naming the field)."""
+    """Server caps beyond the core's: profile samples, returned samples and collocation intervals (422 naming
+    the field), checked before any work starts."""
     n = len(mission.profile.t) if mission.profile is not None else 0
     if n > settings.max_profile_samples:
         raise MissionError(f"{prefix}profile.t",
@@ -74,6 +79,18 @@ def check_mission_limits(mission: Mission, settings: Settings, prefix: str = "")
         if n > settings.max_profile_samples:
             raise MissionError(f"{prefix}segments", f"sample to {n} points; this server accepts at most "
                                                     f"{settings.max_profile_samples}")
+    out = mission.span() * mission.retiming.max_stretch * OUTPUT_RATE + 1.0  # returned samples, at most
+    if out > settings.max_reference_samples:
+        raise MissionError(f"{prefix}retiming.max_stretch", f"a {mission.span():.4g} s profile stretched up to "
+                                                            f"{mission.retiming.max_stretch:g}x gives {out:.4g} "
+                                                            f"samples; this server returns at most "
+                                                            f"{settings.max_reference_samples}")
+    phases = 1 + len(sign_change_times(*mission.desired()))  # at most max_profile_samples: cheap
+    if MIN_INTERVALS_PER_PHASE * phases > settings.max_intervals:
+        where = "profile.thrust" if mission.profile is not None else "segments"
+        raise MissionError(f"{prefix}{where}", f"{phases - 1} reversals need at least {MIN_INTERVALS_PER_PHASE} "
+                                               f"collocation intervals each ({MIN_INTERVALS_PER_PHASE * phases}); "
+                                               f"this server accepts at most {settings.max_intervals}")
     if mission.collocation.intervals > settings.max_intervals:
         raise MissionError(f"{prefix}collocation.intervals", f"{mission.collocation.intervals} intervals; this "
                                                              f"server accepts at most {settings.max_intervals}")

@@ -9,8 +9,8 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException
 
-from ocp.errors import SEGMENT_TAGS, SolverError, ThrustshapeError, validation_location
-from service.jobs import IdempotencyConflict
+from ocp.errors import SEGMENT_TAGS, InfeasibleError, SolverError, ThrustshapeError, validation_location
+from service.jobs import IdempotencyConflict, StoreUnavailable
 from service.workers import QueueFull, TaskFailed, TaskTimeout
 
 PROBLEM = "application/problem+json"
@@ -77,9 +77,12 @@ async def _validation(request: Request, exc: Exception) -> JSONResponse:
 async def _core(request: Request, exc: Exception) -> JSONResponse:
     if not isinstance(exc, ThrustshapeError):
         raise exc
-    title = "Solver failed" if isinstance(exc, SolverError) else "Invalid input"
+    title = ("Solver failed" if isinstance(exc, SolverError) else
+             "Infeasible within the limits" if isinstance(exc, InfeasibleError) else "Invalid input")
     form = getattr(exc, "form_field", None)  # model-check uploads: the form input the field belongs to
     extra: dict[str, Any] = {"form_field": form} if isinstance(form, str) else {}
+    if isinstance(exc, InfeasibleError):
+        extra["code"] = "infeasible"
     return problem(422, title, str(exc), exc.field, exc.reason, error_type=type(exc).__name__, **extra)
 
 
@@ -102,6 +105,10 @@ async def _queue_full(request: Request, exc: Exception) -> JSONResponse:
     if not isinstance(exc, QueueFull):
         raise exc
     return problem(503, "Server busy", str(exc), headers={"Retry-After": str(exc.retry_after)})
+
+
+async def _store(request: Request, exc: Exception) -> JSONResponse:
+    return problem(503, "Store unavailable", str(exc), headers={"Retry-After": "5"})
 
 
 async def _timeout(request: Request, exc: Exception) -> JSONResponse:
@@ -132,5 +139,6 @@ def install(app: FastAPI) -> None:
     app.add_exception_handler(TooLarge, _too_large)
     app.add_exception_handler(QueueFull, _queue_full)
     app.add_exception_handler(TaskTimeout, _timeout)
+    app.add_exception_handler(StoreUnavailable, _store)
     app.add_exception_handler(TaskFailed, _failed)
     app.add_exception_handler(IdempotencyConflict, _conflict)

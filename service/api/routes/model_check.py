@@ -73,12 +73,15 @@ FORM_FIELDS = ("log", "params", "effects", "columns", *READ_FIELDS)
 
 @contextmanager
 def _form_field() -> Iterator[None]:
-    """Tag errors with ``form_field``, the form input they belong to: ``field`` itself, or ``log`` when
-    ``field`` names a column of the log (the problem+json then carries both)."""
+    """Tag errors with ``form_field``, the form input they belong to: the form field ``field`` starts with
+    (``params.effects.coulomb_friction.omega_eps`` -> ``params``), or ``log`` when ``field`` names a column
+    of the log (the problem+json then carries both)."""
     try:
         yield
     except ThrustshapeError as exc:
-        exc.form_field = exc.field if exc.field in FORM_FIELDS else "log"  # type: ignore[attr-defined]
+        head = exc.field.split(".", 1)[0]  # "params.effects.stribeck.omega_s" belongs to the params input
+        form = head if head in FORM_FIELDS else "log"
+        exc.form_field = form  # type: ignore[attr-defined]
         raise
 
 

@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import asyncio
-from typing import Any
+from typing import Any, cast
 
 from fastapi import APIRouter, Request
 
 from ocp.errors import MissionError
 from service.api.deps import PoolDep, SettingsDep, TasksDep, check_mission_limits
+from service.api.logging import TaskLog
 from service.api.problems import error_responses
 from service.schemas import AnalyticRequest, DesignRequest, MissionRequest, OptimizePublic, ReferencePublic
-from service.workers import TaskFailed, TaskTimeout, execute, unwrap
+from service.workers import PHASES, TaskFailed, TaskTimeout, WorkerPool
 
 _ERRORS = error_responses(401, 413, 422, 503, 504)
 
@@ -34,13 +35,29 @@ async def analytic(req: AnalyticRequest, settings: SettingsDep, pool: PoolDep, t
     return await pool.run(tasks.analytic, payload, settings.task_timeout_s)
 
 
+class DeadlineExceeded(TaskTimeout):
+    """Neither the solver nor the fallback answered within the request's deadline (504); ``detail`` says
+    which part ran out of time where."""
+
+    def __init__(self, total: float, detail: str) -> None:
+        super().__init__(total)
+        self.args = (f"the {total:.3g} s deadline ran out: {detail}",)
+
+
+_SOLVER_OUT = {"queue": "no solver worker was free within {:.3g} s (queue)",
+               "start-up": "the solver worker process was still starting after {:.3g} s (start-up)",
+               "run": "the solver did not finish within {:.3g} s (run)"}
+
+
 @optimize_router.post("/optimize", response_model=OptimizePublic, responses=_ERRORS,
                       summary="Optimal reference for a mission, or the analytic fallback when the deadline is near")
 async def optimize(mission: MissionRequest, request: Request, settings: SettingsDep, pool: PoolDep,
                    tasks: TasksDep) -> Any:
-    """The solver gets the deadline ``min(optimize_deadline_s, time_limit_s + optimize_grace_s)`` minus
-    ``fallback_reserve_s``; if it overruns (its process is killed) or its process dies, the answer is
-    the analytic fallback with ``source = "analytic-fallback"`` and the ``reason``."""
+    """One deadline ``min(optimize_deadline_s, time_limit_s + optimize_grace_s)`` covers everything: the wait
+    for a solver worker, its start-up, the solve, then the analytic fallback in its own worker process. The
+    solver part ends ``fallback_reserve_s`` before the deadline; if it runs out (its process is killed) or its
+    process dies, the answer is the fallback with ``source = "analytic-fallback"`` and a ``reason`` that says
+    which part ran out. A mission nothing within the limits reproduces is a 422 ``InfeasibleError``."""
     check_mission_limits(mission, settings)
     if tasks.optimize is None or tasks.fallback is None:  # routes are only registered with both
         raise MissionError("route", "optimisation is not available on this server")
@@ -50,15 +67,23 @@ async def optimize(mission: MissionRequest, request: Request, settings: Settings
     solve_budget = max(total - settings.fallback_reserve_s, 0.0)
     payload = mission.model_dump(mode="json")
     try:
-        return await pool.run(tasks.optimize, payload, solve_budget, deadline=start + solve_budget)
-    except TaskTimeout:
-        reason = f"deadline: the solver did not finish within {solve_budget:.3g} s"
+        return await pool.run(tasks.optimize, payload, solve_budget, deadline=start + solve_budget,
+                              min_run=min(1.0, 0.5 * solve_budget))
+    except TaskTimeout as exc:
+        reason = "deadline: " + _SOLVER_OUT[exc.phase].format(solve_budget)
     except TaskFailed as exc:
         reason = f"solver process failed: {exc.detail}"
-    remaining = max(start + total - loop.time(), settings.fallback_reserve_s)
-    fut = loop.run_in_executor(request.app.state.fallback_threads, execute, tasks.fallback,
-                               {"mission": payload, "reason": reason})
-    try:
-        return unwrap(await asyncio.wait_for(asyncio.shield(fut), remaining))
-    except TimeoutError:
-        raise TaskTimeout(total) from None
+    fallbacks = cast(WorkerPool, TaskLog(request.app.state.fallback_pool, tasks))
+    detail = ""
+    for _ in range(2):  # a fallback process that dies (killed, out of memory) gets one more try
+        try:
+            return await fallbacks.run(tasks.fallback, {"mission": payload, "reason": reason}, total,
+                                       deadline=start + total)
+        except TaskTimeout as exc:
+            raise DeadlineExceeded(total, f"{reason}; then the fallback ran out while "
+                                          f"{PHASES[exc.phase]} ({exc.phase})") from None
+        except TaskFailed as exc:
+            detail = exc.detail
+            if loop.time() >= start + total:
+                break
+    raise TaskFailed(f"{reason}; then the fallback process failed twice: {detail}")
