@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import contextvars
 import importlib
 import logging
 import multiprocessing as mp
@@ -254,7 +255,9 @@ class WorkerPool:
                 if timeout <= max(min_run, 0.0):
                     self._idle.put_nowait(worker)
                     raise TaskTimeout(max(timeout, 0.0), "queue")
-            fut = loop.run_in_executor(self._threads, self._call_and_release, loop, worker, fn, payload, timeout)
+            # the call's thread runs in this request's context: its kill/respawn lines carry the request id
+            fut = loop.run_in_executor(self._threads, contextvars.copy_context().run, self._call_and_release, loop,
+                                       worker, fn, payload, timeout)
             return unwrap(await asyncio.shield(fut))
         finally:
             self._pending -= 1
