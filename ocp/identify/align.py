@@ -71,18 +71,27 @@ def shifted(y: np.ndarray, lag: float) -> np.ndarray:
     return np.interp(k - lag, k, y)
 
 
-def cutoff_hz(log: Log) -> float:
-    """Low-pass used on every channel before derivatives [Hz]: 15 % of the sample rate, at most 400 Hz."""
-    return min(0.15 / log.dt, 400.0)
+def cutoff_hz(log: Log, tau_m: float) -> float:
+    """Low-pass used on every channel before derivatives [Hz]: ``4/tau_m`` (about 25 times the mechanical
+    bandwidth, ``tau_m = J R / (k_t k_e)`` [s] nominal), within 2 Hz .. 15 % of the sample rate."""
+    return float(np.clip(4.0 / tau_m, 2.0, min(0.15 / log.dt, 400.0)))
 
 
-def _residual(target: np.ndarray, cols: np.ndarray, v: np.ndarray) -> float:
-    """RMS of the least-squares fit of ``target`` (M,) by ``cols`` (M, P), the command ``v`` (M,) and a
-    dead-band term of it."""
-    a = np.column_stack([cols, v, np.tanh(v / (0.05 * np.std(v) + 1e-12))])
-    x, *_ = np.linalg.lstsq(a, target, rcond=None)
-    r = target - a @ x
-    return float(np.sqrt(np.mean(r * r)))
+def _residual(target: np.ndarray, gram: np.ndarray, cross: np.ndarray, cols: np.ndarray, v: np.ndarray) -> float:
+    """RMS of the least-squares fit of ``target`` (M,) by ``cols`` (M, P) (Gram ``gram``, ``cross`` = cols' target),
+    the command ``v`` (M,) and a dead-band term of it; normal equations (few columns, many rows)."""
+    extra = np.column_stack([v, np.tanh(v / (0.05 * np.std(v) + 1e-12))])
+    p = cols.shape[1]
+    g = np.empty((p + 2, p + 2))
+    g[:p, :p] = gram
+    g[:p, p:] = np.einsum("mp,mq->pq", cols, extra)
+    g[p:, :p] = g[:p, p:].T
+    g[p:, p:] = np.einsum("mp,mq->pq", extra, extra)
+    h = np.concatenate([cross, np.einsum("mq,m->q", extra, target)])
+    d = np.sqrt(np.maximum(np.diag(g), 1e-300))
+    x = np.linalg.lstsq(g / np.outer(d, d), h / d, rcond=1e-12)[0] / d
+    ss = float(target @ target - 2 * h @ x + x @ g @ x)
+    return math.sqrt(max(ss, 0.0) / target.size)
 
 
 def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
@@ -99,7 +108,8 @@ def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
     cols = np.column_stack([i[k], 0.5 * (w[k] + w[k + 1]), np.tanh(ibar / (0.05 * np.std(i) + 1e-12)),
                             np.ones(k.size)])
     lags = np.arange(0.0, MAX_LAG + 1e-9, LAG_STEP)
-    res = np.array([_residual(i[k + 1], cols, shifted(v, lag)[k]) for lag in lags])
+    gram, cross = np.einsum("mp,mq->pq", cols, cols), np.einsum("mp,m->p", cols, i[k + 1])
+    res = np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k]) for lag in lags])
     j = int(np.argmin(res))
     lag = float(lags[j])
     if 0 < j < lags.size - 1:  # parabola through the neighbours

@@ -47,8 +47,8 @@ class DiagnoseOptions(BaseModel):
 
     segment_s: float = Field(default=0.5, gt=0)
     holdout_every: int = Field(default=3, ge=2)
-    min_improvement: float = Field(default=0.05, gt=0, lt=1)  # held-out score must fall by this fraction
-    noise_floor: float = Field(default=1.1, gt=0)  # [noise units] a model this close to the noise is done
+    min_improvement: float = Field(default=0.12, gt=0, lt=1)  # held-out score must fall by this fraction
+    noise_floor: float = Field(default=1.15, gt=0)  # [noise units] a model this close to the noise is done
     max_effects: int = Field(default=3, ge=1, le=10)  # at most this many items in the verdict
     include_params: bool = True  # constants may be named beyond the tolerance (else: calibration only)
     candidates: tuple[str, ...] | None = None  # None: the whole catalogue (+ corrections)
@@ -204,7 +204,9 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     align = estimate(log, opt.max_logging_skew + own_delay / log.dt if log.kind is LogKind.TIME_SERIES else 0.0)
     delay = align.seconds - own_delay if align.delay and "input_delay" in _allowed(opt) else None
     work = log if delay is not None else realign(log, align.samples - own_delay / log.dt)
-    sp = split(work, opt.segment_s, opt.holdout_every)
+    seg = min(opt.segment_s, work.n * work.dt / (3 * opt.holdout_every)) if work.kind is LogKind.TIME_SERIES \
+        else opt.segment_s  # short logs: shorter segments, so that some are held out
+    sp = split(work, seg, opt.holdout_every)
     design = build(plant.params, work, sp.train, sp.test, effects)
     if progress is not None:
         progress(0.2)
@@ -212,7 +214,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
                  opt.max_effects - (delay is not None), opt.ambiguity_margin,
                  None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
     noise = noise_levels(work)
-    base = score(plant, work, sp.test, noise, opt.segment_s)
+    base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:
         verdict.append("input_delay")
@@ -222,7 +224,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         before = base
         heldout: dict[str, float] = {}
         if step.adopted is not None:
-            base = score(plant_of(plant, design, step.tried[0][1], delay), work, sp.test, noise, opt.segment_s)
+            base = score(plant_of(plant, design, step.tried[0][1], delay), work, sp.test, noise, seg)
             heldout = base.rms
         entries = [_entry(n, f, step.before, n == step.adopted, plant, design, heldout if n == step.adopted else {})
                    for n, f in step.tried]

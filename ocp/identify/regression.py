@@ -40,7 +40,7 @@ EQS = ("mechanical", "electrical", "thrust")
 CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 #: effects found by regression (input_delay is found by the alignment)
 REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")
-GRID = 16
+GRID = 12
 MAX_PERIODS = 64
 
 
@@ -80,6 +80,7 @@ class Design:
     sigma: np.ndarray
     periods: int = 0
     spectrum: list[float] = field(default_factory=list)
+    unresolved: dict[str, str] = field(default_factory=dict)
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
@@ -106,12 +107,14 @@ class Signals:
     dt: float
 
 
-def signals(log: Log) -> Signals:
+def signals(log: Log, p: MotorParams) -> Signals:
     if log.kind is LogKind.STEADY_STATE:
         w, i = log.omega, log.current
         return Signals(w, w, i, i, w, i, log.voltage, log.thrust, log.theta, log.t, 0.0)
-    dt, fc = log.dt, cutoff_hz(log)
-    w, i, v, f = (smooth(getattr(log, ch), dt, fc) for ch in ("omega", "current", "voltage", "thrust"))
+    dt, fc = log.dt, cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
+    i, v, f = (smooth(getattr(log, ch), dt, fc) for ch in ("current", "voltage", "thrust"))
+    # a logged angle gives the speed without the lag of a backward-differenced or filtered speed column
+    w = smooth(np.gradient(log.theta, dt) if log.theta is not None else log.omega, dt, fc)
     theta = log.theta if log.theta is not None else np.concatenate(
         [[0.0], np.cumsum(0.5 * (log.omega[1:] + log.omega[:-1]) * dt)])
     return Signals(w[:-1], w[1:], i[:-1], i[1:], 0.5 * (w[:-1] + w[1:]), 0.5 * (i[:-1] + i[1:]), v[:-1], f[:-1],
@@ -218,12 +221,12 @@ def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> n
 
 def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects: tuple[str, ...]) -> Design:
     """Gram matrices (module doc) of the constants and ``effects`` on the ``train``/``test`` masks (N,)."""
-    s = signals(log)
+    s = signals(log, p)
     t = targets(p, s)
     rows = s.w.size
     edge = np.zeros(rows, dtype=bool)
-    if log.kind is LogKind.TIME_SERIES:
-        m = min(10, rows // 10)
+    if log.kind is LogKind.TIME_SERIES:  # the low-pass's start-up and run-out transients
+        m = min(int(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt))), rows // 6)
         edge[:m] = edge[rows - m:] = True
     train, test = train[:rows] & ~edge, test[:rows] & ~edge
     cols: list[tuple[Column, np.ndarray]] = [(Column(c, c), a) for c, a in constant_columns(p, s).items()]
@@ -250,7 +253,18 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
     return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
-                  sigma, periods, [float(v) for v in spectrum])
+                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log))
+
+
+def unresolved(p: MotorParams, log: Log) -> dict[str, str]:
+    """Constants this log cannot resolve from logger artefacts, with the reason: the inductance when the
+    electrical time constant L/R is under two samples (a current filter or a fraction of a sample of
+    command timing then looks the same)."""
+    out = {}
+    if log.kind is LogKind.STEADY_STATE or p.L / p.R < 2 * log.dt:
+        out["L"] = (f"L/R = {1e3 * p.L / p.R:.3g} ms is under two samples ({1e3 * log.dt:.3g} ms): the log cannot tell "
+                    "an inductance error from current filtering or sub-sample command timing")
+    return out
 
 
 def _mid(cols: list[tuple[Column, np.ndarray]], item: str) -> float:

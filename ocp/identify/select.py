@@ -69,8 +69,9 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float) -> F
         r = np.linalg.cholesky(gs).T
     except np.linalg.LinAlgError:
         r = np.linalg.cholesky(gs + 1e-6 * np.eye(idx.size)).T
-    rhs = np.linalg.solve(r.T, h / d)
-    y = lsq_linear(r, rhs, bounds=(lo * d, hi * d), method="bvls").x
+    y = np.linalg.solve(gs, h / d)  # unconstrained first; bounded only when a bound binds
+    if np.any(y < lo * d) or np.any(y > hi * d):
+        y = lsq_linear(r, np.linalg.solve(r.T, h / d), bounds=(lo * d, hi * d), method="bvls").x
     x = y / d
     cost = float(design.c_train.sum() - 2 * h @ x + x @ g @ x)
     ms = np.array([(design.c_test[e] - 2 * design.h_test[e][idx] @ x + x @ design.g_test[e][np.ix_(idx, idx)] @ x)
@@ -122,7 +123,9 @@ class Selection:
 
 def select(design: Design, pool: Sequence[str], tol: float, min_improvement: float, noise_floor: float,
            max_items: int, margin: float, progress: Callable[[float], None] | None = None) -> Selection:
-    """Forward selection over ``pool`` (effects and constants), then the ambiguity challenge (module doc)."""
+    """Forward selection over ``pool`` (effects and constants), then the ambiguity challenge (module doc).
+    Constants the log cannot resolve (:attr:`.regression.Design.unresolved`) are calibrated, never named."""
+    pool = [c for c in pool if c not in design.unresolved]
     items: list[str] = []
     current = fit_model(design, items, tol)
     steps: list[Step] = []

@@ -26,7 +26,7 @@ EFFECTS = ("coulomb_friction", "stribeck", "drag_asymmetry", "thrust_asymmetry",
 CONSTANTS = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 TOLERANCE = 0.10
 VISIBLE = 1.5
-MAX_SAMPLES = 8000
+MAX_SAMPLES = 6000
 
 
 @dataclass
@@ -112,10 +112,13 @@ def _substeps(t: Truth, lg: Logger, tau_m: float) -> int:
     return max(4, math.ceil(lg.dt / h))
 
 
+def _replay(x: Truth, cmds: np.ndarray, lg: Logger, tau_m: float) -> np.ndarray:
+    return run(x, lambda k, _s: float(cmds[k]), cmds.size, lg.dt, _lag(x, lg), _substeps(x, lg, tau_m))[0]
+
+
 def _visible(a: Truth, b: Truth, cmds: np.ndarray, lg: Logger, tau_m: float, sig: np.ndarray) -> bool:
     """Whether replaying ``cmds`` on ``a`` and ``b`` gives logs differing by >= VISIBLE noise levels."""
-    outs = [run(x, lambda k, _s: float(cmds[k]), cmds.size, lg.dt, _lag(x, lg), _substeps(x, lg, tau_m))[0]
-            for x in (a, b)]
+    outs = [_replay(x, cmds, lg, tau_m) for x in (a, b)]
     d = np.sqrt(np.mean((outs[0][[0, 1, 3]] - outs[1][[0, 1, 3]]) ** 2, axis=1)) / sig
     return bool(np.max(d) >= VISIBLE)
 
