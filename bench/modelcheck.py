@@ -72,7 +72,8 @@ def table(rows: list[dict[str, Any]]) -> str:
     labels = sorted(set(tp) | set(fp) | set(fn))
     td = sorted(r["t_diagnose"] for r in rows)
     lines = [f"logs: {len(rows)}   verdicts exactly right: {exact}/{len(rows)} ({100 * exact / len(rows):.1f} %)",
-             f"clean logs: {len(clean)}   false alarms: {alarms}   crashes: {sum(r['error'] is not None for r in rows)}",
+             f"clean logs: {len(clean)}   false alarms: {alarms}   "
+             f"crashes: {sum(r['error'] is not None for r in rows)}",
              f"time per log (diagnose): median {td[len(td) // 2]:.2f} s, max {td[-1]:.2f} s;   generating: "
              f"median {sorted(r['t_generate'] for r in rows)[len(rows) // 2]:.2f} s",
              "", f"{'label':22s} {'TP':>4s} {'FP':>4s} {'FN':>4s} {'precision':>9s} {'recall':>7s}"]

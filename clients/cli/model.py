@@ -172,7 +172,8 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
                   f"{_g(rel, '+6.1f')} %{'  NAMED' if c['named'] else ''}")
     ap = d.get("angle_periodic")
     if ap:
-        print(f"angle-periodic torque: strongest at {ap['periods']} periods/rev, amplitude {_g(ap['amplitude'], '.3g')} "
+        print(f"angle-periodic torque: strongest at {ap['periods']} periods/rev, "
+              f"amplitude {_g(ap['amplitude'], '.3g')} "
               f"N m (median over 1..64: {_g(ap['median_amplitude'], '.3g')} N m)")
     print("ranking (held-out error reduction):")
     for e in d["ranking"][:8]:

@@ -5,11 +5,13 @@ applies it over the following sample (half a sample on average), a loop that log
 about to write next to the sensors it just read adds a whole sample, a drive that latches on the next
 PWM period adds a fraction. The *alignment* is that lag, in samples, beyond the zero-order hold.
 
-Estimate: the armature equation with free coefficients (eq. dc_electrical, plus a brush-drop and an
-offset term, so wrong nominal constants do not bias it), ``V(t - lag) = a1 i' + a2 i + a3 w + a4 sign(i) + a5``,
-+ a6 sign(V(t - lag))`` (a drive dead band) is fitted by least squares for lags on a grid of ``1/8`` sample; the lag of the smallest residual,
-refined by a parabola through its neighbours, minus the half sample of the hold, is the alignment. A minimum that is not sharp (residual within 1 % one sample either side: slow,
-smooth excitation) leaves the lag unidentifiable; none is assumed then, and none is called a delay.
+Estimate: the armature equation over one held sample (eq. dc_electrical, exact under a zero-order
+hold) with free coefficients, so wrong nominal constants do not bias it, plus brush-drop, dead-band and
+offset terms: ``i[k+1] = a1 i[k] + a2 V[k - lag] + a3 w[k+1/2] + a4 sign(i) + a5 + a6 sign(V[k - lag])``,
+fitted by least squares (raw samples) for lags on a grid of 1/8 sample; the lag of the smallest residual,
+refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k command drives
+k -> k+1). A minimum that is not sharp (residual within 1 % one sample either side: slow, smooth
+excitation) leaves the lag unidentifiable; none is assumed then, and none is called a delay.
 
 Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
 conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
@@ -123,7 +125,7 @@ def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
         samples = 0.0
         rule += "; here the lag is not identifiable (flat residual), none is assumed"
     curve = (tuple(float(x) for x in lags), tuple(float(x / (np.std(i) or 1.0)) for x in res))
-    return Alignment(samples, samples * dt, samples > max_logging_skew + 0.75, rule, curve)
+    return Alignment(float(samples), float(samples * dt), bool(samples > max_logging_skew + 0.75), rule, curve)
 
 
 def realign(log: Log, samples: float) -> Log:

@@ -22,17 +22,27 @@ Procedure:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
+from ocp.effects import make_effect
 from ocp.identify.align import Alignment, estimate, realign
 from ocp.identify.candidates import candidate
-from ocp.identify.explain import KEYS, calibration, effect_values, explain, item_name, plant_of, relative, \
-    spectrum_peak, units
+from ocp.identify.explain import (
+    KEYS,
+    calibration,
+    effect_values,
+    explain,
+    item_name,
+    plant_of,
+    relative,
+    spectrum_peak,
+    units,
+)
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
 from ocp.identify.select import Fitted, select
@@ -217,9 +227,14 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:
+        with_delay = DCMotorPlant(plant.params, (*plant.effects, make_effect("input_delay", {"delay": delay})))
+        before, base = base, score(with_delay, work, sp.test, noise, seg)
+        text = (f"input_delay: the command acts {1e3 * delay:.3g} ms ({align.samples:.2f} samples) after its row, "
+                f"beyond the {opt.max_logging_skew:g}-sample logging skew. {align.rule}.")
+        rounds.append(Round(before, [RankEntry("input_delay", 1.0 - base.combined / before.combined, True,
+                                               {"delay": delay}, {"delay": "s"}, base.rms, text)]))
         verdict.append("input_delay")
-        explanations.append(f"input_delay: the command acts {1e3 * delay:.3g} ms ({align.samples:.2f} samples) after "
-                            f"its row, beyond the {opt.max_logging_skew:g}-sample logging skew. {align.rule}.")
+        explanations.append(text)
     for step in sel.steps:
         before = base
         heldout: dict[str, float] = {}
@@ -235,10 +250,11 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     if progress is not None:
         progress(1.0)
     final = plant_of(plant, design, sel.final, delay)
+    ambiguous = [{**a, "adopted": item_name(str(a["adopted"])), "alternative": item_name(str(a["alternative"]))}
+                 for a in sel.ambiguous]
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
-                          calibration(plant.params, design, sel.final, opt.tolerance),
-                          [{**a, "adopted": item_name(str(a["adopted"])), "alternative": item_name(str(a["alternative"]))}
-                           for a in sel.ambiguous], spectrum_peak(design), opt.tolerance)
+                          calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
+                          spectrum_peak(design), opt.tolerance)
 
 
 def _allowed(opt: DiagnoseOptions) -> set[str]:

@@ -30,7 +30,7 @@ def item_name(item: str) -> str:
 
 def relative(design: Design, f: Fitted, const: str) -> float:
     """Fitted relative error x of a constant (true = nominal (1 + x))."""
-    return f.coefficient(design.index(const)[0])
+    return float(f.coefficient(design.index(const)[0]))
 
 
 def effect_values(design: Design, f: Fitted, item: str) -> dict[str, float]:
@@ -79,7 +79,7 @@ def calibration(p: MotorParams, design: Design, f: Fitted, tol: float) -> dict[s
         x = relative(design, f, c)
         nominal = float(getattr(p, KEYS[c][0]))
         out[c] = {"nominal": nominal, "fitted": nominal * (1.0 + x), "relative": x, "unit": UNITS[c],
-                  "named": c in f.items, "within_tolerance": abs(x) <= tol + 1e-9}
+                  "named": c in f.items, "within_tolerance": bool(abs(x) <= tol + 1e-9)}
     return out
 
 

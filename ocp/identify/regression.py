@@ -149,7 +149,8 @@ def constant_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
         return (_armature(s, p.R * (1 + dr), p.L * (1 + dl)) - _armature(s, p.R * (1 - dr), p.L * (1 - dl))) / (2 * h)
 
     return {"J": np.vstack([p.J * dw, z, z]), "B": np.vstack([p.B * s.w, z, z]),
-            "c_tau": np.vstack([p.c_tau * s.w * np.abs(s.w), z, z]), "c_f": np.vstack([z, z, p.c_f * s.w0 * np.abs(s.w0)]),
+            "c_tau": np.vstack([p.c_tau * s.w * np.abs(s.w), z, z]),
+            "c_f": np.vstack([z, z, p.c_f * s.w0 * np.abs(s.w0)]),
             "k": np.vstack([-p.k_t * s.i, p.k_e * s.w, z]), "R": np.vstack([z, arm(h, 0.0), z]),
             "L": np.vstack([z, arm(0.0, h), z])}
 
@@ -193,9 +194,13 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
         if s.theta is None or periods < 1:
             return []
         z = np.zeros_like(s.w)
-        return [(Column(name, k, float(periods)), np.vstack([np.asarray(Cogging(**{k: 1.0}, periods=periods)
-                                                             .bound_load_torque([s.theta], s.w, NUMPY)), z, z]))
-                for k in ("tau_sin", "tau_cos")]
+        theta = np.append(s.theta, s.theta[-1] + s.w1[-1] * s.dt)
+        out = []
+        for k in ("tau_sin", "tau_cos"):  # the ripple at the sample instants, low-passed like the signals,
+            ripple = np.asarray(Cogging(**{k: 1.0}, periods=periods).bound_load_torque([theta], theta, NUMPY))
+            ripple = smooth(ripple, log.dt, cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)))
+            out.append((Column(name, k, float(periods)), np.vstack([0.5 * (ripple[:-1] + ripple[1:]), z, z])))
+        return out  # averaged over each held interval
     key = CATALOGUE[name].fitted[0]
     return [(Column(name, key), _effect(name, {key: 1.0}, p, s))]
 
@@ -226,7 +231,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     rows = s.w.size
     edge = np.zeros(rows, dtype=bool)
     if log.kind is LogKind.TIME_SERIES:  # the low-pass's start-up and run-out transients
-        m = min(int(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt))), rows // 6)
+        m = min(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt)), rows // 6)
         edge[:m] = edge[rows - m:] = True
     train, test = train[:rows] & ~edge, test[:rows] & ~edge
     cols: list[tuple[Column, np.ndarray]] = [(Column(c, c), a) for c, a in constant_columns(p, s).items()]

@@ -1,0 +1,101 @@
+"""Model check beyond the project's own rig: timing alignment as a nuisance, constants named only beyond a
+tolerance (smaller refinements are calibration), angle-periodic torque with a free period count, and a
+sample of the independent proving ground (``tests/proving_ground``; the full sweep is
+``python bench/modelcheck.py``)."""
+
+from __future__ import annotations
+
+import ast
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from clients.cli import main
+from ocp.identify import DiagnoseOptions, diagnose
+from ocp.logs import Log, log_from_arrays, write_log_csv
+from ocp.params import MotorParams
+from ocp.plant import DCMotorPlant
+from tests.proving_ground import make_case
+from tests.synthetic_rig import RigSpec, generate
+
+SECONDS = 1.5
+
+
+def _skewed(log: Log, rows: int) -> Log:
+    """The log a loop writes when it logs, next to the sensors it just read, the command it applies
+    ``rows`` samples later: row k holds the command that acts over k+rows -> k+rows+1."""
+    v = np.concatenate([log.voltage[rows:], np.repeat(log.voltage[-1], rows)])
+    return Log(log.t, v, log.current, log.omega, log.theta, log.thrust, log.kind, log.source)
+
+
+def test_a_logging_skew_is_aligned_away_not_blamed(rig: MotorParams, tmp_path: Path,
+                                                   capsys: pytest.CaptureFixture[str]) -> None:
+    log = _skewed(generate(rig, RigSpec(effects={"coulomb_friction": {"tau_c": 0.004}}, seconds=SECONDS, seed=5)), 1)
+    res = diagnose(DCMotorPlant(rig), log)
+    assert res.alignment is not None and res.alignment.samples == pytest.approx(1.0, abs=0.2)
+    assert not res.alignment.delay
+    assert res.verdict == ["coulomb_friction"]
+    csv = tmp_path / "skewed.csv"
+    write_log_csv(log, csv)
+    assert main(["diagnose", str(csv), "--params", "paper-rig"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("missing: coulomb_friction") and "alignment: command acts 1.0" in out
+    assert "removed: logging convention" in out and "calibration (refinements within 10 %" in out
+
+
+def test_a_long_lag_is_an_input_delay(rig: MotorParams) -> None:
+    log = _skewed(generate(rig, RigSpec(seconds=SECONDS, seed=6)), 4)  # 4 samples > 2 + 0.75
+    res = diagnose(DCMotorPlant(rig), log)
+    assert res.verdict == ["input_delay"] and res.alignment is not None and res.alignment.delay
+    assert res.alignment.seconds == pytest.approx(4 * log.dt, abs=0.3 * log.dt)
+    d = json.loads(json.dumps(res.to_dict(), allow_nan=False))
+    assert d["alignment"]["called_input_delay"] and "logging conventions" in d["alignment"]["rule"]
+
+
+@pytest.mark.parametrize(("error", "tolerance", "named"), [(0.05, 0.10, False), (0.30, 0.10, True),
+                                                            (0.05, 0.02, True)])
+def test_a_constant_is_named_only_beyond_the_tolerance(rig: MotorParams, error: float, tolerance: float,
+                                                        named: bool) -> None:
+    """True R = nominal (1 + error): within the tolerance it is calibration, beyond it the verdict."""
+    log = generate(rig, RigSpec(seconds=SECONDS, seed=7))
+    nominal = rig.model_copy(update={"R": rig.R / (1 + error)})
+    res = diagnose(DCMotorPlant(nominal), log, DiagnoseOptions(tolerance=tolerance))
+    assert res.verdict == (["param:R"] if named else [])
+    cal = res.calibration["R"]
+    assert cal["named"] is named
+    assert cal["fitted"] == pytest.approx(rig.R, rel=0.02)
+    assert res.plant.params.R == pytest.approx(rig.R, rel=0.02)
+    for other, c in res.calibration.items():  # the exact constants stay put and unnamed
+        if other in ("J", "c_tau", "c_f", "k"):
+            assert abs(c["relative"]) < 0.03 and not c["named"], other
+
+
+def test_angle_periodic_torque_with_14_periods(rig: MotorParams) -> None:
+    effects = {"cogging": {"tau_sin": 0.002, "tau_cos": -0.001, "periods": 14.0}}
+    log = generate(rig, RigSpec(effects=effects, seconds=SECONDS, seed=8))
+    res = diagnose(DCMotorPlant(rig), log)
+    assert res.verdict == ["cogging"]
+    assert res.angle_periodic is not None and res.angle_periodic["periods"] == 14
+    top = res.ranking[0].parameters
+    assert top["periods"] == 14
+    assert top["tau_sin"] == pytest.approx(0.002, rel=0.2) and top["tau_cos"] == pytest.approx(-0.001, rel=0.3)
+
+
+def test_the_proving_ground_shares_no_code_with_ocp() -> None:
+    for path in Path(__file__).with_name("proving_ground").glob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.Import | ast.ImportFrom):
+                names = [a.name for a in node.names] if isinstance(node, ast.Import) else [node.module or ""]
+                assert not any(n.split(".")[0] in ("ocp", "service", "clients") for n in names), (path, names)
+
+
+@pytest.mark.parametrize(("seed", "kind"), [(2005, None), (2101, "clean")])
+def test_proving_ground_sample(seed: int, kind: str | None) -> None:
+    """A few logs of the proving ground (seeds outside the benchmark's 0..199 and the tuning 1000..1039)."""
+    case = make_case(seed, kind)
+    c = case.columns
+    log = log_from_arrays(c["t"], c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
+    assert set(res.verdict) == set(case.expected), (case.kind, case.excitations)
