@@ -14,7 +14,7 @@ import pytest
 
 from clients.cli import main
 from ocp.identify import DiagnoseOptions, diagnose
-from ocp.logs import Log, log_from_arrays, write_log_csv
+from ocp.logs import Log, LogKind, log_from_arrays, write_log_csv
 from ocp.params import MotorParams
 from ocp.plant import DCMotorPlant
 from tests.proving_ground import make_case
@@ -99,3 +99,25 @@ def test_proving_ground_sample(seed: int, kind: str | None) -> None:
     log = log_from_arrays(c["t"], c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
     res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
     assert set(res.verdict) == set(case.expected), (case.kind, case.excitations)
+
+
+def _sweep(rig: MotorParams, speeds: list[float], seed: int) -> Log:
+    """A steady-state sweep of a rig with Coulomb friction (3 mN m) at the given speeds [rad/s], 12 rows each."""
+    rng = np.random.default_rng(seed)
+    w = np.repeat(speeds, 12) * (1 + 0.002 * rng.standard_normal(12 * len(speeds)))
+    i = (rig.B * w + rig.c_tau * w * np.abs(w) + 0.003 * np.sign(w)) / rig.k_t  # eq. dc_mechanical, w' = 0
+    v = rig.R * i + rig.k_e * w  # eq. dc_electrical, i' = 0
+    noise = 1e-4 * rng.standard_normal((2, w.size))
+    return log_from_arrays(None, v, i + noise[0], rig.c_f * w * np.abs(w) + noise[1], omega=w,
+                           kind=LogKind.STEADY_STATE)
+
+
+def test_coulomb_or_viscous_on_one_amplitude_is_ambiguous_and_two_amplitudes_settle_it(rig: MotorParams) -> None:
+    one = diagnose(DCMotorPlant(rig), _sweep(rig, [40.0, -40.0], 0))
+    assert one.verdict in (["coulomb_friction"], ["param:B"])
+    names = {one.verdict[0]} | {a["alternative"] for a in one.ambiguous}
+    assert {"coulomb_friction", "param:B"} <= names
+    d = json.loads(json.dumps(one.to_dict(), allow_nan=False))
+    assert d["message"].startswith("ambiguous:") and "cannot tell them apart" in d["ambiguous"][0]["reason"]
+    two = diagnose(DCMotorPlant(rig), _sweep(rig, [40.0, -40.0, 15.0, -15.0], 0))
+    assert two.verdict == ["coulomb_friction"] and not two.ambiguous

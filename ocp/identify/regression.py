@@ -81,6 +81,7 @@ class Design:
     periods: int = 0
     spectrum: list[float] = field(default_factory=list)
     unresolved: dict[str, str] = field(default_factory=dict)
+    independence: float = 1.0  # fraction of rows that are independent (low-passed rows are correlated)
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
@@ -258,7 +259,8 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
     return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
-                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log))
+                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log),
+                  1.0 if s.dt == 0 else min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt))
 
 
 def unresolved(p: MotorParams, log: Log) -> dict[str, str]:

@@ -125,7 +125,7 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
            max_items: int, margin: float, progress: Callable[[float], None] | None = None) -> Selection:
     """Forward selection over ``pool`` (effects and constants), then the ambiguity challenge (module doc).
     Constants the log cannot resolve (:attr:`.regression.Design.unresolved`) are calibrated, never named."""
-    pool = [c for c in pool if c not in design.unresolved]
+    pool = [c for c in pool if c not in design.unresolved and design.index(c)]  # (no columns: not testable here)
     items: list[str] = []
     current = fit_model(design, items, tol)
     steps: list[Step] = []
@@ -145,15 +145,21 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
 
 def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitted, tol: float,
                margin: float) -> list[dict[str, object]]:
-    """Adopted items that another item explains as well on held-out data."""
+    """Adopted items that another item explains as well on held-out data: within ``margin``, or within the
+    held-out score's own sampling scatter (two standard errors of an RMS over the independent held-out
+    rows, ``2 / sqrt(2 n)``), whichever is wider."""
+    live = design.n_test > 0
+    n_eff = float(design.n_test[live].sum()) * design.independence
+    margin = max(margin, 2.0 / math.sqrt(2.0 * max(n_eff, 1.0)))
     out = []
     for a, b in itertools.product(items, pool):
         if b in items:
             continue
         alt = fit_model(design, [b if i == a else i for i in items], tol)
+        na, nb = (f"param:{x}" if x in CONSTANTS else x for x in (a, b))
         if alt.score <= best.score * (1.0 + margin):
             out.append({"adopted": a, "alternative": b, "score": best.score, "alternative_score": alt.score,
-                        "reason": f"replacing {a} by {b} fits the held-out data as well "
-                                  f"({alt.score:.3g} vs {best.score:.3g} noise units, within {100 * margin:.0f} %): "
+                        "reason": f"replacing {na} by {nb} fits the held-out data as well "
+                                  f"({alt.score:.3g} vs {best.score:.3g} noise units, within {100 * margin:.1f} %): "
                                   "this log cannot tell them apart"})
     return out
