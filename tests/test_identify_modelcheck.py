@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from clients.cli import main
-from ocp.identify import DiagnoseOptions, diagnose
+from ocp.identify import DiagnoseOptions, diagnose, fit
 from ocp.logs import Log, LogKind, log_from_arrays, write_log_csv
 from ocp.params import MotorParams
 from ocp.plant import DCMotorPlant
@@ -121,3 +121,12 @@ def test_coulomb_or_viscous_on_one_amplitude_is_ambiguous_and_two_amplitudes_set
     assert d["message"].startswith("ambiguous:") and "cannot tell them apart" in d["ambiguous"][0]["reason"]
     two = diagnose(DCMotorPlant(rig), _sweep(rig, [40.0, -40.0, 15.0, -15.0], 0))
     assert two.verdict == ["coulomb_friction"] and not two.ambiguous
+
+
+def test_a_named_motor_constant_can_be_fitted(rig: MotorParams) -> None:
+    """``param:k`` (k_t and k_e together), as diagnose names it, is also a ``fit`` candidate."""
+    log = generate(rig, RigSpec(seconds=1.0, seed=3))
+    nominal = rig.model_copy(update={"k_t": rig.k_t / 1.2, "k_e": rig.k_e / 1.2})
+    res = fit(DCMotorPlant(nominal), log, ["param:k"])
+    assert res.plant.params.k_t == pytest.approx(rig.k_t, rel=0.01)
+    assert res.plant.params.k_e == pytest.approx(rig.k_e, rel=0.01)
