@@ -16,6 +16,7 @@ from clients.cli.remote import add_server_args, client, params_for_server
 from ocp.errors import LogError, ParameterError
 
 if TYPE_CHECKING:  # the core is imported inside the commands: `thrustshape --help` stays fast
+    from ocp.identify import DiagnoseOptions
     from ocp.logs import Log, ReadOptions
 
 _LOG_DESCRIPTION = ("A log is CSV/Parquet/.xlsx/.mat with headers and units (Tyto/RCbenchmark exports, vendor "
@@ -135,7 +136,11 @@ def register(sub: argparse._SubParsersAction) -> None:
                     lists=("presets", "effects"))
     _log_args(p)
     p.add_argument("--max-effects", type=int, default=3, help="at most this many effects in the verdict")
-    p.add_argument("--no-corrections", action="store_true", help="do not try corrections of the nominal constants")
+    p.add_argument("--no-corrections", action="store_true", help="never name a constant wrong (calibrate only)")
+    p.add_argument("--tolerance", type=float, default=0.10,
+                   help="a constant is named wrong only beyond this relative error (default 0.10 = 10 %%)")
+    p.add_argument("--max-logging-skew", type=float, default=2.0,
+                   help="command-to-sensor lag [samples] that logging conventions explain (beyond: input_delay)")
     p.set_defaults(func=cmd_diagnose)
 
     p = add_command(sub, "fit", summary="add named effects, refit, write a calibrated parameter file",
@@ -241,23 +246,82 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             d = c.diagnose(**_upload(args), max_effects=args.max_effects, corrections=not args.no_corrections)
     else:
         from ocp.effects import load_plant
-        from ocp.identify import DiagnoseOptions, diagnose
+        from ocp.identify import diagnose
 
         log = _load_log(args)
-        opt = DiagnoseOptions(max_effects=args.max_effects, include_params=not args.no_corrections)
-        d = _annotate(diagnose(load_plant(args.params), log, opt).to_dict(), log)
+        opt = _diagnose_options(args)
+        with _Progress("diagnose") as bar:
+            d = _annotate(diagnose(load_plant(args.params), log, opt, progress=bar.update).to_dict(), log)
     if args.json:
         print_json(d)
         return 0
+    _print_diagnosis(d)
+    return 0
+
+
+def _diagnose_options(args: argparse.Namespace) -> DiagnoseOptions:
+    from pydantic import ValidationError
+
+    from ocp.identify import DiagnoseOptions
+
+    try:
+        return DiagnoseOptions(max_effects=args.max_effects, include_params=not args.no_corrections,
+                               tolerance=args.tolerance, max_logging_skew=args.max_logging_skew)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        raise ParameterError(f"--{str(err['loc'][0]).replace('_', '-')}", str(err["msg"])) from None
+
+
+class _Progress:
+    """A one-line progress bar on stderr, drawn only when stderr is a terminal."""
+
+    def __init__(self, label: str) -> None:
+        self.label, self.tty = label, sys.stderr.isatty()
+
+    def __enter__(self) -> _Progress:
+        return self
+
+    def update(self, fraction: float) -> None:
+        if self.tty:
+            n = int(30 * min(max(fraction, 0.0), 1.0))
+            sys.stderr.write(f"\r{self.label} [{'#' * n}{'.' * (30 - n)}] {100 * fraction:3.0f} %")
+            sys.stderr.flush()
+
+    def __exit__(self, *exc: object) -> None:
+        if self.tty:
+            sys.stderr.write("\r" + " " * 50 + "\r")
+            sys.stderr.flush()
+
+
+def _print_diagnosis(d: dict[str, Any]) -> None:
     print("nothing missing" if not d["verdict"] else "missing: " + ", ".join(d["verdict"]))
     for text in d["explanations"]:
         print(f"  {text}")
+    for a in d.get("ambiguous") or []:
+        print(f"ambiguous: {a['adopted']} or {a['alternative']}: {a['reason']}")
+    al = d.get("alignment")
+    if al:
+        print(f"alignment: command acts {_g(al['samples'], '.2f')} samples ({_g(1e3 * al['seconds'], '.3g')} ms) after "
+              f"its row{' -> input_delay' if al['called_input_delay'] else ' (removed: logging convention)'}")
+        print(f"  rule: {al['rule']}")
+    cal = d.get("calibration") or {}
+    if cal:
+        print(f"calibration (refinements within {100 * d.get('tolerance', 0.1):.0f} % stay here; beyond it a constant "
+              "is named in the verdict):")
+        for k, c in cal.items():
+            rel = 100 * c["relative"] if isinstance(c["relative"], int | float) else None
+            print(f"  {k:6s} {_g(c['nominal'], '.4g'):>10s} -> {_g(c['fitted'], '.4g'):>10s} {c['unit']:16s} "
+                  f"{_g(rel, '+6.1f')} %{'  NAMED' if c['named'] else ''}")
+    ap = d.get("angle_periodic")
+    if ap:
+        print(f"angle-periodic torque: strongest at {ap['periods']} periods/rev, "
+              f"amplitude {_g(ap['amplitude'], '.3g')} "
+              f"N m (median over 1..64: {_g(ap['median_amplitude'], '.3g')} N m)")
     print("ranking (held-out error reduction):")
     for e in d["ranking"][:8]:
         imp = 100 * e["improvement"] if isinstance(e["improvement"], int | float) else None
         print(f"  {e['effect']:18s} {_g(imp, '6.1f'):>6s} %  {'significant' if e['significant'] else ''}")
     _print_equations(d)
-    return 0
 
 
 def cmd_fit(args: argparse.Namespace) -> int:

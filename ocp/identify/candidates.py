@@ -18,11 +18,11 @@ from ocp.params import MotorParams
 from ocp.plant import DCMotorPlant
 
 PARAM_PREFIX = "param:"
-PARAM_KEYS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k_t", "k_e", "R", "L")
+PARAM_KEYS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k_t", "k_e", "k", "R", "L")
 PARAM_UNITS = {"J": "kg m^2", "B": "N m s/rad", "c_tau": "N m s^2/rad^2", "c_f": "N s^2/rad^2",
-               "k_t": "N m/A", "k_e": "V s/rad", "R": "Ohm", "L": "H"}
+               "k_t": "N m/A", "k_e": "V s/rad", "k": "N m/A", "R": "Ohm", "L": "H"}
 PARAM_CHANNEL = {"J": "mechanical", "B": "mechanical", "c_tau": "mechanical", "c_f": "thrust",
-                 "k_t": "mechanical", "k_e": "electrical", "R": "electrical", "L": "electrical"}
+                 "k_t": "mechanical", "k_e": "electrical", "k": "electrical", "R": "electrical", "L": "electrical"}
 PARAM_SIGNATURE = {
     "J": "torque residual proportional to the acceleration",
     "B": "torque residual proportional to the speed, odd, in both directions",
@@ -30,6 +30,8 @@ PARAM_SIGNATURE = {
     "c_f": "thrust residual proportional to w|w|, same relative size in both directions",
     "k_t": "torque residual proportional to the current",
     "k_e": "voltage residual proportional to the speed (back-emf off): steady speed off by a fixed ratio",
+    "k": "torque residual proportional to the current and voltage residual proportional to the speed "
+         "(k_t and k_e together, their ratio kept)",
     "R": "voltage residual proportional to the current",
     "L": "voltage residual proportional to the current rate (fast current transients mis-predicted)",
 }
@@ -76,7 +78,7 @@ class Candidate:
 
     def bounds(self, plant: DCMotorPlant) -> tuple[np.ndarray, np.ndarray]:
         if self.is_param:
-            v = float(getattr(plant.params, self.param_key))
+            v = _param(plant, self.param_key)
             return np.array([0.25 * v]), np.array([4.0 * v])
         b = CATALOGUE[self.name].bounds
         return np.array([b[k][0] for k in self.keys]), np.array([b[k][1] for k in self.keys])
@@ -85,7 +87,7 @@ class Candidate:
         """Starting points (one, or several when a parameter enters nonlinearly)."""
         lo, hi = self.bounds(plant)
         if self.is_param:
-            return [np.array([float(getattr(plant.params, self.param_key))])]
+            return [np.array([_param(plant, self.param_key)])]
         current = _existing(plant, self.name)
         g = CATALOGUE[self.name].guess
         base = np.array([current.parameters()[k] if current is not None else g[k] for k in self.keys])
@@ -96,7 +98,11 @@ class Candidate:
         """``plant`` with this candidate's fitted ``values`` (an existing effect of that name replaced)."""
         if self.is_param:
             data = plant.params.model_dump()
-            data[self.param_key] = float(values[0])
+            if self.param_key == "k":  # the motor constant: k_t and k_e scaled together
+                data["k_e"] *= float(values[0]) / data["k_t"]
+                data["k_t"] = float(values[0])
+            else:
+                data[self.param_key] = float(values[0])
             return DCMotorPlant(MotorParams(**data), plant.effects)
         current = _existing(plant, self.name)
         fixed = current.parameters() if current is not None else {}
@@ -108,7 +114,7 @@ class Candidate:
     def values(self, plant: DCMotorPlant) -> dict[str, float]:
         """The candidate's parameters as they are in ``plant``."""
         if self.is_param:
-            return {self.param_key: float(getattr(plant.params, self.param_key))}
+            return {self.param_key: _param(plant, self.param_key)}
         eff = _existing(plant, self.name)
         return {k: eff.parameters()[k] for k in self.keys} if eff is not None else {}
 
@@ -116,11 +122,16 @@ class Candidate:
         """Words: what was found, its fitted magnitude with units, the signature that gives it away."""
         if self.is_param:
             k = self.param_key
-            v0, v1 = float(getattr(before.params, k)), float(getattr(after.params, k))
+            v0, v1 = _param(before, k), _param(after, k)
             return (f"{k} correction: nominal {v0:.4g} -> fitted {v1:.4g} {PARAM_UNITS[k]} "
                     f"({100 * (v1 / v0 - 1):+.1f} %). Signature: {PARAM_SIGNATURE[k]}")
         eff = _existing(after, self.name)
         return eff.describe() if eff is not None else self.name
+
+
+def _param(plant: DCMotorPlant, key: str) -> float:
+    """A constant's value; ``k`` (the motor constant) reads k_t."""
+    return float(getattr(plant.params, "k_t" if key == "k" else key))
 
 
 def _existing(plant: DCMotorPlant, name: str) -> EffectBase | None:

@@ -1,35 +1,51 @@
-"""diagnose: which physics is missing? Fit every candidate, rank by HELD-OUT error reduction.
+"""diagnose: which physics is missing? Explanations compete on HELD-OUT evidence.
 
-Procedure (greedy forward selection):
+Procedure:
 
-1. Split the log into segments of ``segment_s`` seconds; every third segment is held out
-   (``holdout_every``), the rest trains. Steady-state sweeps: every third row is held out.
-2. Score a plant by its held-out free-run error: per channel (speed, current, thrust) the RMS
-   divided by the sensor-noise level (:func:`ocp.identify.predict.noise_levels`), combined as
-   ``E = sqrt(mean_channel (rms/noise)^2)``. A perfect model of a clean rig scores about 1.
-3. For each candidate (catalogue effect or nominal-constant correction): fit its parameters, jointly
-   with those already selected, by equation error on the training data; score on held-out data.
-   ``improvement = 1 - E_candidate / E_current``.
-4. Significance rule: the best candidate is accepted when its improvement is at least
-   ``min_improvement`` AND the current model is not yet at the noise floor (``E > noise_floor``).
-   On clean data nothing passes: the verdict is empty ("nothing missing").
-5. Repeat with the accepted candidate in the model (up to ``max_effects``), so several hidden
-   effects are found one after the other.
+1. **Alignment** (:mod:`.align`): the command-to-sensor lag is estimated first and removed; only a lag
+   beyond what logging conventions explain (stated rule there) is called ``input_delay``.
+2. Split the log into segments of ``segment_s`` seconds; every ``holdout_every``-th is held out
+   (steady-state sweeps: rows).
+3. **Regression** (:mod:`.regression`): the nominal model's equation residuals against the columns of
+   every candidate -- catalogue effects (shaped ones on a grid; angle-periodic torque with its period
+   count from the residual's spectrum against rotor angle) and relative errors of the constants.
+4. **Selection** (:mod:`.select`): every model refines all constants within ``tolerance`` of nominal
+   (``calibration``); a constant is *named* (``param:<key>`` in the verdict) only when freeing it beyond
+   the tolerance wins on held-out data like an effect must: forward selection while the held-out score
+   is above ``noise_floor`` and falls by ``min_improvement``. Adopted items that another item explains
+   equally well (within ``ambiguity_margin``) are reported under ``ambiguous`` with the reason.
+5. The user's plant and each round's adopted model are simulated (free run under the measured voltage,
+   :func:`ocp.identify.predict.free_run`) on the held-out segments: the per-channel errors reported.
+   ``verdict`` is the list of adopted effects and named constants, most important first.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from ocp.identify.candidates import Candidate, all_candidates, candidate
-from ocp.identify.equations import allowed
-from ocp.identify.estimate import Estimate, equation_error_fit, equation_scales, free_run
-from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, noise_levels
+from ocp.effects import make_effect
+from ocp.identify.align import Alignment, estimate, realign
+from ocp.identify.candidates import candidate
+from ocp.identify.explain import (
+    KEYS,
+    calibration,
+    effect_values,
+    explain,
+    item_name,
+    plant_of,
+    relative,
+    spectrum_peak,
+    units,
+)
+from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels
+from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
+from ocp.identify.select import Fitted, select
 from ocp.logs import Log, LogKind
 from ocp.plant import DCMotorPlant
 
@@ -41,11 +57,14 @@ class DiagnoseOptions(BaseModel):
 
     segment_s: float = Field(default=0.5, gt=0)
     holdout_every: int = Field(default=3, ge=2)
-    min_improvement: float = Field(default=0.10, gt=0, lt=1)
-    noise_floor: float = Field(default=1.5, gt=0)
-    max_effects: int = Field(default=3, ge=1, le=10)
-    include_params: bool = True
+    min_improvement: float = Field(default=0.12, gt=0, lt=1)  # held-out score must fall by this fraction
+    noise_floor: float = Field(default=1.15, gt=0)  # [noise units] a model this close to the noise is done
+    max_effects: int = Field(default=3, ge=1, le=10)  # at most this many items in the verdict
+    include_params: bool = True  # constants may be named beyond the tolerance (else: calibration only)
     candidates: tuple[str, ...] | None = None  # None: the whole catalogue (+ corrections)
+    tolerance: float = Field(default=0.10, gt=0, lt=1)  # a constant is named wrong only beyond this (relative)
+    ambiguity_margin: float = Field(default=0.02, ge=0, lt=0.5)  # equal held-out fits within this -> ambiguous
+    max_logging_skew: float = Field(default=2.0, ge=0, le=20)  # [samples] lags logging conventions explain
 
 
 def dynamic(log: Log) -> bool:
@@ -127,6 +146,11 @@ class DiagnoseResult:
     plant: DCMotorPlant
     noise: dict[str, float]
     explanations: list[str] = field(default_factory=list)
+    alignment: Alignment | None = None
+    calibration: dict[str, dict[str, Any]] = field(default_factory=dict)
+    ambiguous: list[dict[str, Any]] = field(default_factory=list)
+    angle_periodic: dict[str, Any] | None = None
+    tolerance: float = 0.10
 
     @property
     def ranking(self) -> list[RankEntry]:
@@ -138,7 +162,13 @@ class DiagnoseResult:
             "verdict": self.verdict,
             "ranking": [e.to_dict() for e in self.ranking],
             "explanations": self.explanations,
-            "message": "nothing missing" if not self.verdict else "; ".join(self.explanations),
+            "message": _message(self.verdict, self.explanations, self.ambiguous),
+            "alignment": self.alignment.to_dict() if self.alignment else None,
+            "calibration": {k: {kk: finite(vv) if isinstance(vv, float) else vv for kk, vv in v.items()}
+                            for k, v in self.calibration.items()},
+            "tolerance": self.tolerance,
+            "ambiguous": [{k: finite(v) if isinstance(v, float) else v for k, v in a.items()} for a in self.ambiguous],
+            "angle_periodic": self.angle_periodic,
             "noise": {k: finite(v) for k, v in self.noise.items()},
             "units": CHANNEL_UNITS,
             "rounds": [{"baseline_rms": {k: finite(v) for k, v in r.baseline.rms.items()},
@@ -147,49 +177,94 @@ class DiagnoseResult:
         }
 
 
-def _try(base: DCMotorPlant, cand: Candidate, log: Log, sp: Split, scales: dict[str, float]) -> Estimate:
-    """Fit one candidate on top of ``base`` (those already chosen stay at their values)."""
-    return equation_error_fit(base, [cand], log, sp.train, scales)
+def _message(verdict: list[str], explanations: list[str], ambiguous: list[dict[str, Any]]) -> str:
+    if not verdict:
+        return "nothing missing"
+    text = "; ".join(explanations)
+    if ambiguous:
+        text = "ambiguous: " + "; ".join(str(a["reason"]) for a in ambiguous) + ". " + text
+    return text
 
 
-def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None) -> DiagnoseResult:
-    """Rank candidate effects by held-out error reduction and say which are missing (module doc)."""
+def _pool(plant: DCMotorPlant, opt: DiagnoseOptions) -> tuple[tuple[str, ...], list[str]]:
+    """Effects to build columns for, and the selection pool (effects + constants) as regression names."""
+    present = {e.name for e in plant.effects}
+    wanted = opt.candidates
+    if wanted is not None:
+        for n in wanted:
+            candidate(n)  # unknown names raise, naming them
+    effects = tuple(n for n in REGRESSED if n not in present and (wanted is None or n in wanted))
+    consts = [c for c in CONSTANTS if opt.include_params and (wanted is None or f"param:{c}" in wanted
+                                                               or any(f"param:{k}" in wanted for k in KEYS[c]))]
+    return effects, [*effects, *consts]
+
+
+def _entry(name: str, fit_: Fitted, before: Fitted, significant: bool, plant: DCMotorPlant, design: Design,
+           heldout: dict[str, float]) -> RankEntry:
+    values = {} if name in CONSTANTS else effect_values(design, fit_, name)
+    if name in CONSTANTS:
+        values = {name: float(getattr(plant.params, KEYS[name][0])) * (1 + relative(design, fit_, name))}
+    imp = 1.0 - fit_.score / before.score if before.score > 0 else 0.0
+    return RankEntry(item_name(name), imp, significant, values, units(name), heldout,
+                     explain(name, values, plant.params, design, fit_))
+
+
+def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None,
+             progress: Callable[[float], None] | None = None) -> DiagnoseResult:
+    """Say which effects are missing and which constants are wrong (module doc). ``progress(fraction)``
+    is called as the work advances (for progress bars)."""
     opt = options or DiagnoseOptions()
-    # --- issue #13 hook: sweeps, ESC rigs and flight logs are checked point by point (no time effect) ---
-    if not dynamic(log):
+    if not dynamic(log):  # sweeps, ESC rigs and flight logs: point by point, never a time effect (issue #13)
         from ocp.identify.steady import diagnose_points
 
         return diagnose_points(plant, log, opt)
-    # --- end of hook ---
-    pool = ([candidate(n) for n in opt.candidates] if opt.candidates is not None
-            else all_candidates(opt.include_params))
-    present = {e.name for e in plant.effects}
-    pool = [c for c in pool if c.name not in present and allowed(c.name, c.channel, log)]  # issue #13 filter
-    noise = noise_levels(log)
-    sp = split(log, opt.segment_s, opt.holdout_every)
-    current, chosen, verdict, explanations, rounds = plant, [], [], [], []
-    for _ in range(opt.max_effects):
-        base_score = score(current, log, sp.test, noise, opt.segment_s)
-        scales = equation_scales(current, log, sp.train)
-        entries: list[tuple[RankEntry, DCMotorPlant, Candidate]] = []
-        for cand in pool:
-            if cand in chosen:
-                continue
-            est = _try(current, cand, log, sp, scales)
-            s = score(est.plant, log, sp.test, noise, opt.segment_s)
-            imp = 1.0 - s.combined / base_score.combined if math.isfinite(s.combined) else -math.inf
-            ok = imp >= opt.min_improvement and base_score.combined > opt.noise_floor
-            entry = RankEntry(cand.name, imp, ok, cand.values(est.plant), cand.units(), s.rms,
-                              cand.explain(current, est.plant))
-            entries.append((entry, est.plant, cand))
-        entries.sort(key=lambda e: (-e[0].improvement, len(e[2].keys)))
-        rounds.append(Round(base_score, [e[0] for e in entries]))
-        if not entries or not entries[0][0].significant:
-            break
-        best, current, cand = entries[0]
-        chosen.append(cand)
-        if len(chosen) > 1:  # joint refit of everything chosen so far, from the values found
-            current = equation_error_fit(current, chosen, log, sp.train, scales).plant
-        verdict.append(best.name)
-        explanations.append(f"{best.explanation} Held-out error down {100 * best.improvement:.0f} %.")
-    return DiagnoseResult(verdict, rounds, current, noise, explanations)
+    effects, pool = _pool(plant, opt)
+    own_delay = sum(float(getattr(e, "delay", 0.0)) for e in plant.effects if e.name == "input_delay")
+    align = estimate(log, opt.max_logging_skew + own_delay / log.dt if log.kind is LogKind.TIME_SERIES else 0.0)
+    delay = align.seconds - own_delay if align.delay and "input_delay" in _allowed(opt) else None
+    work = log if delay is not None else realign(log, align.samples - own_delay / log.dt)
+    seg = min(opt.segment_s, work.n * work.dt / (3 * opt.holdout_every)) if work.kind is LogKind.TIME_SERIES \
+        else opt.segment_s  # short logs: shorter segments, so that some are held out
+    sp = split(work, seg, opt.holdout_every)
+    design = build(plant.params, work, sp.train, sp.test, effects)
+    if progress is not None:
+        progress(0.2)
+    sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor,
+                 opt.max_effects - (delay is not None), opt.ambiguity_margin,
+                 None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
+    noise = noise_levels(work)
+    base = score(plant, work, sp.test, noise, seg)
+    rounds, verdict, explanations = [], [], []
+    if delay is not None:
+        with_delay = DCMotorPlant(plant.params, (*plant.effects, make_effect("input_delay", {"delay": delay})))
+        before, base = base, score(with_delay, work, sp.test, noise, seg)
+        text = (f"input_delay: the command acts {1e3 * delay:.3g} ms ({align.samples:.2f} samples) after its row, "
+                f"beyond the {opt.max_logging_skew:g}-sample logging skew. {align.rule}.")
+        rounds.append(Round(before, [RankEntry("input_delay", 1.0 - base.combined / before.combined, True,
+                                               {"delay": delay}, {"delay": "s"}, base.rms, text)]))
+        verdict.append("input_delay")
+        explanations.append(text)
+    for step in sel.steps:
+        before = base
+        heldout: dict[str, float] = {}
+        if step.adopted is not None:
+            base = score(plant_of(plant, design, step.tried[0][1], delay), work, sp.test, noise, seg)
+            heldout = base.rms
+        entries = [_entry(n, f, step.before, n == step.adopted, plant, design, heldout if n == step.adopted else {})
+                   for n, f in step.tried]
+        rounds.append(Round(before, entries))
+        if step.adopted is not None:
+            verdict.append(item_name(step.adopted))
+            explanations.append(f"{entries[0].explanation} Held-out error down {100 * entries[0].improvement:.0f} %.")
+    if progress is not None:
+        progress(1.0)
+    final = plant_of(plant, design, sel.final, delay)
+    ambiguous = [{**a, "adopted": item_name(str(a["adopted"])), "alternative": item_name(str(a["alternative"]))}
+                 for a in sel.ambiguous]
+    return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
+                          calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
+                          spectrum_peak(design), opt.tolerance)
+
+
+def _allowed(opt: DiagnoseOptions) -> set[str]:
+    return set(opt.candidates) if opt.candidates is not None else {"input_delay"}

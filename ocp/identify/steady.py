@@ -232,8 +232,9 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
     opt = options or DiagnoseOptions()
     eqs = checked(log)
     if not eqs:
-        return PointDiagnosis([], [], plant, {}, ["no equation can be checked on this log"], statuses(log),
-                              direction_maps(log), log.kind.value, log.notes)
+        return PointDiagnosis([], [], plant, {}, ["no equation can be checked on this log"],
+                              equations=statuses(log), maps=direction_maps(log), kind=log.kind.value,
+                              notes=log.notes)
     nz = noise(log, eqs, plant)
     test = np.arange(log.n) % opt.holdout_every == opt.holdout_every - 1
     rows = (~test, test)
@@ -262,8 +263,8 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
         verdict.append(best.entry.name)
         explanations.append(f"{best.entry.explanation} Held-out error down {100 * best.entry.improvement:.0f} %.")
     fitted_maps = {"thrust_ratio_reverse_to_forward": finite(r) if (r := thrust_ratio(current, log)) else None}
-    return PointDiagnosis(verdict, rounds, current, nz, explanations, statuses(log), direction_maps(log),
-                          log.kind.value, log.notes, fitted_maps)
+    return PointDiagnosis(verdict, rounds, current, nz, explanations, equations=statuses(log),
+                          maps=direction_maps(log), kind=log.kind.value, notes=log.notes, fitted_maps=fitted_maps)
 
 
 @dataclass(frozen=True)

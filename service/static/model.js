@@ -162,6 +162,7 @@ function showDiagnose(res) {
     vd.appendChild(p);
   }
   vd.dataset.verdict = verdict.join(",");
+  showDiagnosisDetails(res, vd);
   const tb = emptied("#m-ranking tbody");
   for (const e of res.ranking || []) {
     const cb = document.createElement("input");
@@ -176,6 +177,40 @@ function showDiagnose(res) {
     r.dataset.effect = e.effect;
     tb.appendChild(r);
   }
+}
+
+/* Alignment, ambiguity, calibration and the angle spectrum's peak, in a block after the verdict. */
+function showDiagnosisDetails(res, after) {
+  let box = document.getElementById("m-diag-details");
+  if (!box) {
+    box = document.createElement("div");
+    box.id = "m-diag-details";
+    box.className = "muted";
+    after.insertAdjacentElement("afterend", box);
+  }
+  box.replaceChildren();
+  const line = (text, id) => {
+    const p = document.createElement("div");
+    if (id) p.id = id;
+    p.textContent = text;
+    box.appendChild(p);
+  };
+  for (const a of res.ambiguous || []) line(`Ambiguous: ${a.adopted} or ${a.alternative} — ${a.reason}`, "m-ambiguous");
+  const al = res.alignment;
+  if (al) {
+    line(`Alignment: the command acts ${fmt(al.samples, 3)} samples (${fmt(1e3 * al.seconds, 3)} ms) after its row` +
+         (al.called_input_delay ? " — called input_delay." : " — removed as a logging convention.") + ` Rule: ${al.rule}`,
+         "m-alignment");
+  }
+  const cal = res.calibration || {};
+  const keys = Object.keys(cal);
+  if (keys.length) {
+    const tol = 100 * (res.tolerance ?? 0.1);
+    const parts = keys.map((k) => `${k} ${fmt(100 * cal[k].relative, 2)} %${cal[k].named ? " (named)" : ""}`);
+    line(`Calibration (within ±${fmt(tol, 2)} % a constant is refined, not named): ${parts.join(", ")}`, "m-calibration");
+  }
+  const ap = res.angle_periodic;
+  if (ap) line(`Angle-periodic torque: strongest at ${ap.periods} periods/rev, ${fmt(ap.amplitude, 3)} N m`, "m-angle");
 }
 
 function showFit(res) {

@@ -1,0 +1,140 @@
+"""Timing alignment between the logged command and the sensors: a nuisance estimated before anything else.
+
+A logged command drives the armature some time after the row it is logged in: a zero-order-held drive
+applies it over the following sample (half a sample on average), a loop that logs the command it is
+about to write next to the sensors it just read adds a whole sample, a drive that latches on the next
+PWM period adds a fraction. The *alignment* is that lag, in samples, beyond the zero-order hold.
+
+Estimate: the armature equation over one held sample (eq. dc_electrical, exact under a zero-order
+hold) with free coefficients, so wrong nominal constants do not bias it, plus brush-drop, dead-band and
+offset terms: ``i[k+1] = a1 i[k] + a2 V[k - lag] + a3 w[k+1/2] + a4 sign(i) + a5 + a6 sign(V[k - lag])``,
+fitted by least squares (raw samples) for lags on a grid of 1/8 sample; the lag of the smallest residual,
+refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k command drives
+k -> k+1). A minimum that is not sharp (residual within 1 % one sample either side: slow, smooth
+excitation) leaves the lag unidentifiable; none is assumed then, and none is called a delay.
+
+Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
+conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
+drive's update instant); it is removed from the log and reported as ``alignment``. Beyond that, the lag is
+a transport delay: ``input_delay`` enters the verdict with ``delay`` = the whole lag [s].
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import signal
+
+from ocp.logs import Log, LogKind
+
+#: finest lag step [samples] and the search range [samples]
+LAG_STEP = 0.125
+MAX_LAG = 24.0
+
+
+@dataclass(frozen=True)
+class Alignment:
+    """Command-to-sensor alignment.
+
+    Attributes:
+        samples: lag beyond the zero-order hold [samples] (0 for a log whose row k command drives k -> k+1)
+        seconds: the same [s]
+        delay: True when the rule calls it an ``input_delay`` (then ``seconds`` is the delay)
+        rule: the rule in words
+        curve: (lags [samples], normalised residual RMS) of the search, for plots
+    """
+
+    samples: float
+    seconds: float
+    delay: bool
+    rule: str
+    curve: tuple[tuple[float, ...], tuple[float, ...]] = ((), ())
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"samples": round(self.samples, 3), "seconds": self.seconds,
+                "called_input_delay": self.delay, "rule": self.rule}
+
+
+def smooth(y: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
+    """Zero-phase 2nd-order Butterworth low-pass of ``y`` (N,) at ``cutoff`` [Hz] (identity at/above Nyquist)."""
+    wn = 2.0 * cutoff * dt
+    if wn >= 0.95 or y.size < 20:
+        return y.astype(float)
+    b, a = signal.butter(2, wn)
+    return np.asarray(signal.filtfilt(b, a, y, padlen=min(3 * max(len(a), len(b)), y.size - 1)), float)
+
+
+def shifted(y: np.ndarray, lag: float) -> np.ndarray:
+    """``y`` (N,) delayed by ``lag`` samples (fractional: linear interpolation; edges held)."""
+    k = np.arange(y.size, dtype=float)
+    return np.interp(k - lag, k, y)
+
+
+def cutoff_hz(log: Log, tau_m: float) -> float:
+    """Low-pass used on every channel before derivatives [Hz]: ``4/tau_m`` (about 25 times the mechanical
+    bandwidth, ``tau_m = J R / (k_t k_e)`` [s] nominal), within 2 Hz .. 15 % of the sample rate."""
+    return float(np.clip(4.0 / tau_m, 2.0, min(0.15 / log.dt, 400.0)))
+
+
+def _residual(target: np.ndarray, gram: np.ndarray, cross: np.ndarray, cols: np.ndarray, v: np.ndarray) -> float:
+    """RMS of the least-squares fit of ``target`` (M,) by ``cols`` (M, P) (Gram ``gram``, ``cross`` = cols' target),
+    the command ``v`` (M,) and a dead-band term of it; normal equations (few columns, many rows)."""
+    extra = np.column_stack([v, np.tanh(v / (0.05 * np.std(v) + 1e-12))])
+    p = cols.shape[1]
+    g = np.empty((p + 2, p + 2))
+    g[:p, :p] = gram
+    g[:p, p:] = np.einsum("mp,mq->pq", cols, extra)
+    g[p:, :p] = g[:p, p:].T
+    g[p:, p:] = np.einsum("mp,mq->pq", extra, extra)
+    h = np.concatenate([cross, np.einsum("mq,m->q", extra, target)])
+    d = np.sqrt(np.maximum(np.diag(g), 1e-300))
+    x = np.linalg.lstsq(g / np.outer(d, d), h / d, rcond=1e-12)[0] / d
+    ss = float(target @ target - 2 * h @ x + x @ g @ x)
+    return math.sqrt(max(ss, 0.0) / target.size)
+
+
+def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
+    """Alignment of a time-series log (see module doc); steady-state sweeps have none."""
+    rule = (f"lags up to {max_logging_skew:g} + 0.75 samples are logging conventions, removed and reported; "
+            "a longer lag is an input_delay (the whole lag)")
+    if log.kind is LogKind.STEADY_STATE:
+        return Alignment(0.0, 0.0, False, rule)
+    dt = log.dt
+    v, i, w = log.voltage, log.current, log.omega  # raw: the relation is exact per held sample
+    edge = int(MAX_LAG) + 10
+    k = np.arange(edge, max(edge + 10, log.n - 10))
+    ibar = 0.5 * (i[k] + i[k + 1])
+    cols = np.column_stack([i[k], 0.5 * (w[k] + w[k + 1]), np.tanh(ibar / (0.05 * np.std(i) + 1e-12)),
+                            np.ones(k.size)])
+    lags = np.arange(0.0, MAX_LAG + 1e-9, LAG_STEP)
+    gram, cross = np.einsum("mp,mq->pq", cols, cols), np.einsum("mp,m->p", cols, i[k + 1])
+    res = np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k]) for lag in lags])
+    j = int(np.argmin(res))
+    lag = float(lags[j])
+    if 0 < j < lags.size - 1:  # parabola through the neighbours
+        den = res[j - 1] - 2 * res[j] + res[j + 1]
+        if den > 0:
+            lag += 0.5 * LAG_STEP * (res[j - 1] - res[j + 1]) / den
+    samples = max(lag, 0.0)
+    one = round(1.0 / LAG_STEP)  # a sharp minimum: the residual rises by >= 1 % one sample either side
+    side = [res[x] for x in (j - one, j + one) if 0 <= x < lags.size]
+    if not (side and min(side) >= 1.01 * res[j]):
+        samples = 0.0
+        rule += "; here the lag is not identifiable (flat residual), none is assumed"
+    curve = (tuple(float(x) for x in lags), tuple(float(x / (np.std(i) or 1.0)) for x in res))
+    return Alignment(float(samples), float(samples * dt), bool(samples > max_logging_skew + 0.75), rule, curve)
+
+
+def realign(log: Log, samples: float) -> Log:
+    """The log with its command moved ``samples`` later, so that row k's command drives k -> k+1 (eq. ZOH)."""
+    if samples <= 0 or log.kind is LogKind.STEADY_STATE:
+        return log
+    return Log(log.t, shifted(log.voltage, samples), log.current, log.omega, log.theta, log.thrust, log.kind,
+               log.source)
+
+
+def sample_rate(log: Log) -> float:
+    return 1.0 / log.dt if log.kind is LogKind.TIME_SERIES else math.nan

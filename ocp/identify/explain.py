@@ -1,0 +1,115 @@
+"""From a fitted explanation (:class:`.select.Fitted`) back to physics: effect parameters, the calibrated
+plant, the calibration table, and words."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ocp.effects import CATALOGUE, EffectBase, make_effect
+from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
+from ocp.identify.regression import CONSTANTS, Design
+from ocp.identify.select import Fitted
+from ocp.params import MotorParams
+from ocp.plant import DCMotorPlant
+
+#: which MotorParams keys a regression constant scales
+KEYS = {"J": ("J",), "B": ("B",), "c_tau": ("c_tau",), "c_f": ("c_f",), "k": ("k_t", "k_e"), "R": ("R",),
+        "L": ("L",)}
+UNITS = {**PARAM_UNITS, "k": "N m/A = V s/rad"}
+SIGNATURE = {**PARAM_SIGNATURE, "k": "torque residual proportional to the current and voltage residual "
+                                     "proportional to the speed, in the ratio of k_t to k_e"}
+
+
+def item_name(item: str) -> str:
+    """Verdict name: effects by catalogue name, constants as ``param:<key>``."""
+    return f"param:{item}" if item in CONSTANTS else item
+
+
+def relative(design: Design, f: Fitted, const: str) -> float:
+    """Fitted relative error x of a constant (true = nominal (1 + x))."""
+    return float(f.coefficient(design.index(const)[0]))
+
+
+def effect_values(design: Design, f: Fitted, item: str) -> dict[str, float]:
+    """Catalogue parameters (SI) of an adopted effect from its fitted columns."""
+    picked = [(design.columns[j], f.coefficient(j)) for j in f.cols if design.columns[j].item == item]
+    if not picked:
+        return {}
+    col, x = picked[0]
+    if item == "stribeck":
+        return {"tau_s": max(x, 0.0), "omega_s": col.shape}
+    if item == "voltage_deadband":
+        return {"v_db": max(x, 0.0)}
+    if item == "thrust_lag":
+        return {"tau": col.shape}
+    if item == "cogging":
+        out = {c.key: x_ for c, x_ in picked}
+        return {**out, "periods": col.shape}
+    return {col.key: x}
+
+
+def params_of(p: MotorParams, design: Design, f: Fitted) -> MotorParams:
+    """Nominal constants scaled by their fitted relative errors (calibration and named corrections)."""
+    data = p.model_dump()
+    for c in CONSTANTS:
+        for key in KEYS[c]:
+            data[key] = float(data[key]) * (1.0 + relative(design, f, c))
+    data["B"] = max(data["B"], 0.0)
+    return MotorParams(**data)
+
+
+def plant_of(plant: DCMotorPlant, design: Design, f: Fitted, delay: float | None) -> DCMotorPlant:
+    """The user's plant with the explanation in: calibrated constants, adopted effects, a delay if called."""
+    effects = list(plant.effects)
+    for item in f.items:
+        if item not in CONSTANTS:
+            effects.append(make_effect(item, effect_values(design, f, item)))
+    if delay is not None and delay > 0:
+        effects.append(make_effect("input_delay", {"delay": delay}))
+    return DCMotorPlant(params_of(plant.params, design, f), tuple(effects))
+
+
+def calibration(p: MotorParams, design: Design, f: Fitted, tol: float) -> dict[str, dict[str, Any]]:
+    """Per constant: nominal, fitted, relative change, and whether it is named (beyond ``tol``)."""
+    out = {}
+    for c in CONSTANTS:
+        x = relative(design, f, c)
+        nominal = float(getattr(p, KEYS[c][0]))
+        out[c] = {"nominal": nominal, "fitted": nominal * (1.0 + x), "relative": x, "unit": UNITS[c],
+                  "named": c in f.items, "within_tolerance": bool(abs(x) <= tol + 1e-9)}
+    return out
+
+
+def explain(item: str, values: dict[str, float], p: MotorParams, design: Design, f: Fitted) -> str:
+    """One sentence with the fitted magnitude, units and the signature that gives it away."""
+    if item in CONSTANTS:
+        x = relative(design, f, item)
+        v0 = float(getattr(p, KEYS[item][0]))
+        return (f"{item} correction: nominal {v0:.4g} -> fitted {v0 * (1 + x):.4g} {UNITS[item]} "
+                f"({100 * x:+.1f} %). Signature: {SIGNATURE[item]}")
+    if not values or not all(math.isfinite(v) for v in values.values()):
+        return item
+    eff = make_effect(item, values)
+    text = eff.describe() if isinstance(eff, EffectBase) else item
+    if item == "cogging":
+        amp = math.hypot(values.get("tau_sin", 0.0), values.get("tau_cos", 0.0))
+        text += f" {int(values['periods'])} periods per revolution, amplitude {amp:.3g} N m."
+    return text
+
+
+def units(item: str) -> dict[str, str]:
+    if item in CONSTANTS:
+        return {item: UNITS[item]}
+    return dict(CATALOGUE[item].units)
+
+
+def spectrum_peak(design: Design) -> dict[str, Any] | None:
+    """The angle spectrum's strongest period count and amplitude [N m] (None when not computed)."""
+    if not design.spectrum:
+        return None
+    s = np.asarray(design.spectrum)
+    return {"periods": int(np.argmax(s)) + 1, "amplitude": float(np.max(s)),
+            "median_amplitude": float(np.median(s)), "amplitudes": [float(v) for v in s]}

@@ -1,0 +1,279 @@
+"""Equation-error regression: every candidate as columns of one linear least-squares problem.
+
+The three model equations, written as residuals of the NOMINAL plant on the (aligned, low-passed) log
+(all (N,), SI)::
+
+    r_mech = k_t i - J w' - B w - c_tau w|w|      [N m]   eq. dc_mechanical
+    r_elec = V - L i' - R i - k_e w               [V]     eq. dc_electrical
+    r_thr  = F - c_f w|w|                         [N]     eq. thrust_model
+
+are explained by a linear combination of columns, one set per candidate:
+
+* a constant off by a relative ``x`` (true = nominal (1 + x)): ``J w'``, ``B w``, ``c_tau w|w|``,
+  ``c_f w|w|`` (thrust), ``R i``, ``L i'``, and the motor constant ``k`` (k_t = k_e, both scaled):
+  ``-k_t i`` (mech) with ``k_e w`` (elec);
+* an effect at unit amplitude, taken from the catalogue's own hooks (:mod:`ocp.effects`): load torques
+  (mech), the drive-voltage loss ``V - V_a`` (elec), the thrust change (thr), a current-sensor offset
+  (``+k_t`` in mech, ``-R`` in elec);
+* effects with a shape parameter (Stribeck speed, dead-band width, wake time constant) get one column per
+  value on a grid; cogging gets ``sin/cos(n theta)`` with ``n`` from the residual's spectrum against angle.
+
+Rows are split into training and held-out samples (every ``holdout_every``-th segment); each
+equation is weighted by its noise level. Only Gram matrices leave this module: fitting a model (a
+subset of columns, bounded) and scoring it on held-out rows are ``P x P`` algebra (:mod:`.select`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ocp.effects import CATALOGUE, Cogging, ThrustLag, make_effect
+from ocp.identify.align import cutoff_hz, smooth
+from ocp.logs import Log, LogKind
+from ocp.params import MotorParams
+from ocp.plant import NUMPY
+
+EQS = ("mechanical", "electrical", "thrust")
+CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
+#: effects found by regression (input_delay is found by the alignment)
+REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")
+GRID = 12
+MAX_PERIODS = 64
+
+
+@dataclass(frozen=True)
+class Column:
+    """One regressor: its candidate, the shape value it was built with, and its parameter name."""
+
+    item: str
+    key: str
+    shape: float = math.nan
+
+
+@dataclass
+class Design:
+    """Weighted Gram matrices of all columns, per equation, on training and held-out rows.
+
+    Attributes:
+        columns: (Q,) descriptions
+        g_train, g_test: (3, Q, Q) ``A_e^T A_e`` per equation e (weighted)
+        h_train, h_test: (3, Q) ``A_e^T r_e``
+        c_train, c_test: (3,) ``r_e^T r_e``
+        n_train, n_test: (3,) row counts
+        sigma: (3,) equation weights (noise level) [N m, V, N]
+        periods: cogging periods per revolution chosen from the spectrum, and its amplitude [N m]
+        spectrum: amplitude [N m] per period count 1..64 of the torque residual against angle
+    """
+
+    columns: list[Column]
+    g_train: np.ndarray
+    g_test: np.ndarray
+    h_train: np.ndarray
+    h_test: np.ndarray
+    c_train: np.ndarray
+    c_test: np.ndarray
+    n_train: np.ndarray
+    n_test: np.ndarray
+    sigma: np.ndarray
+    periods: int = 0
+    spectrum: list[float] = field(default_factory=list)
+    unresolved: dict[str, str] = field(default_factory=dict)
+    independence: float = 1.0  # fraction of rows that are independent (low-passed rows are correlated)
+
+    def index(self, item: str) -> list[int]:
+        return [j for j, c in enumerate(self.columns) if c.item == item]
+
+
+@dataclass(frozen=True)
+class Signals:
+    """Low-passed log channels over the held intervals k -> k+1, (M,) SI with M = N - 1 (sweeps: M = N).
+
+    ``w0, w1``/``i0, i1``: at the interval's start and end; ``w, i``: their means; ``v``: the held command;
+    ``f``, ``theta``: at the start; ``dt`` [s] (0 for a steady-state sweep: no dynamics).
+    """
+
+    w0: np.ndarray
+    w1: np.ndarray
+    i0: np.ndarray
+    i1: np.ndarray
+    w: np.ndarray
+    i: np.ndarray
+    v: np.ndarray
+    f: np.ndarray
+    theta: np.ndarray | None
+    t: np.ndarray
+    dt: float
+
+
+def signals(log: Log, p: MotorParams) -> Signals:
+    if log.kind is LogKind.STEADY_STATE:
+        w, i = log.omega, log.current
+        return Signals(w, w, i, i, w, i, log.voltage, log.thrust, log.theta, log.t, 0.0)
+    dt, fc = log.dt, cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
+    i, v, f = (smooth(getattr(log, ch), dt, fc) for ch in ("current", "voltage", "thrust"))
+    # a logged angle gives the speed without the lag of a backward-differenced or filtered speed column
+    w = smooth(np.gradient(log.theta, dt) if log.theta is not None else log.omega, dt, fc)
+    theta = log.theta if log.theta is not None else np.concatenate(
+        [[0.0], np.cumsum(0.5 * (log.omega[1:] + log.omega[:-1]) * dt)])
+    return Signals(w[:-1], w[1:], i[:-1], i[1:], 0.5 * (w[:-1] + w[1:]), 0.5 * (i[:-1] + i[1:]), v[:-1], f[:-1],
+                   theta[:-1], log.t[:-1], dt)
+
+
+def _armature(s: Signals, r: float, el: float) -> np.ndarray:
+    """Voltage [V] that drives the current from i0 to i1 over one held sample (eq. dc_electrical, exact
+    for a constant voltage: i1 = a i0 + (1 - a) V / R with a = exp(-R dt / L)); sweeps: R i."""
+    if s.dt == 0:
+        return r * s.i
+    a = math.exp(-r * s.dt / el)
+    return r * (s.i1 - a * s.i0) / (1.0 - a)
+
+
+def targets(p: MotorParams, s: Signals) -> np.ndarray:
+    """Nominal-model residuals (3, M): r_mech [N m], r_elec [V], r_thr [N] (module doc)."""
+    dw = (s.w1 - s.w0) / s.dt if s.dt > 0 else 0.0 * s.w
+    return np.vstack([p.k_t * s.i - p.J * dw - p.B * s.w - p.c_tau * s.w * np.abs(s.w),
+                      s.v - _armature(s, p.R, p.L) - p.k_e * s.w,
+                      s.f - p.c_f * s.w0 * np.abs(s.w0)])
+
+
+def constant_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
+    """(3, M) per constant: the residual a relative error x = 1 of that constant leaves (to first order;
+    R and L through the exact armature step by central differences)."""
+    z = np.zeros_like(s.w)
+    dw = (s.w1 - s.w0) / s.dt if s.dt > 0 else z
+    h = 1e-4
+
+    def arm(dr: float, dl: float) -> np.ndarray:
+        return (_armature(s, p.R * (1 + dr), p.L * (1 + dl)) - _armature(s, p.R * (1 - dr), p.L * (1 - dl))) / (2 * h)
+
+    return {"J": np.vstack([p.J * dw, z, z]), "B": np.vstack([p.B * s.w, z, z]),
+            "c_tau": np.vstack([p.c_tau * s.w * np.abs(s.w), z, z]),
+            "c_f": np.vstack([z, z, p.c_f * s.w0 * np.abs(s.w0)]),
+            "k": np.vstack([-p.k_t * s.i, p.k_e * s.w, z]), "R": np.vstack([z, arm(h, 0.0), z]),
+            "L": np.vstack([z, arm(0.0, h), z])}
+
+
+def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> np.ndarray:
+    """(3, N): an effect's contribution at these parameter values, through the catalogue's hooks."""
+    eff = make_effect(name, values)
+    z = np.zeros_like(s.w)
+    mech = np.asarray(eff.load_torque(s.w, NUMPY, None), float) + z
+    elec = s.v - np.asarray(eff.drive_voltage(s.v, s.i, NUMPY), float)
+    ideal = p.c_f * s.w0 * np.abs(s.w0)
+    thr = np.asarray(eff.thrust(ideal, s.w0, NUMPY, None), float) - ideal
+    offset = float(eff.measured_current(0.0))
+    return np.vstack([mech + p.k_t * offset, elec - p.R * offset, thr])
+
+
+def _grid(lo: float, hi: float) -> np.ndarray:
+    return np.geomspace(lo, hi, GRID)
+
+
+def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int) -> list[tuple[Column, np.ndarray]]:
+    """Columns of one effect (one per shape value for shaped effects)."""
+    w_peak = float(np.max(np.abs(s.w))) or 1.0
+    v_peak = float(np.max(np.abs(s.v))) or 1.0
+    if name == "stribeck":
+        return [(Column(name, "tau_s", ws), _effect(name, {"tau_s": 1.0, "omega_s": ws}, p, s))
+                for ws in _grid(0.003 * w_peak, 0.15 * w_peak)]
+    if name == "voltage_deadband":
+        return [(Column(name, "v_db", vd), _effect(name, {"v_db": vd}, p, s) / vd)
+                for vd in _grid(0.005 * v_peak, 0.3 * v_peak)]
+    if name == "thrust_lag":
+        if log.kind is LogKind.STEADY_STATE:
+            return []
+        ideal = p.c_f * s.w0 * np.abs(s.w0)
+        out = []
+        for tau in _grid(max(2 * log.dt, 1e-3), 1.0):
+            lagged = ThrustLag(tau=tau).observe(s.t, s.w0, s.v, ideal, None)[0]
+            out.append((Column(name, "tau", tau), np.vstack([0 * ideal, 0 * ideal, lagged - ideal])))
+        return out
+    if name == "cogging":
+        if s.theta is None or periods < 1:
+            return []
+        z = np.zeros_like(s.w)
+        theta = np.append(s.theta, s.theta[-1] + s.w1[-1] * s.dt)
+        out = []
+        for k in ("tau_sin", "tau_cos"):  # the ripple at the sample instants, low-passed like the signals,
+            ripple = np.asarray(Cogging(**{k: 1.0}, periods=periods).bound_load_torque([theta], theta, NUMPY))
+            ripple = smooth(ripple, log.dt, cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)))
+            out.append((Column(name, k, float(periods)), np.vstack([0.5 * (ripple[:-1] + ripple[1:]), z, z])))
+        return out  # averaged over each held interval
+    key = CATALOGUE[name].fitted[0]
+    return [(Column(name, key), _effect(name, {key: 1.0}, p, s))]
+
+
+def angle_spectrum(resid: np.ndarray, theta: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Amplitude [N m] of ``resid`` (N,) at 1..64 periods per revolution of ``theta`` (N,) on ``rows``."""
+    n = np.arange(1, MAX_PERIODS + 1)
+    r = resid[rows] - resid[rows].mean()
+    ph = np.exp(-1j * np.outer(n, theta[rows]))
+    return np.asarray(2.0 * np.abs(ph @ r) / max(r.size, 1), float)
+
+
+def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
+    """Per equation: the residual (N,) of the least-squares fit by every column's part in it (unbounded)."""
+    a = np.column_stack(cols) if cols else np.zeros((t.size, 0))
+    keep = np.flatnonzero(np.any(a != 0, axis=0)) if a.size else np.zeros(0, int)
+    a = a[:, keep]
+    if a.shape[1] == 0:
+        return t
+    x, *_ = np.linalg.lstsq(a[rows], t[rows], rcond=None)
+    return t - a @ x
+
+
+def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects: tuple[str, ...]) -> Design:
+    """Gram matrices (module doc) of the constants and ``effects`` on the ``train``/``test`` masks (N,)."""
+    s = signals(log, p)
+    t = targets(p, s)
+    rows = s.w.size
+    edge = np.zeros(rows, dtype=bool)
+    if log.kind is LogKind.TIME_SERIES:  # the low-pass's start-up and run-out transients
+        m = min(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt)), rows // 6)
+        edge[:m] = edge[rows - m:] = True
+    train, test = train[:rows] & ~edge, test[:rows] & ~edge
+    cols: list[tuple[Column, np.ndarray]] = [(Column(c, c), a) for c, a in constant_columns(p, s).items()]
+    for name in effects:
+        if name != "cogging":
+            cols += effect_columns(name, p, s, log, 0)
+    # noise level per equation: what the richest fit (one shape per effect) leaves on training rows
+    # (the motor constant is left out: with it, J, B and c_tau the torque balance scales to zero)
+    rich = [a for c, a in cols if c.item != "k" and (math.isnan(c.shape) or c.shape == _mid(cols, c.item))]
+    resid = np.vstack([_rich_residual(t[e], [a[e] for a in rich], train) for e in range(3)])
+    periods, spectrum = 0, np.zeros(0)
+    if "cogging" in effects and s.theta is not None and log.kind is LogKind.TIME_SERIES:
+        spectrum = angle_spectrum(resid[0], s.theta, train)
+        periods = int(np.argmax(spectrum)) + 1
+        cols += effect_columns("cogging", p, s, log, periods)
+        rich = [*rich, *(a for c, a in cols if c.item == "cogging")]
+        resid[0] = _rich_residual(t[0], [a[0] for a in rich], train)
+    sigma = np.array([max(float(np.sqrt(np.mean(resid[e][train] ** 2))), 1e-12 * (np.std(t[e]) + 1e-30))
+                      for e in range(3)])
+    a_all = np.stack([a for _, a in cols], axis=2) / sigma[:, None, None]  # (3, N, Q)
+    tw = t / sigma[:, None]
+    g = {k: np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for k, m in (("tr", train), ("te", test))}
+    h = {k: np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
+    c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
+    n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
+    return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
+                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log),
+                  1.0 if s.dt == 0 else min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt))
+
+
+def unresolved(p: MotorParams, log: Log) -> dict[str, str]:
+    """Constants this log cannot resolve from logger artefacts, with the reason: the inductance when the
+    electrical time constant L/R is under two samples (a current filter or a fraction of a sample of
+    command timing then looks the same)."""
+    out = {}
+    if log.kind is LogKind.STEADY_STATE or p.L / p.R < 2 * log.dt:
+        out["L"] = (f"L/R = {1e3 * p.L / p.R:.3g} ms is under two samples ({1e3 * log.dt:.3g} ms): the log cannot tell "
+                    "an inductance error from current filtering or sub-sample command timing")
+    return out
+
+
+def _mid(cols: list[tuple[Column, np.ndarray]], item: str) -> float:
+    shapes = sorted(c.shape for c, _ in cols if c.item == item and not math.isnan(c.shape))
+    return shapes[len(shapes) // 2] if shapes else math.nan

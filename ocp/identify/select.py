@@ -1,0 +1,165 @@
+"""Competing explanations on held-out evidence, over the Gram matrices of :mod:`.regression`.
+
+A *model* is a set of items: catalogue effects and named constants. Fitting it is a bounded linear
+least-squares problem on the training rows: every constant is always refined (that is calibration),
+within ``+-tolerance`` of nominal unless the model *names* it (then within -80 % .. +300 %); effects
+in the model get their columns (the best shape on a grid by training cost), sign-bounded as the
+catalogue's lower bounds say; effects outside it are zero. Its score is the held-out RMS of the three
+weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise).
+
+Forward selection adopts the item with the best held-out score while the score is above
+``noise_floor`` and falls by at least ``min_improvement``. Then every adopted item is challenged: an
+alternative that swaps it for another item and scores within ``ambiguity_margin`` makes the verdict
+``ambiguous`` (both candidates and the reason are reported) instead of a confident wrong name.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import lsq_linear
+
+from ocp.effects import CATALOGUE
+from ocp.identify.regression import CONSTANTS, Design
+
+NAMED_BOUNDS = (-0.8, 3.0)
+
+
+@dataclass(frozen=True)
+class Fitted:
+    """A model fitted on training rows: its items, chosen columns, coefficients, training cost, held-out score."""
+
+    items: tuple[str, ...]
+    cols: tuple[int, ...]
+    x: np.ndarray
+    train_cost: float
+    score: float
+    per_eq: np.ndarray  # held-out RMS per equation [sigma units], (3,)
+
+    def coefficient(self, j: int) -> float:
+        return float(self.x[self.cols.index(j)]) if j in self.cols else 0.0
+
+
+def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float) -> tuple[np.ndarray, np.ndarray]:
+    lo, hi = [], []
+    for j in cols:
+        c = design.columns[j]
+        if c.item in CONSTANTS:
+            a, b = NAMED_BOUNDS if c.item in named else (-tol, tol)
+        else:
+            a, b = (0.0 if CATALOGUE[c.item].bounds.get(c.key, (-1.0, 1.0))[0] >= 0 else -np.inf), np.inf
+        lo.append(a)
+        hi.append(b)
+    return np.array(lo), np.array(hi)
+
+
+def solve(design: Design, cols: Sequence[int], named: set[str], tol: float) -> Fitted:
+    """Bounded least squares on the training Gram matrices (``min x'Gx - 2h'x``) of columns ``cols``."""
+    idx = np.array(cols, dtype=int)
+    g = design.g_train.sum(axis=0)[np.ix_(idx, idx)]
+    h = design.h_train.sum(axis=0)[idx]
+    d = np.sqrt(np.maximum(np.diag(g), 1e-300))
+    gs = g / np.outer(d, d) + 1e-10 * np.eye(idx.size)
+    lo, hi = _bounds(design, cols, named, tol)
+    try:
+        r = np.linalg.cholesky(gs).T
+    except np.linalg.LinAlgError:
+        r = np.linalg.cholesky(gs + 1e-6 * np.eye(idx.size)).T
+    y = np.linalg.solve(gs, h / d)  # unconstrained first; bounded only when a bound binds
+    if np.any(y < lo * d) or np.any(y > hi * d):
+        y = lsq_linear(r, np.linalg.solve(r.T, h / d), bounds=(lo * d, hi * d), method="bvls").x
+    x = y / d
+    cost = float(design.c_train.sum() - 2 * h @ x + x @ g @ x)
+    ms = np.array([(design.c_test[e] - 2 * design.h_test[e][idx] @ x + x @ design.g_test[e][np.ix_(idx, idx)] @ x)
+                   / max(design.n_test[e], 1) for e in range(3)])
+    live = design.n_test > 0
+    per_eq = np.sqrt(np.maximum(ms, 0.0))
+    score = float(np.sqrt(np.mean(ms[live]))) if live.any() else math.inf
+    return Fitted((), tuple(int(j) for j in idx), x, cost, score, per_eq)
+
+
+def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
+    """Fit a model (module doc): shaped effects take their best grid column by training cost."""
+    base = [j for c in CONSTANTS for j in design.index(c)]
+    named = {i for i in items if i in CONSTANTS}
+    chosen: list[int] = list(base)
+    for item in items:
+        if item in CONSTANTS:
+            continue
+        js = design.index(item)
+        shapes = sorted({design.columns[j].shape for j in js if not math.isnan(design.columns[j].shape)})
+        if design.columns[js[0]].item == "cogging" or not shapes:
+            chosen += js
+            continue
+        best: Fitted | None = None
+        for j in js:
+            f = solve(design, [*chosen, j], named, tol)
+            if best is None or f.train_cost < best.train_cost:
+                best, pick = f, j
+        chosen.append(pick)
+    f = solve(design, chosen, named, tol)
+    return Fitted(tuple(items), f.cols, f.x, f.train_cost, f.score, f.per_eq)
+
+
+@dataclass(frozen=True)
+class Step:
+    """One forward-selection round: the model before, every challenger's fit, and the adopted one (or None)."""
+
+    before: Fitted
+    tried: list[tuple[str, Fitted]]
+    adopted: str | None
+
+
+@dataclass(frozen=True)
+class Selection:
+    final: Fitted
+    steps: list[Step]
+    ambiguous: list[dict[str, object]]
+
+
+def select(design: Design, pool: Sequence[str], tol: float, min_improvement: float, noise_floor: float,
+           max_items: int, margin: float, progress: Callable[[float], None] | None = None) -> Selection:
+    """Forward selection over ``pool`` (effects and constants), then the ambiguity challenge (module doc).
+    Constants the log cannot resolve (:attr:`.regression.Design.unresolved`) are calibrated, never named."""
+    pool = [c for c in pool if c not in design.unresolved and design.index(c)]  # (no columns: not testable here)
+    items: list[str] = []
+    current = fit_model(design, items, tol)
+    steps: list[Step] = []
+    for r in range(max_items):
+        tried = [(c, fit_model(design, [*items, c], tol)) for c in pool if c not in items]
+        tried.sort(key=lambda e: e[1].score)
+        if progress is not None:
+            progress((r + 1) / (max_items + 1))
+        ok = bool(tried) and current.score > noise_floor and tried[0][1].score <= (1 - min_improvement) * current.score
+        steps.append(Step(current, tried, tried[0][0] if ok else None))
+        if not ok:
+            break
+        items.append(tried[0][0])
+        current = tried[0][1]
+    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin))
+
+
+def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitted, tol: float,
+               margin: float) -> list[dict[str, object]]:
+    """Adopted items that another item explains as well on held-out data: within ``margin``, or within the
+    held-out score's own sampling scatter (two standard errors of an RMS over the independent held-out
+    rows, ``2 / sqrt(2 n)``), whichever is wider."""
+    live = design.n_test > 0
+    n_eff = float(design.n_test[live].sum()) * design.independence
+    margin = max(margin, 2.0 / math.sqrt(2.0 * max(n_eff, 1.0)))
+    out = []
+    for a, b in itertools.product(items, pool):
+        if b in items:
+            continue
+        alt = fit_model(design, [b if i == a else i for i in items], tol)
+        na, nb = (f"param:{x}" if x in CONSTANTS else x for x in (a, b))
+        if alt.score <= best.score * (1.0 + margin):
+            out.append({"adopted": a, "alternative": b, "score": best.score, "alternative_score": alt.score,
+                        "reason": f"replacing {na} by {nb} fits the held-out data as well "
+                                  f"({alt.score:.3g} vs {best.score:.3g} noise units, within {100 * margin:.1f} %): "
+                                  "this log cannot tell them apart"})
+    return out
