@@ -31,6 +31,7 @@ def one(seed: int) -> dict[str, Any]:
     """Generate case ``seed`` and diagnose it; a JSON-ready record."""
     from ocp.identify import diagnose
     from ocp.logs import log_from_arrays
+    from ocp.logs.timebase import uniform
     from ocp.params import MotorParams
     from ocp.plant import DCMotorPlant
     from tests.proving_ground import make_case
@@ -38,8 +39,9 @@ def one(seed: int) -> dict[str, Any]:
     t0 = time.perf_counter()
     case = make_case(seed)
     t1 = time.perf_counter()
-    c = case.columns
-    log = log_from_arrays(c["t"], c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"),
+    # a jittery logger's time stamps are resampled to a uniform grid, as the file readers do (and say)
+    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
+    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"),
                           source=f"proving-ground-{seed}")
     try:
         res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)

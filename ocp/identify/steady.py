@@ -227,6 +227,25 @@ def _try(current: DCMotorPlant, chosen: list[Candidate], cand: Candidate, pool_:
                           cand.explain(current, fitted.plant)), fitted.plant, (*extra, cand))
 
 
+def _rivals(best: _Try, tries: list[_Try], base: float, opt: DiagnoseOptions) -> list[dict[str, Any]]:
+    """Other candidates that fit the held-out rows as well as ``best``: held-out score within
+    ``ambiguity_margin`` of it, or both within the noise (``noise_floor``; ``base`` is the score before this
+    round, in noise units). The sweep cannot tell them apart (e.g. Coulomb friction and a viscous ``B``
+    change at one speed)."""
+    out: list[dict[str, Any]] = []
+    ref = base * (1.0 - best.entry.improvement)
+    for t in tries:
+        alt = base * (1.0 - t.entry.improvement)
+        if t is not best and t.entry.significant and alt <= max(ref * (1.0 + opt.ambiguity_margin), opt.noise_floor):
+            out.append({"adopted": best.entry.name, "alternative": t.entry.name, "score": ref,
+                        "alternative_score": alt,
+                        "reason": f"{t.entry.name} instead of {best.entry.name} fits the held-out points as well "
+                                  f"({alt:.3g} vs {ref:.3g} noise units; within {100 * opt.ambiguity_margin:.1f} % "
+                                  f"or both within the noise floor {opt.noise_floor:g}): "
+                                  "this log cannot tell them apart"})
+    return out
+
+
 def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None) -> PointDiagnosis:
     """Rank the time-free candidates on the checkable equations, point by point (module doc)."""
     opt = options or DiagnoseOptions()
@@ -240,6 +259,7 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
     rows = (~test, test)
     current, verdict, explanations, rounds = plant, [], [], []
     chosen: list[Candidate] = []
+    ambiguous: list[dict[str, Any]] = []
     cands = pool(log, opt, plant)
     for _ in range(opt.max_effects):
         base = score(current, log, test, nz)
@@ -251,6 +271,7 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
         best = next((t for t in tries if t.entry.significant), None)  # a paired one may rank first yet fail
         if best is None:
             break
+        ambiguous += _rivals(best, tries, base.combined, opt)
         if len(best.cands) > 1:  # the partner (c_f) is named too when it matters on its own
             alone = fit_candidates(current, [*chosen, best.cands[-1]], log, rows[0], scale)
             gain = 1.0 - score(best.plant, log, test, nz).combined / score(alone.plant, log, test, nz).combined
@@ -263,7 +284,7 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
         verdict.append(best.entry.name)
         explanations.append(f"{best.entry.explanation} Held-out error down {100 * best.entry.improvement:.0f} %.")
     fitted_maps = {"thrust_ratio_reverse_to_forward": finite(r) if (r := thrust_ratio(current, log)) else None}
-    return PointDiagnosis(verdict, rounds, current, nz, explanations, equations=statuses(log),
+    return PointDiagnosis(verdict, rounds, current, nz, explanations, ambiguous=ambiguous, equations=statuses(log),
                           maps=direction_maps(log), kind=log.kind.value, notes=log.notes, fitted_maps=fitted_maps)
 
 
