@@ -22,6 +22,7 @@ import json
 import multiprocessing as mp
 import os
 import signal
+import time
 from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache, partial
 from multiprocessing.connection import Connection
@@ -124,17 +125,19 @@ class StreamSession:
 
     async def _answer(self, timeout: float) -> Payload:
         loop = asyncio.get_running_loop()
-        outcome = await loop.run_in_executor(self._waiter, self._wait, timeout)
+        # the timeout counts from now, not from when the waiting thread gets to run
+        outcome = await loop.run_in_executor(self._waiter, self._wait, time.monotonic() + timeout)
         if outcome is None:
             self.close()
             raise TaskTimeout(timeout)
         return unwrap(outcome)
 
-    def _wait(self, timeout: float) -> Outcome | None:
-        """Blocking, in the session's thread: the child's next outcome, ``None`` after ``timeout`` [s]."""
+    def _wait(self, deadline: float) -> Outcome | None:
+        """Blocking, in the session's thread: the child's next outcome, ``None`` when it was not there by
+        ``deadline`` (``time.monotonic()`` [s])."""
         assert self._conn is not None
         try:
-            if not self._conn.poll(timeout):
+            if not self._conn.poll(max(deadline - time.monotonic(), 0.0)) or time.monotonic() > deadline:
                 return None
             return self._conn.recv()
         except (EOFError, OSError):
