@@ -57,6 +57,10 @@ class Settings(BaseSettings):
     optimize_grace_s: Annotated[float, Field(ge=0, le=600)] = 5.0
     #: share of the deadline kept for the analytic fallback when the solver overruns [s]
     fallback_reserve_s: Annotated[float, Field(gt=0, le=60)] = 2.0
+    #: how long a solver worker may go on building a new solver after the request that asked for it was
+    #: answered by the fallback (its deadline ran out during the build); the built solver is cached for the
+    #: next request. Past this the worker is killed [s]
+    solver_build_limit_s: Annotated[float, Field(ge=0, le=600)] = 60.0
     #: hard timeout of any other worker task (analytic, compare, model check) [s]
     task_timeout_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
     #: hard timeout of one batch item [s]; the item is retried up to ``batch_attempts`` times

@@ -56,9 +56,14 @@ def analytic_reference(payload: Payload) -> Payload:
 
 
 def optimize_mission(payload: Payload) -> Payload:
-    """Mission -> :meth:`ocp.optimize.OptimizeResult.to_dict` (the solver bounds its own CPU time)."""
+    """Mission -> :meth:`ocp.optimize.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
+    build is reported to the worker's parent (:func:`service.workers.report_phase`): it survives the deadline."""
+    from ocp import collocation
     from ocp.mission import Mission
+    from service.workers import report_phase
 
+    if report_phase not in collocation.BUILD_OBSERVERS:
+        collocation.BUILD_OBSERVERS.append(report_phase)
     optimize = importlib.import_module("ocp.optimize").optimize
     return optimize(Mission.model_validate(payload)).to_dict()
 
