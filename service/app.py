@@ -58,7 +58,7 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
             log.info("resuming %d batch items left running by a previous server", recovered)
         preload = ("ocp.analytic", "ocp.fallback", "ocp.mission", "service.tasks", *tasks.extra_preload)
         pool = WorkerPool(settings.workers, settings.queue_size, settings.retry_after_s, preload=preload,
-                          build_limit=settings.solver_build_limit_s)
+                          build_limit=settings.solver_build_limit_s, niceness=settings.solver_niceness)
         # the analytic fallback runs in its own processes: killable, and never queued behind the solves
         fallback_pool = WorkerPool(settings.fallback_workers, settings.queue_size + settings.workers,
                                    settings.retry_after_s,

@@ -27,6 +27,9 @@ class Settings(BaseSettings):
     #: processes for the analytic fallback of /v1/references/optimize (no IPOPT; they keep the fallback
     #: off the solver queue and out of the server process)
     fallback_workers: Annotated[int, Field(ge=1, le=64)] = 2
+    #: added to the solver processes' nice value: under overload the short, deadline-bound fallbacks and the
+    #: server's event loop get the CPU before the long solves
+    solver_niceness: Annotated[int, Field(ge=0, le=19)] = 5
     #: requests allowed to wait for a busy worker before new ones get 503 + Retry-After
     queue_size: Annotated[int, Field(ge=0, le=10_000)] = 8
     #: SQLite job store (WAL); created with its directory on start; ``<db_path>.lock`` keeps a second

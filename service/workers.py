@@ -22,6 +22,7 @@ import contextvars
 import importlib
 import logging
 import multiprocessing as mp
+import os
 import signal
 import time
 from collections.abc import Callable, Sequence
@@ -44,6 +45,13 @@ PHASES: dict[str, str] = {"queue": "waiting for a free worker", "start-up": "wai
                           "build": "building the solver", "run": "computing"}
 log = logging.getLogger("thrustshape.workers")
 _PARENT: list[Connection] = []  # inside a worker process: its end of the pipe (empty elsewhere)
+_UNTIL: list[float] = []  # inside a worker process: monotonic time at which the current call is killed
+
+
+def time_left() -> float | None:
+    """Inside a worker: seconds before the current call's process is killed (a task can stop its own work
+    before that, and keep the process and its caches); ``None`` outside a worker."""
+    return _UNTIL[0] - time.monotonic() if _UNTIL else None
 
 
 class TaskAbandoned(Exception):
@@ -115,8 +123,11 @@ def unwrap(outcome: Outcome) -> Payload:
     raise TaskFailed(str(value))
 
 
-def _worker_main(conn: Connection, preload: Sequence[str]) -> None:
+def _worker_main(conn: Connection, preload: Sequence[str], niceness: int = 0) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server decides when workers stop
+    if niceness:
+        with contextlib.suppress(OSError):
+            os.nice(niceness)
     for name in preload:
         with contextlib.suppress(ImportError):
             importlib.import_module(name)
@@ -131,15 +142,16 @@ def _worker_main(conn: Connection, preload: Sequence[str]) -> None:
             return
         if not isinstance(msg, tuple):  # a reply to a build report that came after its task ended
             continue
-        fn, payload = msg
+        fn, payload, budget = msg
+        _UNTIL[:] = [time.monotonic() + budget]
         conn.send(execute(fn, payload))
 
 
 class _Worker:
     """One solver process and the parent's end of its pipe; used by one thread at a time."""
 
-    def __init__(self, ctx: Any, preload: Sequence[str]) -> None:
-        self._ctx, self._preload = ctx, tuple(preload)
+    def __init__(self, ctx: Any, preload: Sequence[str], niceness: int = 0) -> None:
+        self._ctx, self._preload, self._niceness = ctx, tuple(preload), niceness
         self._ready = False
         self.conn: Connection
         self.proc: Any
@@ -147,7 +159,8 @@ class _Worker:
 
     def _spawn(self) -> None:
         parent, child = self._ctx.Pipe()
-        self.proc = self._ctx.Process(target=_worker_main, args=(child, self._preload), daemon=True,
+        self.proc = self._ctx.Process(target=_worker_main, args=(child, self._preload, self._niceness),
+                                      daemon=True,
                                       name="thrustshape-worker")
         self.proc.start()
         child.close()
@@ -190,7 +203,7 @@ class _Worker:
             raise TaskTimeout(timeout, "start-up")
         name = getattr(fn, "__name__", fn)
         try:
-            self.conn.send((fn, payload))
+            self.conn.send((fn, payload, budget))
             return self._follow(name, timeout, time.monotonic() + budget, on_overrun, build_limit)
         except (EOFError, OSError, BrokenPipeError):
             code = self.proc.exitcode
@@ -255,16 +268,18 @@ class WorkerPool:
     """
 
     def __init__(self, workers: int, queue_size: int, retry_after: int,
-                 preload: Sequence[str] = ("ocp.analytic", "ocp.fallback", "ocp.mission"), build_limit: float = 0.0
-                 ) -> None:
+                 preload: Sequence[str] = ("ocp.analytic", "ocp.fallback", "ocp.mission"), build_limit: float = 0.0,
+                 niceness: int = 0) -> None:
         """``build_limit`` [s]: how long a worker whose caller's deadline ran out during a reported build
-        (:func:`report_phase`) may go on building before it is killed (0: killed at the deadline)."""
+        (:func:`report_phase`) may go on building before it is killed (0: killed at the deadline).
+        ``niceness``: added to the processes' nice value (a pool of long solves yields the CPU to a pool of
+        short, deadline-bound fallbacks)."""
         self.size = workers
         self.build_limit = build_limit
         self.capacity = workers + queue_size
         self.retry_after = retry_after
         self._ctx = mp.get_context("spawn")
-        self._workers = [_Worker(self._ctx, preload) for _ in range(workers)]
+        self._workers = [_Worker(self._ctx, preload, niceness) for _ in range(workers)]
         self._threads = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="thrustshape-call")
         self._idle: asyncio.Queue[_Worker] = asyncio.Queue()
         for w in self._workers:
@@ -342,6 +357,9 @@ class WorkerPool:
         except BaseException as exc:  # handed to the awaiting request (a TaskTimeout, TaskFailed, ...)
             settle(None, exc)
         finally:
+            # a respawned process re-enters the pool once started: no request waits for a start-up it could skip
+            with contextlib.suppress(TaskFailed, TaskTimeout, OSError, EOFError):
+                worker._await_ready()
             if not loop.is_closed():
                 loop.call_soon_threadsafe(self._idle.put_nowait, worker)
 
