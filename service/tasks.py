@@ -71,7 +71,10 @@ def optimize_mission(payload: Payload) -> Payload:
     module = importlib.import_module("ocp.optimize")
     left = time_left()  # IPOPT stops early enough to verify and answer before the worker would be killed
     module.SOLVE_DEADLINE[0] = math.inf if left is None else time.perf_counter() + left - SOLVE_MARGIN_S
-    return module.optimize(Mission.model_validate(payload)).to_dict()
+    try:
+        return module.optimize(Mission.model_validate(payload)).to_dict()
+    finally:
+        module.SOLVE_DEADLINE[0] = math.inf  # no later task (a compare) inherits this call's deadline
 
 
 def fallback_mission(payload: Payload) -> Payload:
