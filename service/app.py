@@ -31,10 +31,11 @@ from service.api.middleware import ApiKeyGate, BodyLimit
 from service.api.routes import batches, compare, health, info, model_check, page, references
 from service.api.routes import stream as stream_route
 from service.batches import BatchRunner
+from service.dask_runner import DaskRunner
 from service.jobs import JobStore, StoreLocked, lock_store
 from service.settings import Settings
 from service.tasks import TaskSet, available_tasks, fallback_mission
-from service.workers import DaskRunner, Runner, WorkerPool
+from service.workers import Runner, WorkerPool
 
 log = logging.getLogger("thrustshape.service")
 

@@ -4,14 +4,17 @@
 nothing is shared with the server's threads). A task is any importable top-level function
 ``fn(payload: dict) -> dict``; it travels by reference over a pipe. Each call has a hard wall-clock
 timeout: when it expires the process is killed and replaced, so a runaway solve costs one process,
-never the server. Calls beyond ``workers + queue_size`` are refused at once with :class:`QueueFull`
-(the API answers 503 + Retry-After).
+never the server. A task may report an expensive one-off build (:func:`report_phase`): a deadline that runs
+out during it is answered at once, but the process finishes the build (up to the pool's ``build_limit``) and
+keeps it. Calls beyond ``workers + queue_size`` are refused at once with :class:`QueueFull` (the API answers
+503 + Retry-After).
 
 Errors cross the process boundary as data, not as pickled exceptions: a
 :class:`~ocp.errors.ThrustshapeError` raised by a task comes back as the same class with its
 ``field`` and ``reason``; anything else becomes :class:`TaskFailed`.
 
-:class:`DaskRunner` runs the same task functions on a ``distributed`` cluster (batch items only).
+:class:`service.dask_runner.DaskRunner` runs the same task functions on a ``distributed`` cluster (batch
+items only).
 """
 
 from __future__ import annotations
@@ -407,39 +410,7 @@ def _settle(answer: asyncio.Future[Outcome], outcome: Outcome | None, exc: BaseE
 
 
 class Runner(Protocol):
-    """Where batch items run: the local :class:`WorkerPool` or a :class:`DaskRunner`."""
+    """Where batch items run: the local :class:`WorkerPool` or a :class:`~service.dask_runner.DaskRunner`."""
 
     async def run(self, fn: TaskFn, payload: Payload, timeout: float, *, wait: bool = False,
                   deadline: float | None = None) -> Payload: ...
-
-
-class DaskRunner:
-    """Batch items on a Dask distributed cluster (``distributed.Client`` in asynchronous mode).
-
-    Dask cannot kill a running task: on timeout the future is cancelled and the item fails or is
-    retried, but the cluster thread finishes the call (solves bound their own CPU time).
-    """
-
-    def __init__(self, client: Any) -> None:
-        self._client = client
-
-    @classmethod
-    async def connect(cls, address: str) -> DaskRunner:
-        from distributed import Client
-
-        client = await Client(address, asynchronous=True, timeout="10s")
-        return cls(client)
-
-    async def run(self, fn: TaskFn, payload: Payload, timeout: float, *, wait: bool = False,
-                  deadline: float | None = None) -> Payload:
-        fut = self._client.submit(execute, fn, payload, pure=False)
-        try:
-            outcome = await asyncio.wait_for(fut, timeout)
-        except TimeoutError:
-            await self._client.cancel(fut)
-            log.warning("dask task %s abandoned after %g s", getattr(fn, "__name__", fn), timeout)
-            raise TaskTimeout(timeout) from None
-        return unwrap(outcome)
-
-    async def close(self) -> None:
-        await self._client.close()
