@@ -11,7 +11,7 @@ SIGKILLed every few seconds and the database locked by another process past the 
 It passes when no answer is a 5xx, every 200 is within its limits (``verification`` peaks), every 422
 is ``infeasible`` naming a limit, and every batch item finishes exactly once (none lost, none twice).
 
-    python bench/load.py [--workers 2] [--requests 40] [--json] [--faults [--fault-seconds 60]]
+    python bench/load.py [--workers 2] [--requests 40] [--json] [--faults [--fault-seconds 60] [--factor 2]]
 """
 
 from __future__ import annotations
@@ -146,6 +146,7 @@ def _over_limits(body: dict[str, Any], mission: dict[str, Any]) -> bool:
 
 
 async def _fault_clients(url: str, concurrency: int, seconds: float) -> dict[str, Any]:
+    late: list[float] = []  # seconds past each answer's own deadline (min(30, time_limit_s + 5))
     codes: Counter[int] = Counter()
     sources: Counter[str] = Counter()
     bad: list[str] = []
@@ -158,7 +159,9 @@ async def _fault_clients(url: str, concurrency: int, seconds: float) -> dict[str
         while time.monotonic() < end:
             m = missions[n % len(missions)]
             n += 1
+            t0 = time.monotonic()
             r = await http.post("/v1/references/optimize", json=m)
+            late.append(time.monotonic() - t0 - min(30.0, float(m["time_limit_s"]) + 5.0))
             codes[r.status_code] += 1
             if r.status_code == 200:
                 sources[r.json()["source"]] += 1
@@ -171,7 +174,8 @@ async def _fault_clients(url: str, concurrency: int, seconds: float) -> dict[str
 
     async with httpx.AsyncClient(base_url=url, timeout=120) as http:
         await asyncio.gather(*(client(http, k) for k in range(concurrency)))
-    return {"codes": dict(codes), "sources": dict(sources), "bad": bad, "5xx_examples": details}
+    return {"codes": dict(codes), "sources": dict(sources), "bad": bad, "5xx_examples": details,
+            "max_past_deadline_s": max(late, default=0.0)}
 
 
 def _batch_check(url: str, batch: str, missions: list[dict[str, Any]]) -> list[str]:
@@ -193,14 +197,15 @@ def _batch_check(url: str, batch: str, missions: list[dict[str, Any]]) -> list[s
     return problems
 
 
-def run_faults(workers: int, seconds: float, as_json: bool) -> int:
-    """2x overload of optimise requests plus a batch, with worker kills and database locks; see the doc."""
-    concurrency, queue = 2 * workers, 2 * workers  # capacity 3x workers: the clients plus the batch items
+def run_faults(workers: int, seconds: float, as_json: bool, factor: int = 2) -> int:
+    """``factor`` x overload of optimise requests plus a batch, with worker kills and database locks; see the
+    doc. The server runs with its default queue and fallback settings."""
+    concurrency = factor * workers
     # batch items: the normal mission and the 0.05 A one (a many-reversal build takes minutes under load)
     missions = [{**(ADVERSARIAL[0] if i % 4 == 0 else OPTIMIZE), "name": f"item-{i}"} for i in range(24)]
     with tempfile.TemporaryDirectory() as tmp:
         db = Path(tmp) / "jobs.sqlite3"
-        proc, url = _start(workers, queue, db, THRUSTSHAPE_STORE_BUSY_TIMEOUT_S="0.5")
+        proc, url = _start(workers, 8, db, THRUSTSHAPE_STORE_BUSY_TIMEOUT_S="0.5")  # 8: the default queue
         stop, log = threading.Event(), []
         try:
             asyncio.run(_round(url, "/v1/references/optimize", OPTIMIZE, 1, 2))  # warm the solver caches
@@ -224,9 +229,10 @@ def run_faults(workers: int, seconds: float, as_json: bool) -> int:
     if as_json:
         print(json.dumps(summary, indent=1))
     else:
-        print(f"2x overload with faults: workers={workers} clients={concurrency} {seconds:g} s, "
+        print(f"{factor}x overload with faults: workers={workers} clients={concurrency} {seconds:g} s, "
               f"faults {dict(summary['faults'])}")
-        print(f"  optimise answers {out['codes']} sources {out['sources']}")
+        print(f"  optimise answers {out['codes']} sources {out['sources']}; slowest answer "
+              f"{out['max_past_deadline_s']:+.2f} s from its deadline")
         print(f"  5xx: {fives}  over limits / unexpected 422: {len(out['bad'])}  batch problems: "
               f"{out['batch_problems'] or 'none'} (24 items)")
         for d in out["5xx_examples"]:
@@ -242,9 +248,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--faults", action="store_true", help="only the 2x overload run with injected faults")
     ap.add_argument("--fault-seconds", type=float, default=60.0, help="length of the fault run [s]")
+    ap.add_argument("--factor", type=int, default=2, help="fault run: concurrent clients per solver worker")
     args = ap.parse_args(argv)
     if args.faults:
-        return run_faults(args.workers, args.fault_seconds, args.json)
+        return run_faults(args.workers, args.fault_seconds, args.json, args.factor)
     queue = args.workers  # capacity = 2x workers: the 2x round fits, the overload round does not
     rows: list[dict[str, Any]] = []
     with tempfile.TemporaryDirectory() as tmp:

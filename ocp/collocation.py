@@ -20,6 +20,7 @@ All decision variables are scaled to O(1) by per-call scale parameters.
 from __future__ import annotations
 
 import threading
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
 
@@ -229,6 +230,9 @@ def layout(P: int, N: int, nx: int) -> Layout:
 _CACHE: dict[tuple[Structure, tuple[tuple[str, object], ...]], Program] = {}
 _CACHE_LOCK = threading.Lock()
 CACHE_SIZE = 8  # built programs kept per process (tens of MB each), least recently used evicted
+#: called with "build" before a program is built and "built" once it is cached (a service worker tells its
+#: parent, which then keeps a build that outlives a request's deadline instead of killing it)
+BUILD_OBSERVERS: list[Callable[[str], None]] = []
 
 
 def solver_for(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Program:
@@ -239,11 +243,15 @@ def solver_for(plant: Plant, st: Structure, ipopt_options: dict[str, object]) ->
         if prog is not None:
             _CACHE[key] = prog  # most recently used last
     if prog is None:
+        for observe in BUILD_OBSERVERS:
+            observe("build")
         prog = build(plant, st, ipopt_options)
         with _CACHE_LOCK:
             while len(_CACHE) >= CACHE_SIZE:
                 _CACHE.pop(next(iter(_CACHE)))
             _CACHE[key] = prog
+        for observe in BUILD_OBSERVERS:
+            observe("built")
     return prog
 
 

@@ -174,6 +174,9 @@ class _Deadline(ca.Callback):
         return [1.0 if time.perf_counter() > self.until else 0.0]
 
 
+#: ``perf_counter()`` time past which IPOPT stops whatever the mission's time limit (a service worker sets it
+#: before its process would be killed, so a build plus a solve never costs the process); inf: none
+SOLVE_DEADLINE = [math.inf]
 _DEADLINE: list[_Deadline] = []  # one per process, built on the first solve (nothing is built at import)
 
 
@@ -532,7 +535,7 @@ def solve_problem(problem: Problem, data: dict[str, np.ndarray], warm: bool,
             args["x0"] = np.clip(prog.last["x"], data["lbx"], data["ubx"])
             args["lam_x0"], args["lam_g0"] = prog.last["lam_x"], prog.last["lam_g"]
         t0 = time.perf_counter()
-        _deadline().until = t0 + budget
+        _deadline().until = min(t0 + budget, SOLVE_DEADLINE[0])
         try:
             sol = prog.solver(**args)
         finally:

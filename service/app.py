@@ -31,10 +31,11 @@ from service.api.middleware import ApiKeyGate, BodyLimit
 from service.api.routes import batches, compare, health, info, model_check, page, references
 from service.api.routes import stream as stream_route
 from service.batches import BatchRunner
+from service.dask_runner import DaskRunner
 from service.jobs import JobStore, StoreLocked, lock_store
 from service.settings import Settings
 from service.tasks import TaskSet, available_tasks, fallback_mission
-from service.workers import DaskRunner, Runner, WorkerPool
+from service.workers import Runner, WorkerPool
 
 log = logging.getLogger("thrustshape.service")
 
@@ -57,7 +58,8 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         if recovered:
             log.info("resuming %d batch items left running by a previous server", recovered)
         preload = ("ocp.analytic", "ocp.fallback", "ocp.mission", "service.tasks", *tasks.extra_preload)
-        pool = WorkerPool(settings.workers, settings.queue_size, settings.retry_after_s, preload=preload)
+        pool = WorkerPool(settings.workers, settings.queue_size, settings.retry_after_s, preload=preload,
+                          build_limit=settings.solver_build_limit_s, niceness=settings.solver_niceness)
         # the analytic fallback runs in its own processes: killable, and never queued behind the solves
         fallback_pool = WorkerPool(settings.fallback_workers, settings.queue_size + settings.workers,
                                    settings.retry_after_s,

@@ -27,6 +27,9 @@ class Settings(BaseSettings):
     #: processes for the analytic fallback of /v1/references/optimize (no IPOPT; they keep the fallback
     #: off the solver queue and out of the server process)
     fallback_workers: Annotated[int, Field(ge=1, le=64)] = 2
+    #: added to the solver processes' nice value: under overload the short, deadline-bound fallbacks and the
+    #: server's event loop get the CPU before the long solves
+    solver_niceness: Annotated[int, Field(ge=0, le=19)] = 5
     #: requests allowed to wait for a busy worker before new ones get 503 + Retry-After
     queue_size: Annotated[int, Field(ge=0, le=10_000)] = 8
     #: SQLite job store (WAL); created with its directory on start; ``<db_path>.lock`` keeps a second
@@ -57,6 +60,10 @@ class Settings(BaseSettings):
     optimize_grace_s: Annotated[float, Field(ge=0, le=600)] = 5.0
     #: share of the deadline kept for the analytic fallback when the solver overruns [s]
     fallback_reserve_s: Annotated[float, Field(gt=0, le=60)] = 2.0
+    #: how long a solver worker may go on building a new solver after the request that asked for it was
+    #: answered by the fallback (its deadline ran out during the build); the built solver is cached for the
+    #: next request. Past this the worker is killed [s]
+    solver_build_limit_s: Annotated[float, Field(ge=0, le=600)] = 60.0
     #: hard timeout of any other worker task (analytic, compare, model check) [s]
     task_timeout_s: Annotated[float, Field(gt=0, le=3600)] = 60.0
     #: hard timeout of one batch item [s]; the item is retried up to ``batch_attempts`` times

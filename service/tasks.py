@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import math
+import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -21,6 +23,8 @@ from ocp.errors import MissionError
 from service.workers import TaskFn
 
 Payload = dict[str, Any]
+#: kept between IPOPT's stop and the worker's deadline, for verifying the result (or the in-worker fallback) [s]
+SOLVE_MARGIN_S = 1.0
 
 
 def analytic_reference(payload: Payload) -> Payload:
@@ -56,11 +60,21 @@ def analytic_reference(payload: Payload) -> Payload:
 
 
 def optimize_mission(payload: Payload) -> Payload:
-    """Mission -> :meth:`ocp.optimize.OptimizeResult.to_dict` (the solver bounds its own CPU time)."""
+    """Mission -> :meth:`ocp.optimize.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
+    build is reported to the worker's parent (:func:`service.workers.report_phase`): it survives the deadline."""
+    from ocp import collocation
     from ocp.mission import Mission
+    from service.workers import report_phase, time_left
 
-    optimize = importlib.import_module("ocp.optimize").optimize
-    return optimize(Mission.model_validate(payload)).to_dict()
+    if report_phase not in collocation.BUILD_OBSERVERS:
+        collocation.BUILD_OBSERVERS.append(report_phase)
+    module = importlib.import_module("ocp.optimize")
+    left = time_left()  # IPOPT stops early enough to verify and answer before the worker would be killed
+    module.SOLVE_DEADLINE[0] = math.inf if left is None else time.perf_counter() + left - SOLVE_MARGIN_S
+    try:
+        return module.optimize(Mission.model_validate(payload)).to_dict()
+    finally:
+        module.SOLVE_DEADLINE[0] = math.inf  # no later task (a compare) inherits this call's deadline
 
 
 def fallback_mission(payload: Payload) -> Payload:

@@ -4,14 +4,17 @@
 nothing is shared with the server's threads). A task is any importable top-level function
 ``fn(payload: dict) -> dict``; it travels by reference over a pipe. Each call has a hard wall-clock
 timeout: when it expires the process is killed and replaced, so a runaway solve costs one process,
-never the server. Calls beyond ``workers + queue_size`` are refused at once with :class:`QueueFull`
-(the API answers 503 + Retry-After).
+never the server. A task may report an expensive one-off build (:func:`report_phase`): a deadline that runs
+out during it is answered at once, but the process finishes the build (up to the pool's ``build_limit``) and
+keeps it. Calls beyond ``workers + queue_size`` are refused at once with :class:`QueueFull` (the API answers
+503 + Retry-After).
 
 Errors cross the process boundary as data, not as pickled exceptions: a
 :class:`~ocp.errors.ThrustshapeError` raised by a task comes back as the same class with its
 ``field`` and ``reason``; anything else becomes :class:`TaskFailed`.
 
-:class:`DaskRunner` runs the same task functions on a ``distributed`` cluster (batch items only).
+:class:`service.dask_runner.DaskRunner` runs the same task functions on a ``distributed`` cluster (batch
+items only).
 """
 
 from __future__ import annotations
@@ -22,26 +25,54 @@ import contextvars
 import importlib
 import logging
 import multiprocessing as mp
+import os
 import signal
 import time
 from collections.abc import Callable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from multiprocessing.connection import Connection
-from typing import Any, Literal, Protocol
+from typing import Any, Literal, Protocol, cast
 
 import ocp.errors as errors
 
 Payload = dict[str, Any]
 TaskFn = Callable[[Payload], Payload]
 Outcome = tuple[Literal["ok", "user-error", "crash"], Any]
-Phase = Literal["queue", "start-up", "run"]
+Phase = Literal["queue", "start-up", "build", "run"]
 
 _STARTUP_TIMEOUT_S = 120.0
 _WARM_UP_TIMEOUT_S = 30.0
+_ABORT_GRACE_S = 5.0  # an abandoned task, told to stop after its build, must answer within this [s]
 #: what a task was waiting for when its deadline ran out
 PHASES: dict[str, str] = {"queue": "waiting for a free worker", "start-up": "waiting for a worker process to start",
-                          "run": "computing"}
+                          "build": "building the solver", "run": "computing"}
 log = logging.getLogger("thrustshape.workers")
+_PARENT: list[Connection] = []  # inside a worker process: its end of the pipe (empty elsewhere)
+_UNTIL: list[float] = []  # inside a worker process: monotonic time at which the current call is killed
+
+
+def time_left() -> float | None:
+    """Inside a worker: seconds before the current call's process is killed (a task can stop its own work
+    before that, and keep the process and its caches); ``None`` outside a worker."""
+    return _UNTIL[0] - time.monotonic() if _UNTIL else None
+
+
+class TaskAbandoned(Exception):
+    """Raised inside a worker by :func:`report_phase` ``("built")`` when the caller stopped waiting during the
+    build: the build is kept (cached by the task), the rest of the task is skipped."""
+
+
+def report_phase(stage: str) -> None:
+    """Called by a task inside a worker around an expensive one-off build (e.g. a solver it caches):
+    ``"build"`` before, ``"built"`` once the result is cached. A caller whose deadline runs out during the
+    build is answered at once, but the process is not killed: it finishes the build (up to the pool's
+    ``build_limit``) and, at ``"built"``, is told to stop (:class:`TaskAbandoned`) or go on. No-op outside a
+    worker process."""
+    if not _PARENT:
+        return
+    _PARENT[0].send(("phase", stage))
+    if stage == "built" and _PARENT[0].recv() != "go":
+        raise TaskAbandoned("the caller's deadline ran out during the build; the build is kept")
 
 
 class QueueFull(Exception):
@@ -95,11 +126,15 @@ def unwrap(outcome: Outcome) -> Payload:
     raise TaskFailed(str(value))
 
 
-def _worker_main(conn: Connection, preload: Sequence[str]) -> None:
+def _worker_main(conn: Connection, preload: Sequence[str], niceness: int = 0) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server decides when workers stop
+    if niceness:
+        with contextlib.suppress(OSError):
+            os.nice(niceness)
     for name in preload:
         with contextlib.suppress(ImportError):
             importlib.import_module(name)
+    _PARENT.append(conn)
     conn.send(("ready", None))
     while True:
         try:
@@ -108,15 +143,18 @@ def _worker_main(conn: Connection, preload: Sequence[str]) -> None:
             return
         if msg is None:
             return
-        fn, payload = msg
+        if not isinstance(msg, tuple):  # a reply to a build report that came after its task ended
+            continue
+        fn, payload, budget = msg
+        _UNTIL[:] = [time.monotonic() + budget]
         conn.send(execute(fn, payload))
 
 
 class _Worker:
     """One solver process and the parent's end of its pipe; used by one thread at a time."""
 
-    def __init__(self, ctx: Any, preload: Sequence[str]) -> None:
-        self._ctx, self._preload = ctx, tuple(preload)
+    def __init__(self, ctx: Any, preload: Sequence[str], niceness: int = 0) -> None:
+        self._ctx, self._preload, self._niceness = ctx, tuple(preload), niceness
         self._ready = False
         self.conn: Connection
         self.proc: Any
@@ -124,7 +162,8 @@ class _Worker:
 
     def _spawn(self) -> None:
         parent, child = self._ctx.Pipe()
-        self.proc = self._ctx.Process(target=_worker_main, args=(child, self._preload), daemon=True,
+        self.proc = self._ctx.Process(target=_worker_main, args=(child, self._preload, self._niceness),
+                                      daemon=True,
                                       name="thrustshape-worker")
         self.proc.start()
         child.close()
@@ -153,28 +192,58 @@ class _Worker:
             raise TaskFailed("worker process died while starting", startup=True) from None
         self._ready = True
 
-    def call(self, fn: TaskFn, payload: Payload, timeout: float) -> Outcome:
+    def call(self, fn: TaskFn, payload: Payload, timeout: float,
+             on_overrun: Callable[[TaskTimeout], None] | None = None, build_limit: float = 0.0) -> Outcome:
         """Blocking: run one task within ``timeout`` [s] (start-up of a respawned process included); kill +
-        respawn the process on timeout or death."""
+        respawn the process on timeout or death. With ``on_overrun`` and ``build_limit`` [s], a deadline that
+        runs out while the task reports a build (:func:`report_phase`) calls ``on_overrun`` (the caller is
+        answered elsewhere) and the process finishes the build, up to ``build_limit`` after it began, then
+        is told to stop; only a build past that limit is killed."""
         start = time.monotonic()
         self._await_ready(timeout)
         budget = timeout - (time.monotonic() - start)
         if budget <= 0:
             raise TaskTimeout(timeout, "start-up")
+        name = getattr(fn, "__name__", fn)
         try:
-            self.conn.send((fn, payload))
-            if not self.conn.poll(budget):
-                log.warning("worker %s: %s exceeded its %.3g s budget; killing and respawning", self.proc.pid,
-                            getattr(fn, "__name__", fn), budget)
-                self.restart()
-                raise TaskTimeout(timeout, "run")
-            return self.conn.recv()
+            self.conn.send((fn, payload, budget))
+            return self._follow(name, timeout, time.monotonic() + budget, on_overrun, build_limit)
         except (EOFError, OSError, BrokenPipeError):
             code = self.proc.exitcode
-            log.error("worker %s died during %s (exit code %s); respawning", self.proc.pid,
-                      getattr(fn, "__name__", fn), code)
+            log.error("worker %s died during %s (exit code %s); respawning", self.proc.pid, name, code)
             self.restart()
             raise TaskFailed(f"worker process died (exit code {code})") from None
+
+    def _follow(self, name: object, timeout: float, end: float, on_overrun: Callable[[TaskTimeout], None] | None,
+                build_limit: float) -> Outcome:
+        """Read the task's phase reports until its outcome; kill at ``end`` unless a build is being kept."""
+        build_start: float | None = None
+        abandoned = False
+        while True:
+            if not self.conn.poll(max(end - time.monotonic(), 0.0)):
+                phase: Phase = "build" if build_start is not None else "run"
+                if build_start is not None and not abandoned and on_overrun is not None and build_limit > 0:
+                    abandoned, end = True, build_start + build_limit
+                    log.warning("worker %s: %s ran out of time while building; answered elsewhere, the worker "
+                                "finishes the build (limit %.3g s)", self.proc.pid, name, build_limit)
+                    on_overrun(TaskTimeout(timeout, "build"))
+                    continue
+                log.warning("worker %s: %s exceeded its %s; killing and respawning", self.proc.pid, name,
+                            f"{build_limit:.3g} s build limit" if abandoned else f"{timeout:.3g} s deadline ({phase})")
+                self.restart()
+                raise TaskTimeout(timeout, phase)
+            msg = self.conn.recv()
+            if msg[0] != "phase":
+                return cast(Outcome, msg)
+            if msg[1] == "build":
+                build_start = time.monotonic()
+                continue
+            log.info("worker %s: %s built its solver in %.3g s", self.proc.pid, name,
+                     time.monotonic() - (build_start or time.monotonic()))
+            build_start = None
+            self.conn.send("abort" if abandoned else "go")
+            if abandoned:
+                end = time.monotonic() + _ABORT_GRACE_S
 
     def restart(self) -> None:
         old = self.proc.pid
@@ -202,12 +271,18 @@ class WorkerPool:
     """
 
     def __init__(self, workers: int, queue_size: int, retry_after: int,
-                 preload: Sequence[str] = ("ocp.analytic", "ocp.fallback", "ocp.mission")) -> None:
+                 preload: Sequence[str] = ("ocp.analytic", "ocp.fallback", "ocp.mission"), build_limit: float = 0.0,
+                 niceness: int = 0) -> None:
+        """``build_limit`` [s]: how long a worker whose caller's deadline ran out during a reported build
+        (:func:`report_phase`) may go on building before it is killed (0: killed at the deadline).
+        ``niceness``: added to the processes' nice value (a pool of long solves yields the CPU to a pool of
+        short, deadline-bound fallbacks)."""
         self.size = workers
+        self.build_limit = build_limit
         self.capacity = workers + queue_size
         self.retry_after = retry_after
         self._ctx = mp.get_context("spawn")
-        self._workers = [_Worker(self._ctx, preload) for _ in range(workers)]
+        self._workers = [_Worker(self._ctx, preload, niceness) for _ in range(workers)]
         self._threads = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="thrustshape-call")
         self._idle: asyncio.Queue[_Worker] = asyncio.Queue()
         for w in self._workers:
@@ -255,10 +330,12 @@ class WorkerPool:
                 if timeout <= max(min_run, 0.0):
                     self._idle.put_nowait(worker)
                     raise TaskTimeout(max(timeout, 0.0), "queue")
-            # the call's thread runs in this request's context: its kill/respawn lines carry the request id
-            fut = loop.run_in_executor(self._threads, contextvars.copy_context().run, self._call_and_release, loop,
-                                       worker, fn, payload, timeout)
-            return unwrap(await asyncio.shield(fut))
+            # the call's thread runs in this request's context: its kill/respawn lines carry the request id;
+            # ``answer`` may be settled before the thread ends (a deadline during a build that the worker finishes)
+            answer: asyncio.Future[Outcome] = loop.create_future()
+            loop.run_in_executor(self._threads, contextvars.copy_context().run, self._call_and_release, loop,
+                                 worker, fn, payload, timeout, answer)
+            return unwrap(await answer)
         finally:
             self._pending -= 1
 
@@ -273,10 +350,19 @@ class WorkerPool:
             await asyncio.sleep(0.02)
 
     def _call_and_release(self, loop: asyncio.AbstractEventLoop, worker: _Worker, fn: TaskFn, payload: Payload,
-                          timeout: float) -> Outcome:
+                          timeout: float, answer: asyncio.Future[Outcome]) -> None:
+        def settle(outcome: Outcome | None, exc: BaseException | None) -> None:
+            if not loop.is_closed():
+                loop.call_soon_threadsafe(_settle, answer, outcome, exc)
+
         try:
-            return worker.call(fn, payload, timeout)
+            settle(worker.call(fn, payload, timeout, lambda exc: settle(None, exc), self.build_limit), None)
+        except BaseException as exc:  # handed to the awaiting request (a TaskTimeout, TaskFailed, ...)
+            settle(None, exc)
         finally:
+            # a respawned process re-enters the pool once started: no request waits for a start-up it could skip
+            with contextlib.suppress(TaskFailed, TaskTimeout, OSError, EOFError):
+                worker._await_ready()
             if not loop.is_closed():
                 loop.call_soon_threadsafe(self._idle.put_nowait, worker)
 
@@ -313,40 +399,18 @@ class WorkerPool:
         self._threads.shutdown(wait=False, cancel_futures=True)
 
 
+def _settle(answer: asyncio.Future[Outcome], outcome: Outcome | None, exc: BaseException | None) -> None:
+    """Resolve a call's answer once (later outcomes of an abandoned call are dropped)."""
+    if answer.done():
+        return
+    if exc is not None:
+        answer.set_exception(exc)
+    else:
+        answer.set_result(cast(Outcome, outcome))
+
+
 class Runner(Protocol):
-    """Where batch items run: the local :class:`WorkerPool` or a :class:`DaskRunner`."""
+    """Where batch items run: the local :class:`WorkerPool` or a :class:`~service.dask_runner.DaskRunner`."""
 
     async def run(self, fn: TaskFn, payload: Payload, timeout: float, *, wait: bool = False,
                   deadline: float | None = None) -> Payload: ...
-
-
-class DaskRunner:
-    """Batch items on a Dask distributed cluster (``distributed.Client`` in asynchronous mode).
-
-    Dask cannot kill a running task: on timeout the future is cancelled and the item fails or is
-    retried, but the cluster thread finishes the call (solves bound their own CPU time).
-    """
-
-    def __init__(self, client: Any) -> None:
-        self._client = client
-
-    @classmethod
-    async def connect(cls, address: str) -> DaskRunner:
-        from distributed import Client
-
-        client = await Client(address, asynchronous=True, timeout="10s")
-        return cls(client)
-
-    async def run(self, fn: TaskFn, payload: Payload, timeout: float, *, wait: bool = False,
-                  deadline: float | None = None) -> Payload:
-        fut = self._client.submit(execute, fn, payload, pure=False)
-        try:
-            outcome = await asyncio.wait_for(fut, timeout)
-        except TimeoutError:
-            await self._client.cancel(fut)
-            log.warning("dask task %s abandoned after %g s", getattr(fn, "__name__", fn), timeout)
-            raise TaskTimeout(timeout) from None
-        return unwrap(outcome)
-
-    async def close(self) -> None:
-        await self._client.close()

@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 import time
 from pathlib import Path
@@ -29,3 +30,32 @@ def test_one_program_serves_every_time_limit_and_each_limit_holds() -> None:
     done = optimize(long)
     assert done.source == "optimized" and done.solver["build_time_s"] < 0.5  # the same cached program
     assert col.solver_for(b.plant, b.structure, solver_options()) is prog
+
+
+def test_a_solve_stops_before_its_worker_would_be_killed() -> None:
+    """In a worker, IPOPT stops ``SOLVE_MARGIN_S`` before the call's deadline whatever the mission's time limit:
+    a solve that would outlast its call answers (the analytic fallback, "solver time limit reached") instead of
+    having its process killed, and the process keeps its built solver."""
+    from service.tasks import SOLVE_MARGIN_S, optimize_mission
+    from service.workers import WorkerPool
+
+    payload = {**EXAMPLE, "time_limit_s": 60.0}
+
+    async def scenario() -> None:
+        pool = WorkerPool(1, queue_size=0, retry_after=1, preload=("ocp.optimize", "service.tasks"))
+        try:
+            first = await pool.run(optimize_mission, payload, timeout=120)  # builds and solves
+            assert first["source"] == "optimized"
+            pid = pool.pids()[0]
+            t0 = time.monotonic()
+            capped = await pool.run(optimize_mission, payload, timeout=SOLVE_MARGIN_S + 0.01)
+            assert time.monotonic() - t0 < SOLVE_MARGIN_S + 0.5
+            assert capped["source"] == "analytic-fallback" and capped["reason"].startswith("solver time limit")
+            assert capped["solver"]["status"] == "User_Requested_Stop"
+            assert capped["solver"]["build_time_s"] < 0.5 and pool.pids() == [pid]  # same process, cached solver
+            again = await pool.run(optimize_mission, payload, timeout=120)
+            assert again["source"] == "optimized" and pool.pids() == [pid]
+        finally:
+            pool.close()
+
+    asyncio.run(scenario())

@@ -15,12 +15,69 @@ import pytest
 
 from ocp.errors import MissionError
 from service.tasks import available_tasks
-from service.workers import QueueFull, TaskFailed, TaskTimeout, WorkerPool
-from tests.test_service_support import Server, die, digest, hang, mission, spin, start_server
+from service.workers import QueueFull, TaskFailed, TaskTimeout, WorkerPool, report_phase
+from tests.test_service_support import Server, _burn, die, digest, hang, mission, spin, start_server
+
+_BUILT: dict[str, float] = {}  # inside a worker: the "solvers" this process built (key -> seconds it took)
 
 
 def _user_error(payload: dict[str, object]) -> dict[str, object]:
     raise MissionError("profile.t", "must be strictly increasing")
+
+
+def slow_build(payload: dict[str, object]) -> dict[str, object]:
+    """Builds (CPU burn of ``build_s``) and caches a "solver" per ``key`` on first use, reporting the build as
+    the collocation cache does; then "solves" (``solve_s``)."""
+    key = str(payload["key"])
+    cached = key in _BUILT
+    if not cached:
+        report_phase("build")
+        t0 = time.perf_counter()
+        _burn(float(payload["build_s"]))  # type: ignore[arg-type]
+        _BUILT[key] = time.perf_counter() - t0
+        report_phase("built")
+    _burn(float(payload.get("solve_s", 0.01)))  # type: ignore[arg-type]
+    return {"pid": os.getpid(), "cached": cached, "built": sorted(_BUILT)}
+
+
+def test_deadline_during_build_keeps_the_worker_and_its_build() -> None:
+    """A call whose deadline runs out while its worker builds a solver is answered at its deadline (phase
+    ``build``); the worker is not killed: it finishes the build, skips the abandoned solve and serves the next
+    call from its cache. A build past the pool's build limit is killed."""
+    async def scenario() -> None:
+        pool = WorkerPool(1, queue_size=1, retry_after=1, preload=(), build_limit=20.0)
+        try:
+            # first call: the worker imports this module (seconds under pytest), outside the deadlines below
+            pid = (await pool.run(slow_build, {"key": "warm", "build_s": 0.0}, timeout=60))["pid"]
+            t0 = time.monotonic()
+            with pytest.raises(TaskTimeout) as late:
+                await pool.run(slow_build, {"key": "a", "build_s": 2.5, "solve_s": 30.0}, timeout=0.8)
+            assert late.value.phase == "build" and "building the solver" in str(late.value)
+            assert time.monotonic() - t0 < 1.6  # answered at its deadline, not after the build
+            again = await pool.run(slow_build, {"key": "a", "build_s": 2.5}, timeout=10)
+            # same process, solver from its cache, and the abandoned 30 s solve was skipped
+            assert again == {"pid": pid, "cached": True, "built": ["a", "warm"]}
+            assert time.monotonic() - t0 < 2.5 + 5.0
+
+            with pytest.raises(TaskTimeout):  # a call that times out while solving is still killed
+                await pool.run(slow_build, {"key": "a", "build_s": 0.0, "solve_s": 30.0}, timeout=0.8)
+            assert pid not in pool.pids()
+        finally:
+            pool.close()
+        capped = WorkerPool(1, queue_size=1, retry_after=1, preload=(), build_limit=1.5)
+        try:
+            pid = (await capped.run(slow_build, {"key": "warm", "build_s": 0.0}, timeout=60))["pid"]
+            with pytest.raises(TaskTimeout) as late:
+                await capped.run(slow_build, {"key": "b", "build_s": 60.0}, timeout=0.5)
+            assert late.value.phase == "build"
+            t0 = time.monotonic()
+            after = await capped.run(slow_build, {"key": "b", "build_s": 0.1}, timeout=60, wait=True)
+            assert after["pid"] != pid and after["cached"] is False  # killed at the build limit, built anew
+            assert time.monotonic() - t0 < 30.0
+        finally:
+            capped.close()
+
+    asyncio.run(scenario())
 
 
 def test_pool_runs_timeouts_restarts_and_refuses() -> None:

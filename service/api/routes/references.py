@@ -46,6 +46,8 @@ class DeadlineExceeded(TaskTimeout):
 
 _SOLVER_OUT = {"queue": "no solver worker was free within {:.3g} s (queue)",
                "start-up": "the solver worker process was still starting after {:.3g} s (start-up)",
+               "build": "the solver for this mission's structure was still being built after {:.3g} s (build; "
+                        "the worker finishes and keeps it for the next request)",
                "run": "the solver did not finish within {:.3g} s (run)"}
 
 
