@@ -4,7 +4,10 @@ A *model* is a set of items: catalogue effects and named constants. Fitting it i
 least-squares problem on the training rows: every constant is always refined (that is calibration),
 within ``+-tolerance`` of nominal unless the model *names* it (then within -80 % .. +300 %); effects
 in the model get their columns (the best shape on a grid by training cost), sign-bounded as the
-catalogue's lower bounds say; effects outside it are zero. Its score is the held-out RMS of the three
+catalogue's lower bounds say; effects outside it are zero. A constant the log cannot resolve
+(:attr:`.regression.Design.unresolved`, e.g. ``L`` under a current filter) is a free nuisance (-80 % .. any):
+boxed in, what it stands for would be explained by a wrong item (brush drop, dead band, ``R``).
+Its score is the held-out RMS of the three
 weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise).
 
 Forward selection adopts the item with the best held-out score while the score is above
@@ -49,7 +52,10 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float) ->
     for j in cols:
         c = design.columns[j]
         if c.item in CONSTANTS:
-            a, b = NAMED_BOUNDS if c.item in named else (-tol, tol)
+            # a constant the log cannot resolve is a free nuisance (never named): boxing it in would leave
+            # what it stands for (a current filter for L) to be explained by a wrong item
+            a, b = (NAMED_BOUNDS[0], np.inf) if c.item in design.unresolved else \
+                NAMED_BOUNDS if c.item in named else (-tol, tol)
         else:
             a, b = (0.0 if CATALOGUE[c.item].bounds.get(c.key, (-1.0, 1.0))[0] >= 0 else -np.inf), np.inf
         lo.append(a)
