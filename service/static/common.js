@@ -256,13 +256,8 @@ export function missionsFromJson(name, text) {
 /* ------------------------------------------------------------------ downloads */
 
 export function download(name, text, type) {
-  const blob = text instanceof Blob ? text : new Blob([text], { type: type || "application/octet-stream" });
-  const a = document.createElement("a");
-  a.href = URL.createObjectURL(blob);
-  a.download = name;
-  document.body.appendChild(a);
-  a.click();
-  setTimeout(() => { URL.revokeObjectURL(a.href); a.remove(); }, 1000);
+  // one way to save a file on this page: plot.js's (its plots' PNG/SVG/CSV buttons use it too)
+  Plot.save(name, text instanceof Blob ? text : new Blob([text], { type: type || "application/octet-stream" }));
 }
 
 export function downloadJson(name, value, indent, trailer = "") {

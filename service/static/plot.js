@@ -266,5 +266,5 @@ const Plot = (() => {
     return root;
   }
 
-  return { line, bars, num, fmt, PALETTE };
+  return { line, bars, num, fmt, save, PALETTE };
 })();
