@@ -226,13 +226,13 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     seg = min(opt.segment_s, work.n * work.dt / (3 * opt.holdout_every)) if work.kind is LogKind.TIME_SERIES \
         else opt.segment_s  # short logs: shorter segments, so that some are held out
     sp = split(work, seg, opt.holdout_every)
-    design = build(plant.params, work, sp.train, sp.test, effects)
+    noise = noise_levels(work)
+    design = build(plant.params, work, sp.train, sp.test, effects, noise)
     if progress is not None:
         progress(0.2)
     sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor,
                  opt.max_effects - (delay is not None), opt.ambiguity_margin,
                  None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
-    noise = noise_levels(work)
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:

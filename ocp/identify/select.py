@@ -10,8 +10,8 @@ boxed in, what it stands for would be explained by a wrong item (brush drop, dea
 Its score is the held-out RMS of the three
 weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise).
 
-Forward selection adopts the item with the best held-out score while the score is above
-``noise_floor`` and falls by at least ``min_improvement``. Then every adopted item is challenged: an
+Forward selection adopts the item with the best held-out score while some equation's held-out RMS is
+above ``noise_floor`` and the score falls by at least ``min_improvement``. Then every adopted item is challenged: an
 alternative that swaps it for another item and scores within ``ambiguity_margin`` makes the verdict
 ``ambiguous`` (both candidates and the reason are reported) instead of a confident wrong name.
 """
@@ -140,13 +140,21 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
         tried.sort(key=lambda e: e[1].score)
         if progress is not None:
             progress((r + 1) / (max_items + 1))
-        ok = bool(tried) and current.score > noise_floor and tried[0][1].score <= (1 - min_improvement) * current.score
+        ok = bool(tried) and _worst(design, current) > noise_floor \
+            and tried[0][1].score <= (1 - min_improvement) * current.score
         steps.append(Step(current, tried, tried[0][0] if ok else None))
         if not ok:
             break
         items.append(tried[0][0])
         current = tried[0][1]
     return Selection(current, steps, _challenge(design, items, pool, current, tol, margin))
+
+
+def _worst(design: Design, f: Fitted) -> float:
+    """The worst-fitting equation's held-out RMS [noise units]: one equation above the noise is enough to go
+    on (the combined score averages it with the equations that already fit)."""
+    live = design.n_test > 0
+    return float(np.max(f.per_eq[live])) if live.any() else math.inf
 
 
 def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitted, tol: float,
