@@ -97,7 +97,7 @@ def explain(item: str, values: dict[str, float], p: MotorParams, design: Design,
     try:
         eff = make_effect(item, values)
     except ParameterError as exc:  # a rejected challenger's fit can leave the catalogue's range
-        return f"{item}: fitted values outside the catalogue's range ({exc.reason})"
+        return f"{item}: fitted values outside the catalogue's range ({exc.field}: {exc.reason})"
     text = eff.describe() if isinstance(eff, EffectBase) else item
     if item == "cogging":
         amp = math.hypot(values.get("tau_sin", 0.0), values.get("tau_cos", 0.0))

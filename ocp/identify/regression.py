@@ -39,6 +39,9 @@ from ocp.plant import NUMPY
 
 EQS = ("mechanical", "electrical", "thrust")
 CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
+#: logger artefacts every model fits and no verdict names: ``current_lag``, the current sensor's lag [samples]
+#: (a firmware filter): the true current is ``i + lag dt i'``, in both the torque and the armature equation
+NUISANCES: tuple[str, ...] = ("current_lag",)
 #: effects found by regression (input_delay is found by the alignment)
 REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")
 GRID = 12
@@ -161,6 +164,15 @@ def constant_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
             "L": np.vstack([z, arm(0.0, h), z])}
 
 
+def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
+    """(3, M) per logger artefact (:data:`NUISANCES`) at one unit: a one-sample current lag leaves
+    ``-k_t di`` in the torque and ``+R di`` in the armature residual (``di`` the current's step over the
+    interval; the armature's ``L di'`` part is second order and left out)."""
+    z = np.zeros_like(s.w)
+    di = s.i1 - s.i0
+    return {"current_lag": np.vstack([-p.k_t * di if s.dt > 0 else z, p.R * di if s.dt > 0 else z, z])}
+
+
 def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> np.ndarray:
     """(3, N): an effect's contribution at these parameter values, through the catalogue's hooks."""
     eff = make_effect(name, values)
@@ -275,7 +287,8 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         m = min(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt)), rows // 6)
         edge[:m] = edge[rows - m:] = True
     train, test = train[:rows] & ~edge, test[:rows] & ~edge
-    cols: list[tuple[Column, np.ndarray]] = [(Column(c, c), a) for c, a in constant_columns(p, s).items()]
+    cols: list[tuple[Column, np.ndarray]] = [(Column(c, c), a) for c, a in
+                                             (constant_columns(p, s) | nuisance_columns(p, s)).items()]
     for name in effects:
         if name != "cogging":
             cols += effect_columns(name, p, s, log, 0)

@@ -27,7 +27,7 @@ import numpy as np
 from scipy.optimize import lsq_linear
 
 from ocp.effects import CATALOGUE
-from ocp.identify.regression import CONSTANTS, Design
+from ocp.identify.regression import CONSTANTS, NUISANCES, Design
 
 NAMED_BOUNDS = (-0.8, 3.0)
 
@@ -51,7 +51,9 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float) ->
     lo, hi = [], []
     for j in cols:
         c = design.columns[j]
-        if c.item in CONSTANTS:
+        if c.item in NUISANCES:
+            a, b = -1.0, np.inf  # a sensor lag; a lead of up to one sample: a current settling within a sample
+        elif c.item in CONSTANTS:
             # a constant the log cannot resolve is a free nuisance (never named): boxing it in would leave
             # what it stands for (a current filter for L) to be explained by a wrong item
             a, b = (NAMED_BOUNDS[0], np.inf) if c.item in design.unresolved else \
@@ -90,7 +92,7 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float) -> F
 
 def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
     """Fit a model (module doc): shaped effects take their best grid column by training cost."""
-    base = [j for c in CONSTANTS for j in design.index(c)]
+    base = [j for c in (*CONSTANTS, *NUISANCES) for j in design.index(c)]
     named = {i for i in items if i in CONSTANTS}
     chosen: list[int] = list(base)
     for item in items:
