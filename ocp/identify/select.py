@@ -78,7 +78,7 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float) -> F
     except np.linalg.LinAlgError:
         r = np.linalg.cholesky(gs + 1e-6 * np.eye(idx.size)).T
     y = np.linalg.solve(gs, h / d)  # unconstrained first; bounded only when a bound binds
-    if np.any(y < lo * d) or np.any(y > hi * d):
+    if not np.all(np.isfinite(y)) or np.any(y < lo * d) or np.any(y > hi * d):  # (near-singular: bounded too)
         y = lsq_linear(r, np.linalg.solve(r.T, h / d), bounds=(lo * d, hi * d), method="bvls").x
     x = y / d
     cost = float(design.c_train.sum() - 2 * h @ x + x @ g @ x)
