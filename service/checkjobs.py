@@ -90,7 +90,7 @@ class CheckJobStore:
                        .fetchone()[0])
 
     def get(self, job_id: str, full: bool = False) -> CheckJob | None:
-        cols = "result, error" if full else "NULL, NULL"
+        cols = "result, error" if full else "NULL, error"  # the result can be large: read it only when asked
         with self.store.transaction() as db:
             r = db.execute(f"SELECT id, op, state, progress, attempts, created_at, finished_at, {cols} "
                            "FROM model_checks WHERE id = ?", (job_id,)).fetchone()

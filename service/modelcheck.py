@@ -238,7 +238,10 @@ def parse_rivals(text: str | None) -> list[list[str]] | None:
     """Rival explanations for ``/design``: sets separated by ``;``, items of a set by ``,`` (at least two sets)."""
     if text is None or not text.strip():
         return None
-    sets = [parse_effects(part) for part in text.split(";") if part.strip()]
+    try:
+        sets = [parse_effects(part) for part in text.split(";") if part.strip()]
+    except ThrustshapeError as exc:
+        raise ParameterError("rivals", exc.reason) from None
     if len(sets) < 2:
         raise ParameterError("rivals", "give at least two rival explanations separated by ';' "
                                        "(e.g. 'coulomb_friction;param:B')")

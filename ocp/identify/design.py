@@ -239,8 +239,8 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
         sets.append(tuple(res.verdict))
         for a in res.ambiguous:
             reasons.append(str(a["reason"]))
-        reasons += [f"{g} (an effect may hide there)" for g in gaps]
             sets.append(tuple(str(a["alternative"]) if v == a["adopted"] else v for v in res.verdict))
+        reasons += [f"{g} (an effect may hide there)" for g in gaps]
         unique = list(dict.fromkeys(tuple(sorted(s)) for s in sets))
         return [fitted(s) for s in unique], reasons
     out = [Rival("diagnosed plant", tuple(res.verdict), res.plant)]

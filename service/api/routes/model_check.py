@@ -99,10 +99,16 @@ def _form_field() -> Iterator[None]:
     try:
         yield
     except ThrustshapeError as exc:
-        head = exc.field.split(".", 1)[0]  # "params.effects.stribeck.omega_s" belongs to the params input
-        form = head if head in FORM_FIELDS else "log"
-        exc.form_field = form  # type: ignore[attr-defined]
+        exc.form_field = form_field_of(exc.field)  # type: ignore[attr-defined]
         raise
+
+
+def form_field_of(field: str | None) -> str | None:
+    """The form input a problem's ``field`` belongs to (a log column: ``log``)."""
+    if field is None:
+        return None
+    head = field.split(".", 1)[0]  # "params.effects.stribeck.omega_s" belongs to the params input
+    return head if head in FORM_FIELDS else "log"
 
 
 async def _run(op: Op, log: UploadFile, params: str, columns: str | None, steady_state: bool | None, settings: Settings,
@@ -267,6 +273,7 @@ async def get_job_result(job_id: JobId, jobs: JobsDep) -> Any:
         return problem(409, "Not finished", f"job {job_id} is {job.state} ({100 * job.progress:.0f} %)")
     err = job.error or {}
     status = {"TaskTimeout": 504, "TaskFailed": 500}.get(str(err.get("type")), 422)
-    extra = {"form_field": err["form_field"]} if err.get("form_field") else {}
+    form = form_field_of(err.get("field")) if err.get("type") not in ("TaskTimeout", "TaskFailed") else None
+    extra: dict[str, Any] = {"form_field": form} if form else {}
     return problem(status, "Model check failed", f"{err.get('field')}: {err.get('reason')}", err.get("field"),
                    err.get("reason"), error_type=err.get("type"), **extra)
