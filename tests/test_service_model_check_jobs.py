@@ -7,6 +7,7 @@ a killed server left unfinished runs after the restart."""
 from __future__ import annotations
 
 import json
+import sqlite3
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -149,6 +150,9 @@ def test_an_unfinished_job_runs_after_a_restart(tmp_path: Path, friction_csv: Pa
         srv.kill()  # SIGKILL before the worker (still starting) could finish it
     finally:
         srv.stop()
+    with sqlite3.connect(db) as con:  # stored, not finished
+        state = con.execute("SELECT state FROM model_checks WHERE id = ?", (r.json()["id"],)).fetchone()[0]
+    assert state in ("queued", "running")
     srv = start_server(tmp_path, {**ENV, "THRUSTSHAPE_DB_PATH": str(db)})
     try:
         with httpx.Client(base_url=srv.url, timeout=30) as http:
