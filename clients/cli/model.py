@@ -211,9 +211,9 @@ def cmd_check(args: argparse.Namespace) -> int:
             if args.report:
                 Path(args.report).write_text(c.check_report(**_upload(args)), encoding="utf-8")
     else:
-        from ocp.effects import load_plant
         from ocp.identify import CheckOptions, check
         from ocp.identify.report import write_report
+        from ocp.model.effects import load_plant
 
         log = _load_log(args)
         plant = load_plant(args.params)
@@ -245,8 +245,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         with client(args) as c:
             d = c.diagnose(**_upload(args), max_effects=args.max_effects, corrections=not args.no_corrections)
     else:
-        from ocp.effects import load_plant
         from ocp.identify import diagnose
+        from ocp.model.effects import load_plant
 
         log = _load_log(args)
         opt = _diagnose_options(args)
@@ -335,8 +335,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
             Path(args.out).write_text(json.dumps(d["calibrated_params"], indent=2, allow_nan=False) + "\n",
                                       encoding="utf-8")
     else:
-        from ocp.effects import load_plant
         from ocp.identify import FitOptions, fit
+        from ocp.model.effects import load_plant
 
         log = _load_log(args)
         res = fit(load_plant(args.params), log, names, FitOptions(refine=not args.no_refine))
