@@ -26,8 +26,8 @@ PARAMS_HELP = "a preset name or the JSON text of a parameter mapping (J, B, ...,
 
 def parse_params(text: str) -> str | dict[str, Any]:
     """A preset name, or the JSON mapping in ``text``; validated by building the plant. Never a file."""
-    from ocp.effects import load_plant
-    from ocp.params import PRESETS
+    from ocp.model.effects import load_plant
+    from ocp.model.params import PRESETS
 
     source: str | dict[str, Any]
     if text.strip() in PRESETS:
@@ -175,8 +175,8 @@ def model_check(payload: Payload) -> Payload:
     """Worker task: ``{"op", "log" (bytes), "filename", "params", "columns", "steady_state", "max_samples",
     "effects", "options", "report"}`` -> the core result's ``to_dict()`` (``/fit`` adds ``calibrated_params``;
     ``report`` -> ``{"html": page}``)."""
-    from ocp.effects import load_plant
-    from ocp.params import PRESETS
+    from ocp.model.effects import load_plant
+    from ocp.model.params import PRESETS
 
     op: Op = payload["op"]
     log = _read_log(payload)
@@ -209,7 +209,7 @@ def _blame(plant: Any, log: Any, exc: BaseException) -> ThrustshapeError:
     """A numerical failure of the model check: ``params.effects`` when the plant has effects and the nominal
     plant (the same constants without them) checks this log fine, else ``log``."""
     from ocp.identify import CheckOptions, check
-    from ocp.plant import DCMotorPlant
+    from ocp.model.plant import DCMotorPlant
 
     detail = f"{type(exc).__name__}: {exc}"[:400]
     if plant.effects:

@@ -239,9 +239,9 @@ def cmd_check(args: argparse.Namespace) -> int:
             if args.report:
                 Path(args.report).write_text(c.check_report(**_upload(args)), encoding="utf-8")
     else:
-        from ocp.effects import load_plant
         from ocp.identify import CheckOptions, check
         from ocp.identify.report import write_report
+        from ocp.model.effects import load_plant
 
         log = _load_log(args)
         plant = load_plant(args.params)
@@ -275,8 +275,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
             job = c.submit_model_check("diagnose", **_upload(args), **_diagnose_fields(args))
             d = c.wait_model_check(job["id"], on_progress=bar.update)
     else:
-        from ocp.effects import load_plant
         from ocp.identify import diagnose
+        from ocp.model.effects import load_plant
 
         log = _load_log(args)
         opt = _diagnose_options(args)
@@ -345,9 +345,9 @@ def cmd_design(args: argparse.Namespace) -> int:
 def _design_here(args: argparse.Namespace, opts: DiagnoseOptions, fields: dict[str, Any]) -> dict[str, Any]:
     from pydantic import ValidationError
 
-    from ocp.effects import load_plant
     from ocp.identify import diagnose
     from ocp.identify.design import DesignOptions, design
+    from ocp.model.effects import load_plant
 
     try:
         dopt = DesignOptions(**{**fields, "rivals": None if fields["rivals"] is None else
@@ -458,8 +458,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
             Path(args.out).write_text(json.dumps(d["calibrated_params"], indent=2, allow_nan=False) + "\n",
                                       encoding="utf-8")
     else:
-        from ocp.effects import load_plant
         from ocp.identify import FitOptions, fit
+        from ocp.model.effects import load_plant
 
         log = _load_log(args)
         res = fit(load_plant(args.params), log, names, FitOptions(refine=not args.no_refine))

@@ -37,14 +37,14 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 from scipy.stats import norm
 
-from ocp.effects import CATALOGUE, load_plant, plant_to_mapping
 from ocp.errors import LogError, ParameterError, ThrustshapeError
 from ocp.identify.candidates import candidate
 from ocp.identify.diagnose import DiagnoseResult, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
 from ocp.identify.predict import CHANNELS, free_run, noise_levels
 from ocp.logs import Log, log_from_arrays
-from ocp.plant import DCMotorPlant
+from ocp.model.effects import CATALOGUE, load_plant, plant_to_mapping
+from ocp.model.plant import DCMotorPlant
 
 #: relative constants a rival may move to explain a difference (k: k_t and k_e together)
 CONSTANTS: dict[str, tuple[str, ...]] = {"J": ("J",), "B": ("B",), "c_tau": ("c_tau",), "c_f": ("c_f",),
@@ -346,7 +346,7 @@ def _grid(t: np.ndarray, v: np.ndarray, dt_log: float) -> tuple[np.ndarray, np.n
 def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: DesignOptions | None = None,
            progress: Callable[[float], None] | None = None) -> DesignResult:
     """Propose the experiment that separates the rival explanations of ``log`` (module doc)."""
-    from ocp.mission import Mission
+    from ocp.optimize.mission import Mission
 
     opt = options or DesignOptions()
     if not dynamic(log):
@@ -402,8 +402,8 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
 def _score(exc: Excitation, params: dict[str, Any], c_f: float, voltage: float, current: float, opt: DesignOptions,
            rivals: list[Rival], sigma: np.ndarray, rate: float, dt_log: float) -> tuple[Candidate, dict[str, Any], Any]:
     """Optimise one candidate within the limits; its raw separations (no refit) when it runs within them."""
-    from ocp.mission import Mission
-    from ocp.optimize import optimize
+    from ocp.optimize.mission import Mission
+    from ocp.optimize.solve import optimize
 
     mission = mission_for(exc, params, c_f, voltage, current, opt.time_limit_s)
     res = optimize(Mission.model_validate(mission))

@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-from ocp.mission import MAX_INTERVALS, OUTPUT_RATE
+from ocp.optimize.mission import MAX_INTERVALS, OUTPUT_RATE
 
 #: at most this many profile samples per candidate (the service bounds missions' samples)
 PROFILE_SAMPLES = 2000

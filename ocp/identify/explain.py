@@ -8,13 +8,13 @@ from typing import Any
 
 import numpy as np
 
-from ocp.effects import CATALOGUE, EffectBase, make_effect
 from ocp.errors import ParameterError
 from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
 from ocp.identify.regression import CONSTANTS, Design
 from ocp.identify.select import Fitted
-from ocp.params import MotorParams
-from ocp.plant import DCMotorPlant
+from ocp.model.effects import CATALOGUE, EffectBase, make_effect
+from ocp.model.params import MotorParams
+from ocp.model.plant import DCMotorPlant
 
 #: which MotorParams keys a regression constant scales
 KEYS = {"J": ("J",), "B": ("B",), "c_tau": ("c_tau",), "c_f": ("c_f",), "k": ("k_t", "k_e"), "R": ("R",),

@@ -91,7 +91,7 @@ function readSegments(strict) {
   });
 }
 
-/* the same sampling as ocp.mission.sample_segments (1 kHz, segments share their boundary sample) */
+/* the same sampling as ocp.optimize.mission.sample_segments (1 kHz, segments share their boundary sample) */
 function sampleSegments(segments, rate = 1000) {
   const t = [], f = [];
   let level = 0, t0 = 0;
