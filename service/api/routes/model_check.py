@@ -219,7 +219,7 @@ async def _job(jobs: CheckJobRunner, job_id: str, full: bool = False) -> CheckJo
 @router.post("/jobs", status_code=202, response_model=ModelCheckJobPublic, responses=_ERRORS,
              summary="Run a model check (check, diagnose, fit or design) as a job: stored, run in a worker, "
                      "with progress; no request timeout")
-async def submit_job(
+async def submit_model_check(
     response: Response, log: LogFile, params: ParamsField, settings: SettingsDep, tasks: TasksDep, jobs: JobsDep,
     read: ReadForm,
     op: Annotated[ModelCheckOp, Form(description="check, diagnose, fit (needs effects) or design (the experiment "
@@ -257,7 +257,7 @@ async def submit_job(
 
 @router.get("/jobs/{job_id}", response_model=ModelCheckJobPublic, responses=error_responses(401, 404),
             summary="A model-check job's status and progress")
-async def get_job(job_id: JobId, jobs: JobsDep) -> ModelCheckJobPublic:
+async def get_model_check(job_id: JobId, jobs: JobsDep) -> ModelCheckJobPublic:
     return _job_public(await _job(jobs, job_id))
 
 
@@ -265,7 +265,7 @@ async def get_job(job_id: JobId, jobs: JobsDep) -> ModelCheckJobPublic:
                                                 200: {"description": "the op's result: CheckPublic, "
                                                       "DiagnosePublic, FitPublic or ExperimentDesignPublic"}},
             summary="A finished model-check job's result (409 while it runs; its problem when it failed)")
-async def get_job_result(job_id: JobId, jobs: JobsDep) -> Any:
+async def get_model_check_result(job_id: JobId, jobs: JobsDep) -> Any:
     job = await _job(jobs, job_id, full=True)
     if job.state == "done":
         return job.result
