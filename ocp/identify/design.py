@@ -44,6 +44,7 @@ from ocp.identify.excite import Excitation, candidates, mission_for
 from ocp.identify.predict import CHANNELS, free_run, noise_levels
 from ocp.logs import Log, log_from_arrays
 from ocp.model.effects import CATALOGUE, load_plant, plant_to_mapping
+from ocp.model.equilibrium import equilibrium
 from ocp.model.plant import DCMotorPlant
 
 #: relative constants a rival may move to explain a difference (k: k_t and k_e together)
@@ -193,9 +194,12 @@ def _scales(plant: DCMotorPlant, voltage: float, current: float) -> dict[str, fl
     """Top speed held within the limits [rad/s] and the load torque, thrust there; the constants used by probes."""
     p = plant.params
 
-    def within(w: float) -> bool:
-        i, v = plant.steady_state(w)
-        return abs(v) <= voltage and abs(i) <= current
+    def within(w: float) -> bool:  # the plant's effects included (a friction lowers the top speed)
+        try:
+            x, v = equilibrium(plant, w)
+        except ThrustshapeError:
+            return False
+        return abs(v) <= voltage and abs(float(x[1])) <= current
 
     hi = 1.0
     while within(hi) and hi < 1e7:  # bracket, then bisect: the fastest steady speed within both limits
@@ -399,20 +403,23 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
     return DesignResult(**base, candidates=cands, chosen=best, mission=mission, current_log=before, verification=ver)
 
 
-def _score(exc: Excitation, params: dict[str, Any], c_f: float, voltage: float, current: float, opt: DesignOptions,
+def _score(exc_: Excitation, params: dict[str, Any], c_f: float, voltage: float, current: float, opt: DesignOptions,
            rivals: list[Rival], sigma: np.ndarray, rate: float, dt_log: float) -> tuple[Candidate, dict[str, Any], Any]:
     """Optimise one candidate within the limits; its raw separations (no refit) when it runs within them."""
     from ocp.optimize.mission import Mission
     from ocp.optimize.solve import optimize
 
-    mission = mission_for(exc, params, c_f, voltage, current, opt.time_limit_s)
-    res = optimize(Mission.model_validate(mission))
+    mission = mission_for(exc_, params, c_f, voltage, current, opt.time_limit_s)
+    try:
+        res = optimize(Mission.model_validate(mission))
+    except ThrustshapeError as exc:  # nothing within the limits (the fallback too): this candidate cannot run
+        return Candidate(exc_.name, exc_.description, False, f"not run: {exc.field}: {exc.reason}"), mission, None
     i_max, v_max = float(np.max(np.abs(res.arrays["current"]))), float(np.max(np.abs(res.arrays["voltage"])))
     ok = res.source == "optimized" and i_max <= current * (1 + 1e-6) and v_max <= voltage * (1 + 1e-6)
     note = (f"optimised within the limits (peak {i_max:.3g} A, {v_max:.3g} V)" if ok else
             f"not run: {res.source} ({res.reason or 'limits exceeded'}; peak {i_max:.3g} A, {v_max:.3g} V)")
     if not ok:
-        return Candidate(exc.name, exc.description, False, note), mission, res
+        return Candidate(exc_.name, exc_.description, False, note), mission, res
     t, v = _grid(res.arrays["t"], res.arrays["voltage"], dt_log)
     raw, rms = pair_separations(rivals, t, v, sigma, rate, None)
-    return Candidate(exc.name, exc.description, True, note, raw, {}, rms), mission, res
+    return Candidate(exc_.name, exc_.description, True, note, raw, {}, rms), mission, res
