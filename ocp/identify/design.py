@@ -79,7 +79,7 @@ class DesignOptions(BaseModel):
     current: float | None = Field(default=None, gt=0, le=1e4)
     duration_s: float | None = Field(default=None, ge=0.2, le=60.0)
     rivals: tuple[tuple[str, ...], ...] | None = Field(default=None, min_length=2, max_length=6)
-    time_limit_s: float = Field(default=60.0, gt=0, le=600)
+    time_limit_s: float = Field(default=10.0, gt=0, le=600)  # per candidate optimisation [s]
 
     @field_validator("rivals")
     @classmethod

@@ -101,7 +101,7 @@ def candidates(top: float, duration: float, tau: float) -> list[Excitation]:
 
 
 def mission_for(exc: Excitation, params: dict[str, Any], c_f: float, voltage: float, current: float,
-                time_limit_s: float = 60.0) -> dict[str, Any]:
+                time_limit_s: float = 10.0) -> dict[str, Any]:
     """The mission (JSON mapping for :class:`ocp.mission.Mission`) asking for ``exc``'s thrust within the
     limits, with the plant ``params`` (a parameter mapping, effects included)."""
     # eq:thrust_model  F = c_f w |w|
