@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import tempfile
@@ -335,10 +336,12 @@ def cmd_design(args: argparse.Namespace) -> int:
         d = _design_here(args, opts, fields)
     if args.out and d.get("mission") is not None:
         write_text(json.dumps(d["mission"], indent=2, allow_nan=False) + "\n", args.out)
-    if args.json:
-        print_json(d)
-        return 0
-    _print_design(d, args.out)
+    # with --out - the mission is stdout: the summary goes to stderr
+    with contextlib.redirect_stdout(sys.stderr) if args.out == STDIO else contextlib.nullcontext():
+        if args.json:
+            print_json(d)
+        else:
+            _print_design(d, args.out)
     return 0
 
 
@@ -391,7 +394,7 @@ def _print_design(d: dict[str, Any], out: str | None) -> None:
     print(f"  optimised within the limits: peak {_g(v['max_abs_current'], '.3g')} A of {_g(lim['current'], '.3g')}, "
           f"{_g(v['max_abs_voltage'], '.3g')} V of {_g(lim['voltage'], '.3g')}; {_g(v['duration_s'], '.3g')} s")
     print(d["message"])
-    if out:
+    if out and out != STDIO:
         print(f"mission written to {out}: 'thrustshape optimize {out} --out experiment.csv' gives the voltage to play")
 
 
