@@ -39,7 +39,15 @@ from service.modelcheck import (
     parse_read,
     parse_rivals,
 )
-from service.schemas import CheckPublic, DiagnosePublic, FitPublic, ItemError, ModelCheckJobPublic, ModelCheckOp
+from service.schemas import (
+    CheckPublic,
+    DiagnosePublic,
+    ExperimentDesignPublic,
+    FitPublic,
+    ItemError,
+    ModelCheckJobPublic,
+    ModelCheckOp,
+)
 from service.settings import Settings
 from service.tasks import TaskSet
 from service.workers import WorkerPool
@@ -262,7 +270,9 @@ async def get_model_check(job_id: JobId, jobs: JobsDep) -> ModelCheckJobPublic:
 
 
 @router.get("/jobs/{job_id}/result", responses={**error_responses(401, 404, 409, 422, 500, 504),
-                                                200: {"description": "the op's result: CheckPublic, "
+                                                200: {"model": CheckPublic | DiagnosePublic | FitPublic
+                                                      | ExperimentDesignPublic,
+                                                      "description": "the op's result: CheckPublic, "
                                                       "DiagnosePublic, FitPublic or ExperimentDesignPublic"}},
             summary="A finished model-check job's result (409 while it runs; its problem when it failed)")
 async def get_model_check_result(job_id: JobId, jobs: JobsDep) -> Any:
