@@ -12,22 +12,19 @@ each effect the log cannot show at a *probe* size (:data:`PROBES`, relative to t
 and voltage at the top speed): "would this experiment reveal a 5 % Coulomb friction?". ``rivals`` in
 :class:`DesignOptions` names the candidate sets instead.
 
-**Criterion** (T-optimal discrimination, Atkinson & Fedorov 1975, linearised). Every candidate excitation
-(:mod:`.excite`) is optimised within the limits (:func:`ocp.optimize.optimize`, the diagnosed plant), and
-every rival is simulated open loop under the optimised voltage (:func:`.predict.free_run`). For rivals a, b
-with outputs ``y`` (omega, current, thrust) weighted by the log's noise ``sigma`` (:func:`.predict.noise_levels`),
-the difference ``d = (y_a - y_b) / sigma`` is stacked over the samples a logger at the log's rate would take;
-``b`` is then given every chance to explain it: ``d`` minus its least-squares projection on ``b``'s
-sensitivities (finite differences of ``y_b`` in its effect parameters and the relative constants ``J, B,
-c_tau, c_f, k, R``). The norm of what is left is the separation ``z`` [noise standard deviations]; the pair's
-separation is the smaller of the two directions, the design's the smallest over pairs. Under white Gaussian
-noise a likelihood-ratio test then confuses the two with probability ``Phi(-z / 2)``.
-The same figure on the given log (its own voltage) says how little it separated them.
+**Criterion** (:mod:`.separation`: T-optimal discrimination, Atkinson & Fedorov 1975, linearised). Every
+candidate excitation (:mod:`.excite`) is optimised within the limits (:func:`ocp.optimize.solve.optimize`, the
+diagnosed plant); a candidate the optimiser cannot run within them is dropped. Every rival is simulated open
+loop under the optimised voltage; for each pair, what one rival cannot explain of the other's predicted
+speed, current and thrust (in the log's noise units, refitting its own items freely and the other constants
+within about the tolerance) is the separation ``z`` [noise standard deviations]. The proposal maximises the
+smallest ``z`` over the pairs (the :data:`SHORTLIST` best by the raw difference are scored with the refit);
+a likelihood-ratio test then confuses the closest pair with probability ``Phi(-z / 2)``. The same ``z`` on
+the given log (its own voltage) says how little it separated them.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -35,21 +32,25 @@ from typing import Any
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
-from scipy.stats import norm
 
 from ocp.errors import LogError, ParameterError, ThrustshapeError
 from ocp.identify.candidates import candidate
 from ocp.identify.diagnose import DiagnoseResult, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
-from ocp.identify.predict import CHANNELS, free_run, noise_levels
-from ocp.logs import Log, log_from_arrays
-from ocp.model.effects import CATALOGUE, load_plant, plant_to_mapping
+from ocp.identify.predict import CHANNELS, noise_levels
+from ocp.identify.separation import (
+    Rival,
+    confusion,
+    held_on_grid,
+    pair_separations,
+    with_constant,
+    with_effect,
+)
+from ocp.logs import Log
+from ocp.model.effects import plant_to_mapping
 from ocp.model.equilibrium import equilibrium
 from ocp.model.plant import DCMotorPlant
 
-#: relative constants a rival may move to explain a difference (k: k_t and k_e together)
-CONSTANTS: dict[str, tuple[str, ...]] = {"J": ("J",), "B": ("B",), "c_tau": ("c_tau",), "c_f": ("c_f",),
-                                         "k": ("k_t", "k_e"), "R": ("R",)}
 #: probe sizes of effects a log cannot show: fraction of the load torque tau_top, thrust F_top, voltage limit
 #: V, top speed w_top, c_tau, c_f (the smallest a user of a thruster would want to know about)
 PROBES: dict[str, Callable[[dict[str, float]], dict[str, float]]] = {
@@ -65,7 +66,6 @@ GAPS = {"reversal": ("drag_asymmetry", "thrust_asymmetry", "coulomb_friction", "
         "low_speed": ("coulomb_friction", "stribeck"), "speed_range": ("param:B",)}
 GAP_TEXT = {"reversal": "the log never reverses", "low_speed": "the log spends no time at low speed",
             "speed_range": "the log holds one speed only"}
-MAX_SIM_SAMPLES = 6000  # rivals are simulated on at most this many samples (z is scaled to the log's rate)
 SHORTLIST = 3  # candidates whose separation is computed with the refit (best raw separations)
 
 
@@ -93,15 +93,6 @@ class DesignOptions(BaseModel):
                 except ThrustshapeError as exc:
                     raise ValueError(f"{name!r}: {exc.reason}") from None
         return v
-
-
-@dataclass(frozen=True)
-class Rival:
-    """One explanation: its items (effects and ``param:<key>``) and its plant."""
-
-    name: str
-    items: tuple[str, ...]
-    plant: DCMotorPlant
 
 
 @dataclass(frozen=True)
@@ -172,12 +163,6 @@ def _finite(x: float | None) -> float | None:
     return float(x) if x is not None and math.isfinite(x) else None
 
 
-def confusion(z: float) -> float:
-    """Misclassification probability of the likelihood-ratio test between two Gaussian hypotheses ``z``
-    noise standard deviations apart (equal priors): ``Phi(-z/2)``."""
-    return float(norm.cdf(-z / 2.0))
-
-
 def coverage(log: Log) -> dict[str, Any]:
     """What the log exercises: both directions (a reversal), time at low speed (< 10 % of its top speed),
     a range of speeds (10th over 90th percentile of |w| below one half)."""
@@ -212,19 +197,6 @@ def _scales(plant: DCMotorPlant, voltage: float, current: float) -> dict[str, fl
             "c_tau": p.c_tau, "c_f": p.c_f, "tau_m": p.J * p.R / (p.k_t * p.k_e)}
 
 
-def _with_effect(plant: DCMotorPlant, name: str, values: dict[str, float]) -> DCMotorPlant:
-    data = plant_to_mapping(plant)
-    data["effects"] = {**data["effects"], name: values}
-    return load_plant(data)
-
-
-def _with_constant(plant: DCMotorPlant, const: str, rel: float) -> DCMotorPlant:
-    data = plant_to_mapping(plant)
-    for key in CONSTANTS[const]:
-        data[key] = float(data[key]) * (1.0 + rel)
-    return load_plant(data)
-
-
 def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignOptions,
                 scales: dict[str, float], cov: dict[str, Any]) -> tuple[list[Rival], list[str]]:
     """The rival explanations (module doc) and the reasons an experiment is needed."""
@@ -257,94 +229,12 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
             if name in present or any(r.name.startswith(name) for r in out):
                 continue
             if name == "param:B":
-                body = _with_constant(res.plant, "B", 0.5)
+                body = with_constant(res.plant, "B", 0.5)
                 out.append(Rival("param:B (+50 %)", (*res.verdict, name), body))
             else:
                 values = PROBES[name](scales)
-                out.append(Rival(f"{name} (probe)", (*res.verdict, name), _with_effect(res.plant, name, values)))
+                out.append(Rival(f"{name} (probe)", (*res.verdict, name), with_effect(res.plant, name, values)))
     return out, reasons
-
-
-def simulate(plant: DCMotorPlant, t: np.ndarray, voltage: np.ndarray, x0: tuple[float, float] = (0.0, 0.0)
-             ) -> np.ndarray:
-    """Outputs (3, N) -- omega [rad/s], current [A], thrust [N] -- of ``plant`` from ``x0`` (speed [rad/s],
-    current [A]; default rest) under the held ``voltage`` (N,) on the uniform grid ``t`` (N,)."""
-    n = t.size
-    zeros = np.zeros(n)
-    w, i = zeros.copy(), zeros.copy()
-    w[0], i[0] = x0
-    log = log_from_arrays(t, voltage, i, zeros, omega=w, source="design")
-    fr = free_run(plant, log, segment_s=n * (t[1] - t[0]))
-    y = np.zeros((3, n))
-    for k, ch in enumerate(CHANNELS):
-        y[k, fr.idx] = fr.channel(ch)
-    return y
-
-
-def sensitivities(rival: Rival, t: np.ndarray, voltage: np.ndarray, y0: np.ndarray, sigma: np.ndarray,
-                  tolerance: float, x0: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
-    """Weighted output sensitivities (3N, P) of a rival to its effects' fitted parameters and the relative
-    constants (forward differences, 1e-3 relative steps), and each column's prior weight (P,): 0 for the
-    rival's own items (free), ``1 / tolerance`` for the other constants (calibration moves them by about the
-    tolerance, as in :func:`ocp.identify.diagnose`)."""
-    plant = rival.plant
-    cols, weights = [], []
-    for const in CONSTANTS:
-        if float(getattr(plant.params, CONSTANTS[const][0])) != 0.0:
-            cols.append((simulate(_with_constant(plant, const, 1e-3), t, voltage, x0) - y0) / 1e-3)
-            weights.append(0.0 if f"param:{const}" in rival.items else 1.0 / tolerance)
-    data = plant_to_mapping(plant)
-    for eff in plant.effects:
-        for key in getattr(CATALOGUE.get(eff.name), "fitted", ()):
-            value = float(data["effects"][eff.name][key])
-            if value == 0.0:
-                continue
-            moved = _with_effect(plant, eff.name, {**data["effects"][eff.name], key: value * (1 + 1e-3)})
-            cols.append((simulate(moved, t, voltage, x0) - y0) / 1e-3)  # per relative change of the parameter
-            weights.append(0.0 if eff.name in rival.items else 1.0 / tolerance)
-    if not cols:
-        return np.zeros((y0.size, 0)), np.zeros(0)
-    return np.column_stack([(c / sigma[:, None]).ravel() for c in cols]), np.array(weights)
-
-
-def _left(d: np.ndarray, s: np.ndarray, w: np.ndarray) -> float:
-    """What a rival cannot explain of the weighted difference ``d`` (M,): ``min_x |d - s x|^2 + |w x|^2``
-    over relative parameter changes ``x`` (P,), ``s`` (M, P) its sensitivities, ``w`` (P,) the prior weights;
-    returns the square root of the minimum."""
-    if s.shape[1] == 0:
-        return float(np.linalg.norm(d))
-    a = np.vstack([s, np.diag(w)])
-    b = np.concatenate([d, np.zeros(w.size)])
-    x, *_ = np.linalg.lstsq(a, b, rcond=1e-12)
-    return float(np.linalg.norm(b - a @ x))
-
-
-def pair_separations(rivals: list[Rival], t: np.ndarray, voltage: np.ndarray, sigma: np.ndarray, rate: float,
-                     tolerance: float | None, x0: tuple[float, float] = (0.0, 0.0)
-                     ) -> tuple[dict[str, float], dict[str, float]]:
-    """Separation z per rival pair (module doc) and the RMS difference / noise, on a logger at ``rate`` [Hz]."""
-    dt = float(t[-1] - t[0]) / (t.size - 1)
-    scale = math.sqrt(max(dt * rate, 1e-12))  # samples of the logger per simulated sample
-    ys = [simulate(r.plant, t, voltage, x0) for r in rivals]
-    sens = [sensitivities(r, t, voltage, y, sigma, tolerance, x0) if tolerance else None
-            for r, y in zip(rivals, ys, strict=True)]
-    z, rms = {}, {}
-    for (a, ra), (b, rb) in itertools.combinations(enumerate(rivals), 2):
-        d = ((ys[a] - ys[b]) / sigma[:, None]).ravel()
-        key = f"{ra.name} vs {rb.name}"
-        rms[key] = float(np.sqrt(np.mean(d * d)))
-        sa, sb = sens[a], sens[b]
-        left = min(_left(d, *sb), _left(-d, *sa)) if sa is not None and sb is not None else float(np.linalg.norm(d))
-        z[key] = left * scale
-    return z, rms
-
-
-def _grid(t: np.ndarray, v: np.ndarray, dt_log: float) -> tuple[np.ndarray, np.ndarray]:
-    """The command resampled (held) on the simulation grid: the log's step, at most MAX_SIM_SAMPLES."""
-    dt = max(dt_log, float(t[-1] - t[0]) / (MAX_SIM_SAMPLES - 1))
-    grid = np.arange(t[0], t[-1] + 0.5 * dt, dt)
-    idx = np.clip(np.searchsorted(t, grid, side="right") - 1, 0, t.size - 1)
-    return grid - grid[0], np.asarray(v, float)[idx]
 
 
 def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: DesignOptions | None = None,
@@ -371,7 +261,7 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
                 duration_s=duration)
     if len(rivals) < 2:
         return DesignResult(**base, candidates=[], chosen=None, mission=None, current_log={}, verification={})
-    tl, vl = _grid(log.t, log.voltage, log.dt)
+    tl, vl = held_on_grid(log.t, log.voltage, log.dt)
     x0 = (float(log.omega[0]), float(log.current[0]))
     before, _ = pair_separations(rivals, tl, vl, sigma, rate, diagnosis.tolerance, x0)
     params = plant_to_mapping(diagnosis.plant)
@@ -385,7 +275,7 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
     top = sorted((s for s in scored if s[0].runnable), key=lambda s: -s[0].worst)[:SHORTLIST]
     final = []
     for k, (cand, mission, res) in enumerate(top):
-        t, v = _grid(res.arrays["t"], res.arrays["voltage"], log.dt)
+        t, v = held_on_grid(res.arrays["t"], res.arrays["voltage"], log.dt)
         z, rms = pair_separations(rivals, t, v, sigma, rate, diagnosis.tolerance)
         final.append((Candidate(cand.name, cand.description, True, cand.note, cand.raw, z, rms), mission, res))
         if progress is not None:
@@ -420,6 +310,6 @@ def _score(exc_: Excitation, params: dict[str, Any], c_f: float, voltage: float,
             f"not run: {res.source} ({res.reason or 'limits exceeded'}; peak {i_max:.3g} A, {v_max:.3g} V)")
     if not ok:
         return Candidate(exc_.name, exc_.description, False, note), mission, res
-    t, v = _grid(res.arrays["t"], res.arrays["voltage"], dt_log)
+    t, v = held_on_grid(res.arrays["t"], res.arrays["voltage"], dt_log)
     raw, rms = pair_separations(rivals, t, v, sigma, rate, None)
     return Candidate(exc_.name, exc_.description, True, note, raw, {}, rms), mission, res
