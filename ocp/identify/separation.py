@@ -109,6 +109,20 @@ def _left(d: np.ndarray, s: np.ndarray, w: np.ndarray) -> float:
     return float(np.linalg.norm(b - a @ x))
 
 
+def _nested_left(ra: Rival, rb: Rival, d: np.ndarray, sa: tuple[np.ndarray, np.ndarray],
+                 sb: tuple[np.ndarray, np.ndarray]) -> float:
+    """What the rival that is refitted cannot explain of ``d = (y_a - y_b) / sigma``: the smaller of both
+    directions, except for nested rivals (one's items within the other's, e.g. a plant and the same plant
+    with a probe effect), where only the larger one can be the truth to reveal (the larger one explains the
+    smaller by switching its extra effect off)."""
+    ia, ib = set(ra.items), set(rb.items)
+    if ia < ib:  # b true, a refits
+        return _left(-d, *sa)
+    if ib < ia:
+        return _left(d, *sb)
+    return min(_left(d, *sb), _left(-d, *sa))
+
+
 def pair_separations(rivals: list[Rival], t: np.ndarray, voltage: np.ndarray, sigma: np.ndarray, rate: float,
                      tolerance: float | None, x0: tuple[float, float] = (0.0, 0.0)
                      ) -> tuple[dict[str, float], dict[str, float]]:
@@ -124,7 +138,7 @@ def pair_separations(rivals: list[Rival], t: np.ndarray, voltage: np.ndarray, si
         key = f"{ra.name} vs {rb.name}"
         rms[key] = float(np.sqrt(np.mean(d * d)))
         sa, sb = sens[a], sens[b]
-        left = min(_left(d, *sb), _left(-d, *sa)) if sa is not None and sb is not None else float(np.linalg.norm(d))
+        left = float(np.linalg.norm(d)) if sa is None or sb is None else _nested_left(ra, rb, d, sa, sb)
         z[key] = left * scale
     return z, rms
 
