@@ -3,7 +3,7 @@
 For each seed: a proving-ground rig (``tests/proving_ground``, no code shared with ``ocp``) with one hidden
 effect, logged only near ONE operating speed (:func:`tests.proving_ground.experiment.single_speed`); the
 log is diagnosed; :func:`ocp.identify.design.design` proposes an experiment (limits: the supply voltage and
-3x the log's peak current); the optimiser turns its mission into a voltage command; the proving ground plays
+half the stall current); the optimiser turns its mission into a voltage command; the proving ground plays
 that command on the same rig and logger; the new log is diagnosed. Printed per case and in total: the
 first verdict (and whether ambiguous), the proposal and its predicted separation z (this log's z beside
 it), the second verdict, and whether it is exactly right.
@@ -41,7 +41,8 @@ def one(seed: int, effect: str) -> dict[str, object]:
     plant = DCMotorPlant(MotorParams(**rig.nominal))
     t0 = time.perf_counter()
     first = diagnose(plant, log)
-    limits = DesignOptions(voltage=rig.truth.v_max, current=3.0 * float(np.max(np.abs(log.current))))
+    # a drive's limits: the supply voltage, half the stall current (not the log's small operating current)
+    limits = DesignOptions(voltage=rig.truth.v_max, current=0.5 * rig.truth.v_max / rig.truth.R)
     d = design(plant, log, first, limits)
     t_design = time.perf_counter() - t0
     out: dict[str, object] = {"seed": seed, "effect": effect, "first": first.verdict,

@@ -194,12 +194,15 @@ def _scales(plant: DCMotorPlant, voltage: float, current: float) -> dict[str, fl
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if within(mid) else (lo, mid)
     return {"w_top": lo, "tau_top": p.B * lo + p.c_tau * lo * lo, "F_top": p.c_f * lo * lo, "V": voltage,
-            "c_tau": p.c_tau, "c_f": p.c_f, "tau_m": p.J * p.R / (p.k_t * p.k_e)}
+            "c_tau": p.c_tau, "c_f": p.c_f, "tau_m": p.J * p.R / (p.k_t * p.k_e),
+            # time to the top speed at the current limit (no load): a tight current limit slows every change
+            "tau_i": p.J * lo / (p.k_t * current)}
 
 
 def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignOptions,
-                scales: dict[str, float], cov: dict[str, Any]) -> tuple[list[Rival], list[str]]:
-    """The rival explanations (module doc) and the reasons an experiment is needed."""
+                scales: dict[str, float], cov: dict[str, Any]) -> tuple[list[Rival], list[str], bool]:
+    """The rival explanations (module doc), the reasons an experiment is needed, and whether the rivals are
+    probes (the diagnosed plant first: the experiment must *reveal* each probe, not tell probes apart)."""
     from ocp.identify import FitOptions, fit
 
     def fitted(items: Sequence[str]) -> Rival:
@@ -208,7 +211,7 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
         return Rival(name, tuple(items), body)
 
     if opt.rivals is not None:
-        return [fitted(r) for r in opt.rivals], ["rivals given by the user"]
+        return [fitted(r) for r in opt.rivals], ["rivals given by the user"], False
     reasons, sets = [], []
     gaps = [GAP_TEXT[g] for g in GAPS if not cov[g]]
     if res.ambiguous:
@@ -218,7 +221,7 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
             sets.append(tuple(str(a["alternative"]) if v == a["adopted"] else v for v in res.verdict))
         reasons += [f"{g} (an effect may hide there)" for g in gaps]
         unique = list(dict.fromkeys(tuple(sorted(s)) for s in sets))
-        return [fitted(s) for s in unique], reasons
+        return [fitted(s) for s in unique], reasons, False
     out = [Rival("diagnosed plant", tuple(res.verdict), res.plant)]
     present = {e.name for e in res.plant.effects} | set(res.verdict)
     for gap, probes in GAPS.items():
@@ -234,7 +237,7 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
             else:
                 values = PROBES[name](scales)
                 out.append(Rival(f"{name} (probe)", (*res.verdict, name), with_effect(res.plant, name, values)))
-    return out, reasons
+    return out, reasons, True
 
 
 def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: DesignOptions | None = None,
@@ -251,9 +254,10 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
     if voltage <= 0 or current <= 0:
         raise ParameterError("voltage" if voltage <= 0 else "current", "the log has no non-zero peak; give the limit")
     sc = _scales(diagnosis.plant, voltage, current)
-    duration = opt.duration_s or float(np.clip(60.0 * sc["tau_m"], 2.0, 20.0))
+    tau = max(sc["tau_m"], sc["tau_i"])  # the time scale of the experiment's changes [s]
+    duration = opt.duration_s or float(np.clip(60.0 * tau, 2.0, 20.0))
     cov = coverage(log)
-    rivals, reasons = rivals_from(plant, log, diagnosis, opt, sc, cov)
+    rivals, reasons, detect = rivals_from(plant, log, diagnosis, opt, sc, cov)
     noise = noise_levels(log)
     sigma = np.array([noise[ch] for ch in CHANNELS])
     rate = 1.0 / log.dt
@@ -263,20 +267,20 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
         return DesignResult(**base, candidates=[], chosen=None, mission=None, current_log={}, verification={})
     tl, vl = held_on_grid(log.t, log.voltage, log.dt)
     x0 = (float(log.omega[0]), float(log.current[0]))
-    before, _ = pair_separations(rivals, tl, vl, sigma, rate, diagnosis.tolerance, x0)
+    before, _ = pair_separations(rivals, tl, vl, sigma, rate, diagnosis.tolerance, x0, detect)
     params = plant_to_mapping(diagnosis.plant)
     scored: list[tuple[Candidate, dict[str, Any], Any]] = []
-    excs = candidates(0.95 * sc["w_top"], duration, sc["tau_m"])
+    excs = candidates(0.95 * sc["w_top"], duration, tau)
     for k, exc in enumerate(excs):
         scored.append(_score(exc, params, diagnosis.plant.params.c_f, voltage, current, opt, rivals, sigma, rate,
-                             log.dt))
+                             log.dt, detect))
         if progress is not None:
             progress(0.1 + 0.6 * (k + 1) / len(excs))
     top = sorted((s for s in scored if s[0].runnable), key=lambda s: -s[0].worst)[:SHORTLIST]
     final = []
     for k, (cand, mission, res) in enumerate(top):
         t, v = held_on_grid(res.arrays["t"], res.arrays["voltage"], log.dt)
-        z, rms = pair_separations(rivals, t, v, sigma, rate, diagnosis.tolerance)
+        z, rms = pair_separations(rivals, t, v, sigma, rate, diagnosis.tolerance, detect=detect)
         final.append((Candidate(cand.name, cand.description, True, cand.note, cand.raw, z, rms), mission, res))
         if progress is not None:
             progress(0.7 + 0.3 * (k + 1) / max(len(top), 1))
@@ -294,7 +298,8 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
 
 
 def _score(exc_: Excitation, params: dict[str, Any], c_f: float, voltage: float, current: float, opt: DesignOptions,
-           rivals: list[Rival], sigma: np.ndarray, rate: float, dt_log: float) -> tuple[Candidate, dict[str, Any], Any]:
+           rivals: list[Rival], sigma: np.ndarray, rate: float, dt_log: float,
+           detect: bool) -> tuple[Candidate, dict[str, Any], Any]:
     """Optimise one candidate within the limits; its raw separations (no refit) when it runs within them."""
     from ocp.optimize.mission import Mission
     from ocp.optimize.solve import optimize
@@ -311,5 +316,5 @@ def _score(exc_: Excitation, params: dict[str, Any], c_f: float, voltage: float,
     if not ok:
         return Candidate(exc_.name, exc_.description, False, note), mission, res
     t, v = held_on_grid(res.arrays["t"], res.arrays["voltage"], dt_log)
-    raw, rms = pair_separations(rivals, t, v, sigma, rate, None)
+    raw, rms = pair_separations(rivals, t, v, sigma, rate, None, detect=detect)
     return Candidate(exc_.name, exc_.description, True, note, raw, {}, rms), mission, res

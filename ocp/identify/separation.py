@@ -124,16 +124,19 @@ def _nested_left(ra: Rival, rb: Rival, d: np.ndarray, sa: tuple[np.ndarray, np.n
 
 
 def pair_separations(rivals: list[Rival], t: np.ndarray, voltage: np.ndarray, sigma: np.ndarray, rate: float,
-                     tolerance: float | None, x0: tuple[float, float] = (0.0, 0.0)
+                     tolerance: float | None, x0: tuple[float, float] = (0.0, 0.0), detect: bool = False
                      ) -> tuple[dict[str, float], dict[str, float]]:
-    """Separation z per rival pair (module doc) and the RMS difference / noise, on a logger at ``rate`` [Hz]."""
+    """Separation z per rival pair (module doc) and the RMS difference / noise, on a logger at ``rate`` [Hz].
+    ``detect``: only the first rival against each other one (would each probe effect show?), not every pair."""
     dt = float(t[-1] - t[0]) / (t.size - 1)
     scale = math.sqrt(max(dt * rate, 1e-12))  # samples of the logger per simulated sample
     ys = [simulate(r.plant, t, voltage, x0) for r in rivals]
     sens = [sensitivities(r, t, voltage, y, sigma, tolerance, x0) if tolerance else None
             for r, y in zip(rivals, ys, strict=True)]
     z, rms = {}, {}
-    for (a, ra), (b, rb) in itertools.combinations(enumerate(rivals), 2):
+    pairs = [((0, rivals[0]), (k, r)) for k, r in enumerate(rivals) if k] if detect else \
+        itertools.combinations(enumerate(rivals), 2)
+    for (a, ra), (b, rb) in pairs:
         d = ((ys[a] - ys[b]) / sigma[:, None]).ravel()
         key = f"{ra.name} vs {rb.name}"
         rms[key] = float(np.sqrt(np.mean(d * d)))
