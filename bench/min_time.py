@@ -2,7 +2,7 @@
 
 ``python bench/min_time.py [--time-limit S]`` solves the +0.4 N -> -0.4 N reversal of ``examples/reversal.json``
 at 1 A / 12 V in min-time mode, ``bounded`` and ``continuous-voltage``, with mesh refinement
-(:mod:`ocp.min_time`), and prints every mesh's duration, the reported value with its error bound, the
+(:mod:`ocp.optimize.min_time`), and prints every mesh's duration, the reported value with its error bound, the
 independent solve of ``tests/test_min_time.py`` (scipy shooting on the optimal switching structure) and the
 fastest ``sin^5`` reversal within the same limits.
 """
@@ -14,9 +14,10 @@ import json
 import time
 from pathlib import Path
 
-from ocp.mission import mission_from_mapping
-from ocp.optimize import optimize
 from tests.test_min_time import oracle_min_time
+
+from ocp.optimize.mission import mission_from_mapping
+from ocp.optimize.solve import optimize
 
 
 def main() -> None:

@@ -32,8 +32,8 @@ def one(seed: int) -> dict[str, Any]:
     from ocp.identify import diagnose
     from ocp.logs import log_from_arrays
     from ocp.logs.timebase import uniform
-    from ocp.params import MotorParams
-    from ocp.plant import DCMotorPlant
+    from ocp.model.params import MotorParams
+    from ocp.model.plant import DCMotorPlant
     from tests.proving_ground import make_case
 
     t0 = time.perf_counter()

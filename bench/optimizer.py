@@ -6,7 +6,7 @@ Usage::
     python bench/optimizer.py [--quick] [--json out.json] [--repeats N]
 
 For every mission of a suite, the same collocation program (states, scaling, Radau degree 3, weights
-``ocp.optimize.WEIGHTS``, bounds, phases, initial guess: all taken from ``problem_for``/``problem_data``)
+``ocp.optimize.solve.WEIGHTS``, bounds, phases, initial guess: all taken from ``problem_for``/``problem_data``)
 is solved three ways, interleaved so that machine noise hits all of them alike:
 
 * **thrustshape** -- ``optimize_mesh(mission)`` (one mesh; a min-time mission is not refined here): the
@@ -47,11 +47,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from ocp import collocation as col
-from ocp.mission import Mission, mission_from_mapping
-from ocp.optimize import Problem, ipopt_options, optimize_mesh, problem_data, problem_for, solver_options
-from ocp.plant import CASADI
-from ocp.result import OptimizeResult, extract, simulate_response
+from ocp.model.plant import CASADI
+from ocp.optimize import collocation as col
+from ocp.optimize.mission import Mission, mission_from_mapping
+from ocp.optimize.result import OptimizeResult, extract, simulate_response
+from ocp.optimize.solve import Problem, ipopt_options, optimize_mesh, problem_data, problem_for, solver_options
 
 # targets of issue 3 (2 s single-reversal mission for the absolute times; suite medians for ratios)
 TARGET_WARM_S = 0.030
@@ -149,7 +149,7 @@ def transcribe(problem: Problem, up: Unpacked, stretch: Any, x0: Any, xc: list[l
     """(objective, equality residuals) of the thrustshape program, for SX or MX decision blocks.
 
     ``xc[j][k]`` is the (nx, DEGREE) block of scaled states at the collocation points of interval k of
-    phase j, ``u[j][k]`` the scaled control; mirrors ``ocp.collocation.build`` with numeric data.
+    phase j, ``u[j][k]`` the scaled control; mirrors ``ocp.optimize.collocation.build`` with numeric data.
     """
     st, plant = problem.structure, problem.plant
     npx = len(plant.state_names)

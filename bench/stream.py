@@ -6,7 +6,7 @@
 
 Profile: the seed paper's Section IV-B impedance reference (M_I = 0.65, B_I = 3.5, K_I = 5.0), 10 s at
 1 kHz, scaled to +-0.4 N, 19 linear crossings; paper-rig motor, |i| <= 1 A, |V| <= 12 V, look-ahead 0.1 s.
-Every approach is verified the same way: peaks of the returned i and V; the plant (ocp.simulate, Radau)
+Every approach is verified the same way: peaks of the returned i and V; the plant (ocp.simulate.open_loop, Radau)
 driven by the returned voltage vs the returned thrust; local exponent at each reversal (log-log fit on
 +-10 ms); tracking RMS against the desired thrust it tracks (delayed by the look-ahead for the stream).
 """
@@ -24,9 +24,9 @@ import numpy as np
 from scipy.optimize import minimize_scalar
 
 from ocp.gallery.interaction import InteractionSetup, Law, interaction_reference
-from ocp.params import MotorParams, preset
-from ocp.plant import DCMotorPlant
-from ocp.simulate import simulate
+from ocp.model.params import MotorParams, preset
+from ocp.model.plant import DCMotorPlant
+from ocp.simulate.open_loop import simulate
 from ocp.stream import StreamShaper, shape_profile, stream_options
 from ocp.stream.blend import blend_profile
 from ocp.stream.codegen import build, compiler
@@ -90,8 +90,8 @@ def streams(p: MotorParams, t: np.ndarray, f: np.ndarray) -> list[dict[str, obje
 
 def offline(p: MotorParams, t: np.ndarray, f: np.ndarray) -> list[dict[str, object]]:
     """The offline optimiser on the whole profile (knows the future, no delay, no retiming)."""
-    from ocp.mission import mission_from_mapping
-    from ocp.optimize import optimize
+    from ocp.optimize.mission import mission_from_mapping
+    from ocp.optimize.solve import optimize
 
     rows = []
     for reg in ("bounded", "continuous-voltage"):

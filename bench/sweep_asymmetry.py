@@ -19,9 +19,9 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from ocp.effects import load_plant
 from ocp.identify import diagnose
 from ocp.logs import read_log
+from ocp.model.effects import load_plant
 from tests.logfiles import Thruster, thruster_sweep, write_csv
 
 

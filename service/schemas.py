@@ -1,6 +1,6 @@
 """Request and response bodies of the HTTP API (pydantic v2).
 
-Missions are :class:`ocp.mission.Mission` itself (subclassed only to refuse parameter *file paths*:
+Missions are :class:`ocp.optimize.mission.Mission` itself (subclassed only to refuse parameter *file paths*:
 over HTTP ``params`` is a preset name or a mapping, never a path on the server). Bodies reject
 unknown fields. Responses that mirror a core result's ``to_dict()`` list the documented fields and
 allow extra ones the core may add.
@@ -13,9 +13,9 @@ from typing import Annotated, Any, ClassVar, Literal
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, field_validator, model_validator
 
 from ocp.errors import ParameterError
-from ocp.mission import MAX_SPAN_S, MAX_THRUST, Limits, Mission
-from ocp.params import PRESETS, load_params
-from ocp.theory import ReversalRegularity
+from ocp.model.params import PRESETS, load_params
+from ocp.optimize.mission import MAX_SPAN_S, MAX_THRUST, Limits, Mission
+from ocp.theory.reversal import ReversalRegularity
 
 # strict numbers: "12" and true are not numbers
 Finite = Annotated[float, Field(strict=True, allow_inf_nan=False)]
@@ -54,7 +54,7 @@ def preset_or_mapping(v: Any) -> Any:
 
 
 class MissionRequest(Mission):
-    """A :class:`ocp.mission.Mission`; ``params`` is a preset name or a parameter mapping, never a file
+    """A :class:`ocp.optimize.mission.Mission`; ``params`` is a preset name or a parameter mapping, never a file
     path (the core's rule, switched on for the class since FastAPI cannot pass a validation context)."""
 
     model_config = ConfigDict(title="Mission", json_schema_extra={"examples": [MISSION_EXAMPLE]})
@@ -153,7 +153,7 @@ class DesignPublic(_Strict):
 
 
 class ReferencePublic(_Open):
-    """:meth:`ocp.reference.Reference.to_dict`; arrays of shape (N,), SI units, "inf" where unbounded."""
+    """:meth:`ocp.reference.trajectory.Reference.to_dict`; arrays of shape (N,), SI units, "inf" where unbounded."""
 
     t: list[Sample]
     thrust: list[Sample]
@@ -175,7 +175,8 @@ class Verification(_Open):
 
 
 class OptimizePublic(_Open):
-    """:meth:`ocp.optimize.OptimizeResult.to_dict`; ``source`` says whether the solver or the fallback answered."""
+    """:meth:`ocp.optimize.solve.OptimizeResult.to_dict`; ``source`` says whether the solver or the fallback
+    answered."""
 
     source: Literal["optimized", "analytic-fallback"]
     status: str
@@ -208,7 +209,7 @@ class DiagnosePublic(_Open):
 
 class FitPublic(_Open):
     """:meth:`ocp.identify.FitResult.to_dict` plus ``calibrated_params``, the calibrated parameter mapping
-    (readable by :func:`ocp.effects.load_plant`, and as ``params`` of a mission or a model check)."""
+    (readable by :func:`ocp.model.effects.load_plant`, and as ``params`` of a mission or a model check)."""
 
     effects: list[str]
     stage: Literal["equation-error", "free-run"]
@@ -216,6 +217,24 @@ class FitPublic(_Open):
     rms_before: dict[str, float | None]
     rms_after: dict[str, float | None]
     calibrated_params: dict[str, Any]
+
+
+class ExperimentDesignPublic(_Open):
+    """:meth:`ocp.identify.design.DesignResult.to_dict` plus ``diagnosis`` (the diagnosis it settles): why an
+    experiment is needed, the rival explanations, every candidate excitation's separation, the chosen mission."""
+
+    needed: bool = Field(description="false: not ambiguous and the log covers reversals, low speed and a speed range")
+    reasons: list[str]
+    coverage: dict[str, Any] = Field(description="reversal, low_speed, speed_range (bool) and the fractions behind")
+    rivals: list[dict[str, Any]] = Field(description="[{name, items}] the explanations to separate")
+    candidates: list[dict[str, Any]] = Field(description="every excitation: runnable, separation per rival pair")
+    separation: float | None = Field(description="the chosen experiment's smallest pairwise separation z "
+                                                 "[noise standard deviations]")
+    misclassification: float | None = Field(description="Phi(-z/2): probability a likelihood-ratio test confuses "
+                                                        "the closest pair")
+    mission: dict[str, Any] | None = Field(description="the proposed mission (POST it to /v1/references/optimize)")
+    message: str
+    diagnosis: dict[str, Any]
 
 
 class BatchCreate(_Strict):
@@ -327,3 +346,20 @@ class Problem(_Open):
     field: str | None = Field(default=None, description="the input at fault: a dotted body path "
                               "(limits.current, segments.1.duration), a form field, a log column or a header")
     reason: str | None = Field(default=None, description="why that input was refused")
+
+
+ModelCheckOp = Literal["check", "diagnose", "fit", "design"]
+JobStatus = Literal["queued", "running", "done", "failed"]
+
+
+class ModelCheckJobPublic(_Strict):
+    """A model-check job: ``status``, ``progress`` (0..1, while running), the error once failed."""
+
+    id: str
+    op: ModelCheckOp
+    status: JobStatus
+    progress: float = Field(ge=0, le=1)
+    attempts: int
+    created_at: float = Field(description="Unix time [s]")
+    finished_at: float | None = None
+    error: ItemError | None = None

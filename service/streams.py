@@ -37,7 +37,7 @@ EXAMPLE_MAX_DURATION_S = 10.0
 def _open(start: Payload) -> tuple[Any, Payload]:
     """``start`` (the session's first frame, validated by the route) -> the shaper and the ready frame."""
     from ocp.errors import MissionError
-    from ocp.params import PRESETS, load_params
+    from ocp.model.params import PRESETS, load_params
     from ocp.stream import StreamShaper, stream_options
 
     opts = stream_options(current=start["current"], voltage=start["voltage"], regularity=start["regularity"],

@@ -30,9 +30,9 @@ SOLVE_MARGIN_S = 1.0
 def analytic_reference(payload: Payload) -> Payload:
     """``{"request": SinRequest | DesignRequest, "max_samples": int}`` -> :meth:`Reference.to_dict`
     (+ ``design`` for a design request)."""
-    from ocp.analytic import reference, time_grid
-    from ocp.fallback import design_sin
-    from ocp.params import load_params
+    from ocp.model.params import load_params
+    from ocp.reference.analytic import reference, time_grid
+    from ocp.reference.fallback import design_sin
     from service.schemas import AnalyticRequest, DesignRequest
 
     req = TypeAdapter(AnalyticRequest).validate_python(payload["request"])
@@ -45,7 +45,7 @@ def analytic_reference(payload: Payload) -> Payload:
         design = {"q": int(prof.q), "amplitude": float(prof.amplitude), "period": float(prof.period),
                   "peak_current": float(d.peak_current), "peak_voltage": float(d.peak_voltage)}
     else:
-        from ocp.analytic import SinProfile
+        from ocp.reference.analytic import SinProfile
 
         prof = SinProfile(req.amplitude, req.period, req.q, req.phase)
     duration = prof.period if req.duration is None else req.duration
@@ -60,15 +60,15 @@ def analytic_reference(payload: Payload) -> Payload:
 
 
 def optimize_mission(payload: Payload) -> Payload:
-    """Mission -> :meth:`ocp.optimize.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
+    """Mission -> :meth:`ocp.optimize.solve.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
     build is reported to the worker's parent (:func:`service.workers.report_phase`): it survives the deadline."""
-    from ocp import collocation
-    from ocp.mission import Mission
+    from ocp.optimize import collocation
+    from ocp.optimize.mission import Mission
     from service.workers import report_phase, time_left
 
     if report_phase not in collocation.BUILD_OBSERVERS:
         collocation.BUILD_OBSERVERS.append(report_phase)
-    module = importlib.import_module("ocp.optimize")
+    module = importlib.import_module("ocp.optimize.solve")
     left = time_left()  # IPOPT stops early enough to verify and answer before the worker would be killed
     module.SOLVE_DEADLINE[0] = math.inf if left is None else time.perf_counter() + left - SOLVE_MARGIN_S
     try:
@@ -80,18 +80,18 @@ def optimize_mission(payload: Payload) -> Payload:
 def fallback_mission(payload: Payload) -> Payload:
     """``{"mission": ..., "reason": ...}`` -> the analytic fallback answer (cheap, no IPOPT; within the limits or
     :class:`~ocp.errors.InfeasibleError`)."""
-    from ocp.mission import Mission
+    from ocp.optimize.mission import Mission
 
-    analytic_fallback = importlib.import_module("ocp.result").analytic_fallback
+    analytic_fallback = importlib.import_module("ocp.optimize.result").analytic_fallback
     mission = Mission.model_validate(payload["mission"])
     return analytic_fallback(mission, str(payload["reason"])).to_dict()
 
 
 def compare_mission(payload: Payload) -> Payload:
-    """``{"mission": Mission, "qs": [q, ...] | None}`` -> :meth:`ocp.compare.CompareResult.to_dict`."""
-    from ocp.mission import Mission
+    """``{"mission": Mission, "qs": [q, ...] | None}`` -> :meth:`ocp.optimize.compare.CompareResult.to_dict`."""
+    from ocp.optimize.mission import Mission
 
-    compare = importlib.import_module("ocp.compare").compare
+    compare = importlib.import_module("ocp.optimize.compare").compare
     qs = payload.get("qs")
     mission = Mission.model_validate(payload["mission"])
     result = compare(mission) if not qs else compare(mission, tuple(int(q) for q in qs))
@@ -126,8 +126,8 @@ class TaskSet:
 
 def available_tasks() -> TaskSet:
     """Tasks whose core modules exist in this install (checked when the app is created)."""
-    has_opt = _has("ocp.optimize", "optimize", "analytic_fallback")
-    has_cmp = _has("ocp.compare", "compare")
+    has_opt = _has("ocp.optimize.solve", "optimize", "analytic_fallback")
+    has_cmp = _has("ocp.optimize.compare", "compare")
     has_mc = _has("ocp.identify", "check", "diagnose", "fit")
     from service.modelcheck import model_check
 
@@ -137,6 +137,6 @@ def available_tasks() -> TaskSet:
         compare=compare_mission if has_cmp else None,
         batch_item=optimize_mission if has_opt else None,
         model_check=model_check if has_mc else None,
-        extra_preload=tuple(m for m, ok in (("ocp.optimize", has_opt), ("ocp.compare", has_cmp),
+        extra_preload=tuple(m for m, ok in (("ocp.optimize.solve", has_opt), ("ocp.optimize.compare", has_cmp),
                                             ("ocp.identify", has_mc)) if ok),
     )

@@ -271,8 +271,8 @@ class WorkerPool:
     """
 
     def __init__(self, workers: int, queue_size: int, retry_after: int,
-                 preload: Sequence[str] = ("ocp.analytic", "ocp.fallback", "ocp.mission"), build_limit: float = 0.0,
-                 niceness: int = 0) -> None:
+                 preload: Sequence[str] = ("ocp.reference.analytic", "ocp.reference.fallback", "ocp.optimize.mission"),
+                 build_limit: float = 0.0, niceness: int = 0) -> None:
         """``build_limit`` [s]: how long a worker whose caller's deadline ran out during a reported build
         (:func:`report_phase`) may go on building before it is killed (0: killed at the deadline).
         ``niceness``: added to the processes' nice value (a pool of long solves yields the CPU to a pool of

@@ -6,7 +6,7 @@ from typing import Any
 import httpx
 import pytest
 
-from ocp.params import MotorParams, load_params
+from ocp.model.params import MotorParams, load_params
 
 
 @pytest.fixture(scope="session")

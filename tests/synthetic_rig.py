@@ -21,11 +21,11 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ocp.effects import effects_from_mapping, measured_current
 from ocp.logs import Log, log_from_arrays
-from ocp.params import MotorParams
-from ocp.plant import CASADI, DCMotorPlant
-from ocp.simulate import rk4
+from ocp.model.effects import effects_from_mapping, measured_current
+from ocp.model.params import MotorParams
+from ocp.model.plant import CASADI, DCMotorPlant
+from ocp.simulate.open_loop import rk4
 
 
 @dataclass(frozen=True)

@@ -61,7 +61,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def cmd_table(args: argparse.Namespace) -> int:
-    from ocp.theory import table_one
+    from ocp.theory.reversal import table_one
 
     try:
         orders = tuple(int(x) for x in args.orders.split(","))
@@ -80,8 +80,8 @@ def cmd_table(args: argparse.Namespace) -> int:
 
 
 def cmd_analytic(args: argparse.Namespace) -> int:
-    from ocp.analytic import SinProfile, reference, time_grid
-    from ocp.params import load_params
+    from ocp.model.params import load_params
+    from ocp.reference.analytic import SinProfile, reference, time_grid
 
     params = load_params(args.params)
     prof = SinProfile(args.amplitude, args.period, args.q, args.phase)
@@ -101,9 +101,9 @@ def cmd_analytic(args: argparse.Namespace) -> int:
 def cmd_simulate(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from ocp.params import load_params
-    from ocp.plant import DCMotorPlant
-    from ocp.simulate import simulate, simulate_zoh
+    from ocp.model.params import load_params
+    from ocp.model.plant import DCMotorPlant
+    from ocp.simulate.open_loop import simulate, simulate_zoh
 
     params = load_params(args.params)
     cols = read_csv_columns(args.voltage_csv, ("t", "voltage"))

@@ -48,14 +48,14 @@ class VersionAction(argparse.Action):
 def _listing(kind: Listing) -> str:
     """One help line naming what a command accepts, read from the core only when help is printed."""
     if kind == "presets":
-        from ocp.params import PRESETS
+        from ocp.model.params import PRESETS
 
         return "presets (--params NAME): " + ", ".join(PRESETS)
     if kind == "effects":
-        from ocp.effects import CATALOGUE
+        from ocp.model.effects import CATALOGUE
 
         return "effects (--effects NAME,...; or param:<key>): " + ", ".join(sorted(CATALOGUE))
-    from ocp.theory import ReversalRegularity
+    from ocp.theory.reversal import ReversalRegularity
 
     return "regularities (mission 'regularity'): " + ", ".join(r.value for r in ReversalRegularity)
 

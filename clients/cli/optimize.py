@@ -14,15 +14,15 @@ from clients.cli.remote import add_server_args, client, params_for_server
 from ocp.errors import MissionError
 
 if TYPE_CHECKING:
-    from ocp.mission import Mission
+    from ocp.optimize.mission import Mission
 
 CSV_COLUMNS = ("t", "thrust", "thrust_desired", "omega", "theta", "current", "voltage")
 
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = add_command(sub, "optimize", summary="optimise a mission's thrust reference under current/voltage limits",
-                    description="A mission (JSON/YAML, see examples/reversal.json and ocp/mission.py) gives the "
-                                "plant, the limits,\nthe reversal regularity, the objective and the desired "
+                    description="A mission (JSON/YAML, see examples/reversal.json and ocp/optimize/mission.py) "
+                                "gives the plant, the limits,\nthe reversal regularity, the objective and the desired "
                                 "thrust. Prints a summary; --out writes\nthe reference as CSV (t, thrust, "
                                 "thrust_desired, omega, theta, current, voltage).",
                     examples=["thrustshape optimize examples/reversal.json --out ref.csv --plot ref.svg",
@@ -55,7 +55,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 def load_mission_arg(path: str) -> Mission:
     """The mission in ``path`` (JSON or YAML), or read from stdin for ``-``."""
-    from ocp.mission import load_mission, mission_from_mapping
+    from ocp.optimize.mission import load_mission, mission_from_mapping
 
     if path != STDIO:
         return load_mission(path)
@@ -91,7 +91,7 @@ def cmd_optimize(args: argparse.Namespace) -> int:
         if args.out:  # null in the JSON answer = a non-finite sample
             write_csv({k: np.array([math.nan if x is None else x for x in d[k]], float) for k in CSV_COLUMNS}, args.out)
     else:
-        from ocp.optimize import optimize
+        from ocp.optimize.solve import optimize
 
         result = optimize(mission)
         if args.out:
@@ -161,12 +161,12 @@ def cmd_compare(args: argparse.Namespace) -> int:
         with client(args) as c:
             d = c.compare(_for_server(mission), qs=qs)
     else:
-        from ocp.compare import compare
+        from ocp.optimize.compare import compare
 
         d = compare(mission, qs).to_dict()
     rows = d["table"]
     if args.plot:
-        from ocp.compare import plot
+        from ocp.optimize.compare import plot
 
         plot(d, args.plot)
     if args.json:

@@ -24,7 +24,7 @@ def client(args: argparse.Namespace) -> Any:
 def params_for_server(params: str | dict[str, Any]) -> str | dict[str, Any]:
     """A preset name stays a name; a local parameter file is read here and sent as its mapping
     (the server never reads files)."""
-    from ocp.params import PRESETS, read_mapping
+    from ocp.model.params import PRESETS, read_mapping
 
     if isinstance(params, dict) or params in PRESETS:
         return params

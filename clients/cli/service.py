@@ -24,7 +24,7 @@ from clients.cli.io import print_json
 from ocp.errors import MissionError, ThrustshapeError
 
 if TYPE_CHECKING:
-    from ocp.mission import Mission
+    from ocp.optimize.mission import Mission
 
 SUMMARY_COLUMNS = ("index", "name", "status", "source", "solve_time_s", "thrust_rms_error", "max_abs_current",
                    "max_abs_voltage", "error")
@@ -126,7 +126,7 @@ def _documents(path: Path) -> Iterator[tuple[str, Any]]:
 
 def load_missions(path: str | Path) -> list[Mission]:
     """Every mission under ``path``, validated; errors name the file and the field."""
-    from ocp.mission import mission_from_mapping
+    from ocp.optimize.mission import mission_from_mapping
 
     out: list[Mission] = []
     for where, item in _documents(Path(path)):
@@ -139,8 +139,8 @@ def load_missions(path: str | Path) -> list[Mission]:
 
 def optimize_one(mission: dict[str, Any]) -> dict[str, Any]:
     """Local batch item (runs in a worker process or on Dask): result dict, or ``{"error": ...}``."""
-    from ocp.mission import Mission
-    from ocp.optimize import optimize
+    from ocp.optimize.mission import Mission
+    from ocp.optimize.solve import optimize
 
     try:
         return {"result": optimize(Mission.model_validate(mission)).to_dict()}

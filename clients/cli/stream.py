@@ -74,7 +74,7 @@ def _write(out: TextIO, s: StreamSample) -> None:
 
 
 def cmd_stream(args: argparse.Namespace) -> int:
-    from ocp.params import load_params
+    from ocp.model.params import load_params
     from ocp.stream import StreamShaper, stream_options
 
     params = load_params(args.params)

@@ -1,7 +1,7 @@
 """Section V of the seed paper in simulation: Cases 1, 4, 5 on the paper rig, closed loop, vs the paper.
 
 The three experiments track ``x2d = A sin^n(2 pi t / T)`` with n = 1, 5, 7 (Cases 1, 4, 5) through the
-Section V controller (:mod:`ocp.closed_loop`), without feedforward as in the paper. Choices the paper
+Section V controller (:mod:`ocp.simulate.closed_loop`), without feedforward as in the paper. Choices the paper
 leaves open, made here (defaults of :class:`ExperimentSetup`):
 
 * amplitudes from the measured thrust ranges: 0.59 N (Case 1), 0.49 N (Case 4), 0.50 N (Case 5);
@@ -14,7 +14,7 @@ leaves open, made here (defaults of :class:`ExperimentSetup`):
 The paper reports speeds in "Hz"; the paper-rig preset reads that as rad/s (see
 ``ocp/presets/paper-rig.json``), so the paper's numbers are compared here as rad/s.
 
-A fourth and fifth row track the *optimised* reference of Case 1's mission (``ocp.optimize``): once
+A fourth and fifth row track the *optimised* reference of Case 1's mission (``ocp.optimize.solve``): once
 as a plain reference (like the paper's cases) and once with its bounded voltage as feedforward. Like for
 like with Case 1: the mission forbids retiming, so the optimised reference lasts exactly as long as Case 1
 and lies on its time grid, and every row is scored against the DESIRED thrust and speed (Case 1's
@@ -34,8 +34,11 @@ from typing import Any
 
 import numpy as np
 
-from ocp.analytic import SinProfile, reference, time_grid
-from ocp.closed_loop import (
+from ocp.errors import MissionError
+from ocp.model.params import MotorParams, load_params
+from ocp.model.plant import DCMotorPlant
+from ocp.reference.analytic import SinProfile, reference, time_grid
+from ocp.simulate.closed_loop import (
     REVERSAL_WINDOW,
     ClosedLoopResult,
     PaperController,
@@ -43,9 +46,6 @@ from ocp.closed_loop import (
     track,
     tracking_metrics,
 )
-from ocp.errors import MissionError
-from ocp.params import MotorParams, load_params
-from ocp.plant import DCMotorPlant
 
 #: the paper's measured figures (Section V); speeds in the paper's "Hz", read as rad/s
 PAPER_FIGURES: dict[str, dict[str, float | None]] = {
@@ -90,7 +90,7 @@ class ExperimentSetup:
         periods: number of periods simulated per case
         skip_periods: leading periods excluded from the metrics (start-up)
         rate: controller/reference rate [Hz]
-        optimised: add the rows of the optimised Case-1 reference (needs ``ocp.optimize``)
+        optimised: add the rows of the optimised Case-1 reference (needs ``ocp.optimize.solve``)
     """
 
     params: str = "paper-rig"
@@ -196,10 +196,10 @@ def sine_case(params: MotorParams, label: str, q: int, amplitude: float, period:
 def optimised_cases(params: MotorParams, setup: ExperimentSetup) -> tuple[list[CaseRun], str]:
     """Rows for the optimised reference of Case 1's mission; ``([], reason)`` when unavailable."""
     try:
-        from ocp.mission import mission_from_mapping
-        from ocp.optimize import optimize
+        from ocp.optimize.mission import mission_from_mapping
+        from ocp.optimize.solve import optimize
     except ImportError as exc:  # pragma: no cover - depends on the optimiser being installed
-        return [], f"ocp.optimize unavailable: {exc}"
+        return [], f"ocp.optimize.solve unavailable: {exc}"
     period, amp = setup.period_1, setup.amplitudes[0]
     t = time_grid(setup.periods * period, setup.rate)
     desired = reference(SinProfile(amp, period, 0), params, t)
@@ -217,7 +217,7 @@ def optimised_cases(params: MotorParams, setup: ExperimentSetup) -> tuple[list[C
     for feedforward in (False, True):
         run = track(DCMotorPlant(params), a["t"], a["thrust"], a["omega"], a["theta"], PaperController(),
                     feedforward=a["voltage"] if feedforward else None)
-        note = (f"ocp.optimize ({res.source}), " + ("with its voltage as feedforward" if feedforward else
+        note = (f"ocp.optimize.solve ({res.source}), " + ("with its voltage as feedforward" if feedforward else
                                                      "no feedforward") + ", scored against Case 1's desired thrust")
         label = ("Optimised" if res.source == "optimized" else "Fallback") + (" + ff" if feedforward else "")
         try:

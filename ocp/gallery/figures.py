@@ -14,13 +14,13 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from ocp.analytic import LocalReversal, SinProfile, reference
 from ocp.gallery.experiment import CaseRun
 from ocp.gallery.interaction import InteractionReference
-from ocp.params import MotorParams
-from ocp.plant import normal_form_drift, normal_form_gain
-from ocp.reference import Reference
-from ocp.theory import crossing_class, feasibility_bounds, regularity_label
+from ocp.model.params import MotorParams
+from ocp.model.plant import normal_form_drift, normal_form_gain
+from ocp.reference.analytic import LocalReversal, SinProfile, reference
+from ocp.reference.trajectory import Reference
+from ocp.theory.reversal import crossing_class, feasibility_bounds, regularity_label
 
 COLORS = ("tab:blue", "tab:red", "tab:olive", "tab:green", "tab:purple", "tab:brown")
 #: thrust orders p of the six cases of Fig. dc_reference_cases (Cases 1, 4, 5 are Section V's p = 1, 5, 7)

@@ -29,7 +29,6 @@ from typing import Any
 
 import numpy as np
 
-from ocp.analytic import SinProfile, reference
 from ocp.gallery.experiment import (
     METRIC_COLUMNS,
     PAPER_FIGURES,
@@ -39,7 +38,8 @@ from ocp.gallery.experiment import (
     ratio,
     sine_case,
 )
-from ocp.params import MotorParams
+from ocp.model.params import MotorParams
+from ocp.reference.analytic import SinProfile, reference
 
 CASES: tuple[tuple[str, int], ...] = (("Case 1", 0), ("Case 4", 2), ("Case 5", 3))  # label, q
 TREND_KEYS: tuple[str, ...] = ("thrust_rms", "speed_rms", "local_speed_error")

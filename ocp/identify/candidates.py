@@ -1,7 +1,7 @@
 """Candidates a model check can add: catalogue effects and corrections of the nominal constants.
 
-A candidate has a name (an effect name of :data:`ocp.effects.CATALOGUE`, or ``"param:<key>"`` for a
-correction of a :class:`~ocp.params.MotorParams` constant), the parameters it fits, their bounds
+A candidate has a name (an effect name of :data:`ocp.model.effects.CATALOGUE`, or ``"param:<key>"`` for a
+correction of a :class:`~ocp.model.params.MotorParams` constant), the parameters it fits, their bounds
 and starting points, and knows how to put fitted values into a plant.
 """
 
@@ -12,10 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ocp.effects import CATALOGUE, EffectBase, make_effect
 from ocp.errors import ParameterError
-from ocp.params import MotorParams
-from ocp.plant import DCMotorPlant
+from ocp.model.effects import CATALOGUE, EffectBase, make_effect
+from ocp.model.params import MotorParams
+from ocp.model.plant import DCMotorPlant
 
 PARAM_PREFIX = "param:"
 PARAM_KEYS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k_t", "k_e", "k", "R", "L")

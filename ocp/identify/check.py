@@ -39,7 +39,7 @@ from ocp.identify.predict import (
 )
 from ocp.identify.steady import PointCheck, check_points
 from ocp.logs import Log, LogKind
-from ocp.plant import DCMotorPlant
+from ocp.model.plant import DCMotorPlant
 
 SPEED_BANDS = (0.0, 0.1, 0.4, 0.7, 1.0001)
 

@@ -29,7 +29,6 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from ocp.effects import make_effect
 from ocp.identify.align import Alignment, estimate, realign
 from ocp.identify.candidates import candidate
 from ocp.identify.explain import (
@@ -47,7 +46,8 @@ from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
 from ocp.identify.select import Fitted, select
 from ocp.logs import Log, LogKind
-from ocp.plant import DCMotorPlant
+from ocp.model.effects import make_effect
+from ocp.model.plant import DCMotorPlant
 
 
 class DiagnoseOptions(BaseModel):

@@ -25,9 +25,9 @@ from typing import Any
 
 import numpy as np
 
-from ocp.effects import measured_current, stateful
 from ocp.logs import Log, LogKind
-from ocp.plant import DCMotorPlant
+from ocp.model.effects import measured_current, stateful
+from ocp.model.plant import DCMotorPlant
 
 EQUATION_NAMES: tuple[str, ...] = ("thrust", "mechanical", "electrical", "power")
 UNITS = {"thrust": "N", "mechanical": "N m", "electrical": "V", "power": "W"}

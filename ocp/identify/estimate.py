@@ -22,7 +22,7 @@ from scipy.optimize import least_squares, lsq_linear
 from ocp.identify.candidates import Candidate
 from ocp.identify.predict import CHANNELS, EQUATIONS, free_run, one_step
 from ocp.logs import Log
-from ocp.plant import DCMotorPlant
+from ocp.model.plant import DCMotorPlant
 
 
 @dataclass(frozen=True)

@@ -8,13 +8,13 @@ from typing import Any
 
 import numpy as np
 
-from ocp.effects import CATALOGUE, EffectBase, make_effect
 from ocp.errors import ParameterError
 from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
 from ocp.identify.regression import CONSTANTS, Design
 from ocp.identify.select import Fitted
-from ocp.params import MotorParams
-from ocp.plant import DCMotorPlant
+from ocp.model.effects import CATALOGUE, EffectBase, make_effect
+from ocp.model.params import MotorParams
+from ocp.model.plant import DCMotorPlant
 
 #: which MotorParams keys a regression constant scales
 KEYS = {"J": ("J",), "B": ("B",), "c_tau": ("c_tau",), "c_f": ("c_f",), "k": ("k_t", "k_e"), "R": ("R",),
@@ -96,8 +96,8 @@ def explain(item: str, values: dict[str, float], p: MotorParams, design: Design,
         return item
     try:
         eff = make_effect(item, values)
-    except ParameterError as exc:  # a rejected challenger's fit can leave the catalogue's range
-        return f"{item}: fitted values outside the catalogue's range ({exc.field}: {exc.reason})"
+    except ParameterError as exc:  # a candidate fitted outside the physical range (e.g. Stribeck far from zero speed)
+        return f"{item}: fitted outside its physical range ({exc.field}: {exc.reason})"
     text = eff.describe() if isinstance(eff, EffectBase) else item
     if item == "cogging":
         amp = math.hypot(values.get("tau_sin", 0.0), values.get("tau_cos", 0.0))

@@ -6,9 +6,9 @@ every ``segment_s``) polishes it and is kept only if it lowers the free-run erro
 RMS per channel (free run) and per equation (one step) are reported on the whole log, with the
 parameters' standard errors and correlations from the last stage's Jacobian.
 
-The calibrated file is the parameter-file format of :mod:`ocp.effects` (``MotorParams`` keys +
-``effects``), readable by :func:`ocp.effects.load_plant` and, for the constants, by
-:func:`ocp.params.load_params` (it ignores the ``effects`` block).
+The calibrated file is the parameter-file format of :mod:`ocp.model.effects` (``MotorParams`` keys +
+``effects``), readable by :func:`ocp.model.effects.load_plant` and, for the constants, by
+:func:`ocp.model.params.load_params` (it ignores the ``effects`` block).
 """
 
 from __future__ import annotations
@@ -23,13 +23,13 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from ocp.effects import plant_to_mapping
 from ocp.identify.candidates import candidate
 from ocp.identify.diagnose import dynamic, finite
 from ocp.identify.estimate import Estimate, equation_error_fit, equation_scales, free_run_errors, free_run_fit
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, EQUATION_UNITS, EQUATIONS, free_run, noise_levels, one_step
 from ocp.logs import Log, LogKind
-from ocp.plant import DCMotorPlant
+from ocp.model.effects import plant_to_mapping
+from ocp.model.plant import DCMotorPlant
 
 
 class FitOptions(BaseModel):

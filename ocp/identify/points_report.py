@@ -13,7 +13,7 @@ import numpy as np
 from ocp.identify.equations import UNITS, residuals
 from ocp.identify.steady import PointCheck, directions
 from ocp.logs import Log
-from ocp.plant import DCMotorPlant
+from ocp.model.plant import DCMotorPlant
 
 
 def _figure(plant: DCMotorPlant, log: Log, eqs: tuple[str, ...]) -> bytes:

@@ -11,7 +11,7 @@ Two ways to confront a plant with a time-series log (all arrays (N,) SI unless s
   ``V[k]``; the mismatch at k+1 is written in equation units: torque [N m] for eq. dc_mechanical
   (``J dw / dt``), voltage [V] for eq. dc_electrical (``R di / (1 - exp(-R dt/L))``), thrust [N]
   for eq. thrust_model (static). Effect states (delay, inflow lag, rotor angle) come from
-  :meth:`ocp.effects.StatefulBase.observe` driven by the measured signals.
+  :meth:`ocp.model.effects.StatefulBase.observe` driven by the measured signals.
 
 Steady-state sweeps have no dynamics: the "free run" is the equilibrium reached under each row's
 voltage (solved per row), and the equation residuals are the right-hand sides at the measured
@@ -27,11 +27,11 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from ocp.effects import measured_current, stateful, time_scale
 from ocp.errors import LogError, SolverError
 from ocp.logs import Log, LogKind
-from ocp.plant import CASADI, NUMPY, DCMotorPlant
-from ocp.simulate import rk4
+from ocp.model.effects import measured_current, stateful, time_scale
+from ocp.model.plant import CASADI, NUMPY, DCMotorPlant
+from ocp.simulate.open_loop import rk4
 
 CHANNELS: tuple[str, ...] = ("omega", "current", "thrust")
 EQUATIONS: tuple[str, ...] = ("mechanical", "electrical", "thrust")

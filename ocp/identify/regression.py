@@ -12,7 +12,7 @@ are explained by a linear combination of columns, one set per candidate:
 * a constant off by a relative ``x`` (true = nominal (1 + x)): ``J w'``, ``B w``, ``c_tau w|w|``,
   ``c_f w|w|`` (thrust), ``R i``, ``L i'``, and the motor constant ``k`` (k_t = k_e, both scaled):
   ``-k_t i`` (mech) with ``k_e w`` (elec);
-* an effect at unit amplitude, taken from the catalogue's own hooks (:mod:`ocp.effects`): load torques
+* an effect at unit amplitude, taken from the catalogue's own hooks (:mod:`ocp.model.effects`): load torques
   (mech), the drive-voltage loss ``V - V_a`` (elec), the thrust change (thr), a current-sensor offset
   (``+k_t`` in mech, ``-R`` in elec);
 * effects with a shape parameter (Stribeck speed, dead-band width, wake time constant) get one column per
@@ -31,11 +31,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import signal
 
-from ocp.effects import CATALOGUE, Cogging, ThrustLag, make_effect
 from ocp.identify.align import cutoff_hz, smooth
 from ocp.logs import Log, LogKind
-from ocp.params import MotorParams
-from ocp.plant import NUMPY
+from ocp.model.effects import CATALOGUE, Cogging, ThrustLag, make_effect
+from ocp.model.params import MotorParams
+from ocp.model.plant import NUMPY
 
 EQS = ("mechanical", "electrical", "thrust")
 CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")

@@ -20,7 +20,7 @@ from ocp.identify.check import CheckResult
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, EQUATION_UNITS, EQUATIONS
 from ocp.identify.steady import PointCheck
 from ocp.logs import Log
-from ocp.plant import DCMotorPlant
+from ocp.model.plant import DCMotorPlant
 
 
 def _subplots(nrows: int, ncols: int, figsize: tuple[float, float], **kw: Any) -> tuple[Any, Any]:

@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import lsq_linear
 
-from ocp.effects import CATALOGUE
 from ocp.identify.regression import CONSTANTS, NUISANCES, Design
+from ocp.model.effects import CATALOGUE
 
 NAMED_BOUNDS = (-0.8, 3.0)
 

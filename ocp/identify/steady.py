@@ -45,7 +45,7 @@ from ocp.identify.equations import (
 )
 from ocp.identify.estimate import assemble
 from ocp.logs import Log, LogKind
-from ocp.plant import DCMotorPlant
+from ocp.model.plant import DCMotorPlant
 
 if TYPE_CHECKING:
     from ocp.identify.fit import FitResult

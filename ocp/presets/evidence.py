@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from ocp.params import MotorParams
+from ocp.model.params import MotorParams
 
 AIR_DENSITY = 1.225  # kg/m^3, ISA sea level
 RAD_PER_REV = 2.0 * math.pi

@@ -5,7 +5,7 @@ For the output at ``t`` (tracking ``tau = t - D``) the desired thrust is known u
 change ``t_c`` of ``F_d`` with ``|tau - t_c| < h`` (``h = 0.9 D``, so the crossing is seen at least
 ``0.1 D`` before its window starts) is replaced by ``alpha (tau - t_c)^p chi + (1 - chi) F_d``
 (:func:`ocp.gallery.interaction.shape_reversals`), ``p = 2 q + 1`` with ``q`` the smallest of the
-requested class (:func:`ocp.theory.min_sin_q`). Speed and its derivatives follow from the thrust by the
+requested class (:func:`ocp.theory.reversal.min_sin_q`). Speed and its derivatives follow from the thrust by the
 static inverse and the chain rule, ``F'`` and ``F''`` by central differences of the samples; current
 and voltage by eqs. current_reference / voltage_reference. Nothing bounds them: this is what the
 numbers in the README compare against the governed tracker.
@@ -20,12 +20,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ocp.crossings import sign_change_times
 from ocp.gallery.interaction import shape_reversals
-from ocp.params import MotorParams
+from ocp.model.params import MotorParams
 from ocp.stream.inverse import Inverse
 from ocp.stream.options import StreamOptions
-from ocp.theory import min_sin_q, sin_family_order
+from ocp.theory.crossings import sign_change_times
+from ocp.theory.reversal import min_sin_q, sin_family_order
 
 
 @dataclass(frozen=True)

@@ -21,7 +21,7 @@ import subprocess
 from pathlib import Path
 
 from ocp.errors import SolverError
-from ocp.params import MotorParams
+from ocp.model.params import MotorParams
 from ocp.stream.options import StreamOptions
 from ocp.stream.preview import design
 

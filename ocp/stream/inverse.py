@@ -3,7 +3,7 @@
 The shaper moves ``eta`` with ``omega = eta^m`` (``m`` odd: 1 or 3). Near a zero of ``eta`` crossed with
 ``eta' != 0`` the speed goes as ``s^m`` and the thrust ``c_f omega|omega|`` as ``sign(s)|s|^(2m)``: the
 thrust exponent is ``g = 2m`` by construction (2: bounded commands; 6: current and voltage vanish at
-the reversal and stay continuous, as in :func:`ocp.optimize.crossing_order`).
+the reversal and stay continuous, as in :func:`ocp.optimize.solve.crossing_order`).
 
 Every function works on floats or numpy arrays of any one shape; units: omega [rad/s], omega' [rad/s^2],
 omega'' [rad/s^3], thrust [N], current [A], voltage [V].
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ocp.params import MotorParams
+from ocp.model.params import MotorParams
 
 Num = Any  # float or numpy array
 

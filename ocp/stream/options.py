@@ -3,8 +3,8 @@
 All values SI: current [A], voltage [V], delay [s], dt [s], bandwidth [Hz]. Options are strict (unknown
 keys are errors naming the key) and checked once, before any work starts.
 
-The regularity classes are the optimiser's (:class:`ocp.theory.ReversalRegularity`, see
-:func:`ocp.optimize.crossing_order`): ``bounded`` and ``continuous-current`` reverse with the speed
+The regularity classes are the optimiser's (:class:`ocp.theory.reversal.ReversalRegularity`, see
+:func:`ocp.optimize.solve.crossing_order`): ``bounded`` and ``continuous-current`` reverse with the speed
 linear in time (thrust exponent ``g = 2``; the current, a state of the motor, is continuous and the
 voltage bounded), ``continuous-voltage`` with ``omega ~ s^3`` (``g = 6``; current and voltage both
 continuous and zero at the reversal). ``c1-voltage`` is not offered by the stream (it would need the
@@ -19,7 +19,7 @@ from typing import Annotated
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ocp.errors import MissionError, validation_location
-from ocp.theory import ReversalRegularity
+from ocp.theory.reversal import ReversalRegularity
 
 MIN_DELAY_S = 0.005
 MAX_DELAY_S = 1.0

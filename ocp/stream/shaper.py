@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocp.errors import MissionError
-from ocp.params import MotorParams
+from ocp.model.params import MotorParams
 from ocp.stream.governor import govern
 from ocp.stream.inverse import Inverse, speed_derivatives, target_coordinate
 from ocp.stream.options import StreamOptions

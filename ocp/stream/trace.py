@@ -8,7 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocp.errors import MissionError
-from ocp.params import MotorParams
+from ocp.model.params import MotorParams
 from ocp.stream.options import StreamOptions
 from ocp.stream.shaper import StreamShaper
 

@@ -12,9 +12,9 @@ from fastapi import Depends, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from starlette.exceptions import HTTPException
 
-from ocp.crossings import sign_change_times
 from ocp.errors import MissionError
-from ocp.mission import OUTPUT_RATE, Mission, segment_samples
+from ocp.optimize.mission import OUTPUT_RATE, Mission, segment_samples
+from ocp.theory.crossings import sign_change_times
 from service.api.logging import TaskLog
 from service.batches import BatchRunner
 from service.jobs import JobStore
@@ -22,7 +22,7 @@ from service.settings import Settings
 from service.tasks import TaskSet
 from service.workers import WorkerPool
 
-#: fewest collocation intervals the optimiser gives one phase (ocp.optimize.MIN_INTERVALS_PER_PHASE, lower one)
+#: fewest collocation intervals the optimiser gives one phase (ocp.optimize.solve.MIN_INTERVALS_PER_PHASE, lower one)
 MIN_INTERVALS_PER_PHASE = 8
 
 _bearer = HTTPBearer(auto_error=False, description="API key from THRUSTSHAPE_API_KEY (only when the server sets one)")

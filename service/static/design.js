@@ -91,7 +91,7 @@ function readSegments(strict) {
   });
 }
 
-/* the same sampling as ocp.mission.sample_segments (1 kHz, segments share their boundary sample) */
+/* the same sampling as ocp.optimize.mission.sample_segments (1 kHz, segments share their boundary sample) */
 function sampleSegments(segments, rate = 1000) {
   const t = [], f = [];
   let level = 0, t0 = 0;
@@ -200,7 +200,7 @@ export function useParams(params) {
   $("#d-params").value = typeof params === "string" ? params : JSON.stringify(params, null, 1);
 }
 
-function fillMission(m) {
+export function fillMission(m) {
   clearErrors($("#tab-design"));
   $("#d-name").value = m.name || "mission";
   const p = m.params === undefined ? "paper-rig" : m.params;

@@ -6,9 +6,9 @@ import importlib.metadata
 
 from fastapi import APIRouter
 
-from ocp.effects import CATALOGUE
-from ocp.params import PRESETS
-from ocp.theory import ReversalRegularity
+from ocp.model.effects import CATALOGUE
+from ocp.model.params import PRESETS
+from ocp.theory.reversal import ReversalRegularity
 from service.api.deps import SettingsDep, TasksDep
 from service.schemas import InfoPublic, LimitsPublic
 
@@ -23,7 +23,7 @@ def _version() -> str:
 
 
 def effect_names() -> list[str]:
-    """Names of the plant effects in the core's catalogue (``ocp.effects.CATALOGUE``)."""
+    """Names of the plant effects in the core's catalogue (``ocp.model.effects.CATALOGUE``)."""
     return sorted(CATALOGUE)
 
 

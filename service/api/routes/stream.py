@@ -44,7 +44,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from ocp.errors import ThrustshapeError, validation_location
 from ocp.gallery.interaction import Law
-from ocp.theory import ReversalRegularity
+from ocp.theory.reversal import ReversalRegularity
 from service.api.deps import PoolDep, SettingsDep, require_api_key
 from service.streams import EXAMPLE_MAX_DURATION_S, StreamSession, stream_example
 from service.workers import TaskFailed, TaskTimeout

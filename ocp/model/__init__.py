@@ -1,0 +1,1 @@
+"""The plant: parameters (params), the motor-propeller plant and its effects (plant, effects), equilibria."""

@@ -1,0 +1,260 @@
+"""One plant abstraction for the simulator, the optimiser and the model fitter.
+
+Two plants share one interface (:class:`Plant`):
+
+* :class:`DCMotorPlant` -- states ``x = (omega [rad/s], current [A])``, input ``voltage [V]``
+  (paper eqs. dc_mechanical, dc_electrical), optionally extended by effects (see :class:`Effect`).
+* :class:`TorquePlant` -- the normalised torque-input channel, state ``x = (omega,)``, input
+  ``u = tau_m / J [rad/s^2]`` (paper eq. omega_dyn), for drives that control torque/current.
+
+The right-hand sides are written once and evaluated on numpy arrays (simulation, fitting) or on
+CasADi symbols (collocation) through an :class:`Ops` backend. Inside an optimiser phase the sign
+of ``omega`` is fixed; passing ``sign=+1/-1`` replaces ``w|w|`` by the smooth ``sign*w^2``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import casadi as ca
+import numpy as np
+
+from ocp.model.params import MotorParams
+
+Expr = Any  # float, numpy array or casadi SX/MX
+
+
+@dataclass(frozen=True)
+class Ops:
+    """Elementary functions of one backend (numpy or CasADi)."""
+
+    abs: Callable[[Expr], Expr]
+    sqrt: Callable[[Expr], Expr]
+    tanh: Callable[[Expr], Expr]
+    exp: Callable[[Expr], Expr]
+    sign: Callable[[Expr], Expr]
+    sin: Callable[[Expr], Expr] = np.sin
+    cos: Callable[[Expr], Expr] = np.cos
+
+
+NUMPY = Ops(abs=np.abs, sqrt=np.sqrt, tanh=np.tanh, exp=np.exp, sign=np.sign, sin=np.sin, cos=np.cos)
+CASADI = Ops(abs=ca.fabs, sqrt=ca.sqrt, tanh=ca.tanh, exp=ca.exp, sign=ca.sign, sin=ca.sin, cos=ca.cos)
+
+
+def signed_square(w: Expr, ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
+    """``w|w|``; with a known ``sign`` of ``w`` the smooth ``sign * w**2``."""
+    return sign * w * w if sign is not None else w * ops.abs(w)
+
+
+# eq:thrust_model  F = c_f w|w|
+def thrust_from_speed(omega: Expr, c_f: float, ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
+    """Static thrust map: speed [rad/s] -> thrust [N]."""
+    return c_f * signed_square(omega, ops, sign)
+
+
+def speed_from_thrust(thrust: np.ndarray | float, c_f: float) -> np.ndarray:
+    """Inverse static map ``omega = sign(F) sqrt(|F|/c_f)`` [rad/s] (Fig. 1 of the paper)."""
+    f = np.asarray(thrust, dtype=float)
+    return np.sign(f) * np.sqrt(np.abs(f) / c_f)
+
+
+class Effect(Protocol):
+    """A named physical effect that extends :class:`DCMotorPlant` (catalogue: ``ocp.model.effects``).
+
+    Each hook returns an expression in the given backend; an effect that does not act on a channel
+    returns its input unchanged (or 0 for ``load_torque``).
+    """
+
+    @property
+    def name(self) -> str:
+        """Catalogue name of the effect."""
+        ...
+
+    def load_torque(self, omega: Expr, ops: Ops, sign: Expr | None) -> Expr:
+        """Extra torque opposing motion [N m], added to the drag and viscous terms."""
+        ...
+
+    def drive_voltage(self, voltage: Expr, current: Expr, ops: Ops) -> Expr:
+        """Voltage [V] that reaches the armature when ``voltage`` is commanded."""
+        ...
+
+    def thrust(self, thrust: Expr, omega: Expr, ops: Ops, sign: Expr | None) -> Expr:
+        """Measured thrust [N] given the ideal ``thrust`` of eq. thrust_model."""
+        ...
+
+
+class StatefulEffect(Effect, Protocol):
+    """An effect with internal states ``z`` (e.g. an input delay, inflow lag, the rotor angle).
+
+    Its states are appended to the plant state after ``(omega, current)``, in effect order, named
+    ``"<effect name>.<state>"``. Inside :meth:`DCMotorPlant.rhs` the effect is first bound to its
+    states (:meth:`bind` returns a plain :class:`Effect` whose hooks see ``z``), and its state
+    derivative is computed from the signals that reach it in the chain: ``voltage`` is the command
+    after the preceding effects' ``drive_voltage``, ``thrust`` the thrust after the preceding
+    effects' ``thrust``.
+    """
+
+    states: tuple[str, ...]
+
+    def bind(self, z: Sequence[Expr]) -> Effect:
+        """The effect's hooks with its states fixed to ``z``."""
+        ...
+
+    def state_rhs(self, z: Sequence[Expr], omega: Expr, voltage: Expr, thrust: Expr, ops: Ops) -> list[Expr]:
+        """Time derivative of ``z`` (same layout)."""
+        ...
+
+
+def effect_states(effect: Effect) -> tuple[str, ...]:
+    """Names of an effect's internal states (``()`` for a plain, memoryless effect)."""
+    states = getattr(effect, "states", ())
+    return tuple(states)
+
+
+class Plant(Protocol):
+    """What the simulator, the optimiser and the fitter need from a plant."""
+
+    @property
+    def state_names(self) -> tuple[str, ...]: ...
+
+    @property
+    def input_name(self) -> str: ...
+
+    def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: Expr | None = None) -> list[Expr]:
+        """Time derivative of the state (same layout as ``x``)."""
+        ...
+
+    def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
+        """Thrust [N] produced in state ``x``."""
+        ...
+
+
+@dataclass(frozen=True)
+class DCMotorPlant:
+    """Brushed DC motor driving a bidirectional propeller; input V.
+
+    State ``(omega [rad/s], current [A])``, followed by the internal states of stateful effects
+    (:class:`StatefulEffect`), in effect order; :attr:`state_names` lists them all.
+    """
+
+    params: MotorParams
+    effects: tuple[Effect, ...] = field(default=())
+    input_name: str = "voltage"
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        names = ["omega", "current"]
+        for eff in self.effects:
+            names += [f"{eff.name}.{s}" for s in effect_states(eff)]
+        return tuple(names)
+
+    def _bound(self, x: Sequence[Expr]) -> list[tuple[Effect, StatefulEffect | None, list[Expr]]]:
+        """(effect with states bound, the stateful effect or None, its states) per effect."""
+        out: list[tuple[Effect, StatefulEffect | None, list[Expr]]] = []
+        k = 2
+        for eff in self.effects:
+            n = len(effect_states(eff))
+            if n == 0:
+                out.append((eff, None, []))
+                continue
+            z = [x[m] for m in range(k, k + n)]
+            stateful: StatefulEffect = eff  # type: ignore[assignment]
+            out.append((stateful.bind(z), stateful, z))
+            k += n
+        return out
+
+    def _thrust_chain(self, w: Expr, bound: Sequence[tuple[Effect, Any, Any]], ops: Ops,
+                      sign: Expr | None) -> tuple[Expr, list[Expr]]:
+        """Thrust after all effects and the thrust reaching each effect."""
+        f = thrust_from_speed(w, self.params.c_f, ops, sign)
+        inputs = []
+        for b, _, _ in bound:
+            inputs.append(f)
+            f = b.thrust(f, w, ops, sign)
+        return f, inputs
+
+    def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: Expr | None = None) -> list[Expr]:
+        p = self.params
+        w, i = x[0], x[1]
+        load = p.B * w + p.c_tau * signed_square(w, ops, sign)
+        v = u
+        bound = self._bound(x)
+        extra: list[Expr] = []
+        f_in: list[Expr] = []
+        if any(s is not None for _, s, _ in bound):
+            f_in = self._thrust_chain(w, bound, ops, sign)[1]
+        for j, (eff, stateful, z) in enumerate(bound):
+            if stateful is not None:
+                extra += stateful.state_rhs(z, w, v, f_in[j], ops)
+            load = load + eff.load_torque(w, ops, sign)
+            v = eff.drive_voltage(v, i, ops)
+        # eq:dc_mechanical  J w' = k_t i - B w - c_tau w|w|
+        dw = (p.k_t * i - load) / p.J
+        # eq:dc_electrical  L i' = V - R i - k_e w
+        di = (v - p.R * i - p.k_e * w) / p.L
+        return [dw, di, *extra]
+
+    def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
+        return self._thrust_chain(x[0], self._bound(x), ops, sign)[0]
+
+    def steady_state(self, omega: float) -> tuple[float, float]:
+        """(current [A], voltage [V]) that hold ``omega`` [rad/s] constant (no effects)."""
+        p = self.params
+        i = (p.B * omega + p.c_tau * omega * abs(omega)) / p.k_t
+        return i, p.R * i + p.k_e * omega
+
+
+@dataclass(frozen=True)
+class TorquePlant:
+    """Normalised torque-input channel (paper eq. omega_dyn): ``omega' = u - k omega|omega|``.
+
+    Attributes:
+        k: normalised drag c_tau/J [1/rad]
+        c_f: thrust coefficient [N s^2/rad^2] used by :meth:`thrust`
+    """
+
+    k: float
+    c_f: float = 1.0
+    state_names: tuple[str, ...] = ("omega",)
+    input_name: str = "torque"
+
+    @classmethod
+    def from_params(cls, params: MotorParams) -> TorquePlant:
+        return cls(k=params.k, c_f=params.c_f)
+
+    def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: Expr | None = None) -> list[Expr]:
+        w = x[0]
+        # eq:omega_dyn  w' = u - k w|w|
+        return [u - self.k * signed_square(w, ops, sign)]
+
+    def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
+        return thrust_from_speed(x[0], self.c_f, ops, sign)
+
+
+# eq:sys2  x2' = -2k sign(x2)|x2|^(3/2) + 2 sqrt|x2| u
+def normal_form_rhs(x2: np.ndarray | float, u: np.ndarray | float, k: float) -> np.ndarray:
+    """Normalised-thrust dynamics of eq. sys2; ``x2 = w|w|`` [rad^2/s^2], ``u`` [rad/s^2]."""
+    x2 = np.asarray(x2, dtype=float)
+    return -2.0 * k * np.sign(x2) * np.abs(x2) ** 1.5 + 2.0 * np.sqrt(np.abs(x2)) * u
+
+
+def normal_form_drift(x2: np.ndarray | float, k: float) -> np.ndarray:
+    """Drift ``f2(x2) = -2k sign(x2)|x2|^(3/2)`` of eq. sys2 (Fig. f2_map)."""
+    return normal_form_rhs(x2, 0.0, k)
+
+
+def normal_form_gain(x2: np.ndarray | float) -> np.ndarray:
+    """Input gain ``g2(x2) = 2 sqrt|x2|`` of eq. sys2; vanishes at thrust reversal (Fig. f2_map)."""
+    return 2.0 * np.sqrt(np.abs(np.asarray(x2, dtype=float)))
+
+
+# eq:inv_u  u = y'' / (2 sqrt|y'|) + k y'
+def inverse_input(ydot: np.ndarray | float, yddot: np.ndarray | float, k: float) -> np.ndarray:
+    """Unique input reproducing ``(y', y'')`` away from reversal; +-inf where ``y' = 0, y'' != 0``."""
+    yd = np.asarray(ydot, dtype=float)
+    ydd = np.asarray(yddot, dtype=float)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = ydd / (2.0 * np.sqrt(np.abs(yd))) + k * yd
+    return np.where((yd == 0) & (ydd == 0), 0.0, u)

@@ -1,0 +1,1 @@
+"""Mission -> optimised reference: mission, collocation program, solve, result, compare, min-time."""

@@ -1,0 +1,261 @@
+"""Direct collocation program for thrust references, built once per structure and solved many times.
+
+The horizon is split into phases at the reversals of the desired thrust. In phase ``j`` the sign
+``sigma_j`` of the speed is fixed, so ``w|w| = sigma_j w^2`` is smooth (a parameter, not structure),
+and the phase lasts ``h_j = stretch_j * d_j`` (retiming; ``d_j`` is the desired duration). Each phase
+has ``N`` Radau IIA intervals of degree 3 in the normalised time ``tau in [0, 1]``; the tracking target
+at a collocation point is the desired thrust at the same normalised time of the desired phase, so
+retiming never changes the data, only ``h_j``.
+
+State ``x = (plant states, input chain)``: the plant input (voltage or torque) is the control itself
+(``chain = 0``, piecewise constant: bounded command), or a state driven by its slew (``chain = 1``,
+continuous command), or by its second derivative (``chain = 2``, C^1 command).
+
+Everything that changes between calls is data: parameters (desired thrust, signs, durations, scales,
+weights) and variable bounds (limits, sign constraints, boundary and crossing conditions). The NLP
+depends only on :class:`Structure`, and one solver per structure is cached (:func:`solver_for`).
+All decision variables are scaled to O(1) by per-call scale parameters.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from functools import cached_property, lru_cache
+
+import casadi as ca
+import numpy as np
+
+from ocp.model.plant import CASADI, Plant
+
+DEGREE = 3
+TAU = np.append(0.0, ca.collocation_points(DEGREE, "radau"))  # (DEGREE+1,) interval-local nodes
+
+
+def _lagrange_tables(tau: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Derivative matrix C[j, r] = l_j'(tau_r) and quadrature weights B[j] = int_0^1 l_j."""
+    n = tau.size
+    C = np.zeros((n, n))
+    B = np.zeros(n)
+    for j in range(n):
+        poly = np.poly1d([1.0])
+        for r in range(n):
+            if r != j:
+                poly *= np.poly1d([1.0, -tau[r]]) / (tau[j] - tau[r])
+        der = np.polyder(poly)
+        C[j] = [der(tr) for tr in tau]
+        B[j] = np.polyint(poly)(1.0)
+    return C, B
+
+
+C_MAT, B_QUAD = _lagrange_tables(TAU)
+
+
+def lagrange_basis(s: np.ndarray) -> np.ndarray:
+    """Values of the DEGREE+1 Lagrange polynomials on ``TAU`` at points ``s`` (M,): shape (M, DEGREE+1)."""
+    s = np.asarray(s, float)
+    out = np.ones((s.size, TAU.size))
+    for j in range(TAU.size):
+        for r in range(TAU.size):
+            if r != j:
+                out[:, j] *= (s - TAU[r]) / (TAU[j] - TAU[r])
+    return out
+
+
+@dataclass(frozen=True)
+class Structure:
+    """What the NLP's shape depends on (the cache key, with the plant's identity).
+
+    Attributes:
+        plant_key: hashable identity of the plant constants and effects
+        n_phases: number of phases (reversals + 1)
+        intervals: collocation intervals per phase
+        chain: 0 piecewise-constant input, 1 continuous input (slew control), 2 C^1 input
+    """
+
+    plant_key: str
+    n_phases: int
+    intervals: int
+    chain: int
+
+
+@dataclass
+class Layout:
+    """Index maps of the decision vector; arrays of indices into ``x``.
+
+    Shapes: ``stretch`` (P,), ``x0`` (nx,), ``xc`` (P, N, DEGREE, nx), ``u`` (P, N, nu=1).
+    """
+
+    stretch: np.ndarray
+    x0: np.ndarray
+    xc: np.ndarray
+    u: np.ndarray
+    n: int
+
+
+@dataclass
+class Program:
+    """A built NLP with its solver, layout and a warm-start memory."""
+
+    structure: Structure
+    nx: int
+    n_plant_states: int
+    solver: ca.Function
+    layout: Layout
+    n_params: int
+    n_g: int
+    last: dict[str, np.ndarray] = field(default_factory=dict)
+    lock: threading.Lock = field(default_factory=threading.Lock)
+
+    @cached_property
+    def param_slices(self) -> dict[str, slice]:
+        return _param_slices(self.structure, self.nx)
+
+
+def _param_slices(st: Structure, nx: int) -> dict[str, slice]:
+    """Layout of the parameter vector."""
+    sizes = {
+        "fd": st.n_phases * st.intervals * DEGREE,  # desired thrust at collocation points / f_scale
+        "sigma": st.n_phases,  # speed sign per phase
+        "dur": st.n_phases,  # desired phase durations d_j [s]
+        "xscale": nx,  # state scales
+        "uscale": 1,  # control scale
+        "rho": nx,  # residual scaling per state
+        "fscale": 1,  # thrust scale [N]
+        "weights": 5,  # track, time, stretch, smooth, effort
+    }
+    out, k = {}, 0
+    for name, size in sizes.items():
+        out[name] = slice(k, k + size)
+        k += size
+    return out
+
+
+def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Program:
+    """Build the NLP for ``plant`` with structure ``st`` (seconds at most; then cached)."""
+    npx = len(plant.state_names)
+    nx = npx + st.chain
+    P, N = st.n_phases, st.intervals
+    ps = _param_slices(st, nx)
+    n_par = max(s.stop for s in ps.values())
+    par = ca.SX.sym("p", n_par)
+    fd = ca.reshape(par[ps["fd"]], DEGREE * N, P)
+    sigma, dur = par[ps["sigma"]], par[ps["dur"]]
+    xs, us, rho = par[ps["xscale"]], par[ps["uscale"]], par[ps["rho"]]
+    fscale = par[ps["fscale"]]
+    w_track, w_time, w_stretch, w_smooth, w_effort = (par[ps["weights"]][i] for i in range(5))
+
+    stretch = ca.SX.sym("stretch", P)
+    x0 = ca.SX.sym("x0", nx)
+    xc = [[ca.SX.sym(f"xc_{j}_{k}", nx, DEGREE) for k in range(N)] for j in range(P)]
+    u = [[ca.SX.sym(f"u_{j}_{k}", 1) for k in range(N)] for j in range(P)]
+
+    g: list[ca.SX] = []
+    u_all: list[ca.SX] = []
+    f_track = ca.SX(0.0)
+    total = ca.sum1(dur)
+    x_start = x0
+    interval = _interval_function(plant, st, nx, npx)  # one interval's equations, inlined below (fast build)
+    for j in range(P):
+        h = stretch[j] * dur[j]
+        for k in range(N):
+            pts = ca.horzcat(x_start, xc[j][k])  # (nx, DEGREE+1) scaled
+            uk = u[j][k]
+            u_all.append(uk)
+            res, err2 = interval(pts, uk, sigma[j], xs, us, rho, h / N, fscale, fd[k * DEGREE:(k + 1) * DEGREE, j])
+            g += ca.vertsplit(res, nx)
+            f_track += dur[j] / (N * total) * err2
+            x_start = xc[j][k][:, DEGREE - 1]
+    u_vec = ca.vertcat(*u_all)
+    n_u = P * N
+    f_time = ca.dot(stretch, dur) / total
+    f_stretch = ca.dot(stretch - 1, dur) / total
+    f_smooth = ca.sumsqr(u_vec[1:] - u_vec[:-1]) / n_u
+    f_effort = ca.sumsqr(u_vec) / n_u
+    obj = w_track * f_track + w_time * f_time + w_stretch * f_stretch + w_smooth * f_smooth + w_effort * f_effort
+
+    xs_list = [stretch, x0]
+    for j in range(P):
+        for k in range(N):
+            xs_list += [ca.vec(xc[j][k]), u[j][k]]
+    xvec = ca.vertcat(*xs_list)
+    solver = ca.nlpsol("collocation", "ipopt", {"x": xvec, "f": obj, "g": ca.vertcat(*g), "p": par},
+                       dict(ipopt_options))  # type: ignore[arg-type]
+    return Program(structure=st, nx=nx, n_plant_states=npx, solver=solver, layout=layout(P, N, nx),
+                   n_params=n_par, n_g=int(ca.vertcat(*g).numel()))
+
+
+def _interval_function(plant: Plant, st: Structure, nx: int, npx: int) -> ca.Function:
+    """One interval's collocation residuals and quadrature-weighted squared tracking error, as an SX function
+    ``(pts (nx, DEGREE+1), u, sigma, xscale (nx,), uscale, rho (nx,), h/N [s], fscale [N], fd (DEGREE,))
+    -> (residuals (nx*DEGREE,), sum_r B_r err_r^2)``; calling it on SX arguments inlines it."""
+    pts, uk, sig = ca.SX.sym("pts", nx, DEGREE + 1), ca.SX.sym("u"), ca.SX.sym("sigma")
+    xs, us, rho, hn = ca.SX.sym("xs", nx), ca.SX.sym("us"), ca.SX.sym("rho", nx), ca.SX.sym("hn")
+    fscale, fd = ca.SX.sym("fscale"), ca.SX.sym("fd", DEGREE)
+    res: list[ca.SX] = []
+    err2 = ca.SX(0.0)
+    for r in range(1, DEGREE + 1):
+        xr = pts[:, r] * xs
+        plant_u = xr[npx] if st.chain else uk * us
+        dx = plant.rhs([xr[m] for m in range(npx)], plant_u, CASADI, sig)
+        chain_dx = [xr[npx + c + 1] for c in range(st.chain - 1)] + ([uk * us] if st.chain else [])
+        fx = ca.vertcat(*dx, *chain_dx)
+        slope = ca.mtimes(pts, C_MAT[:, r])
+        res.append(rho * (slope - hn * fx / xs))
+        thrust = plant.thrust([xr[m] for m in range(npx)], CASADI, sig)
+        err2 += B_QUAD[r] * (thrust / fscale - fd[r - 1]) ** 2
+    return ca.Function("interval", [pts, uk, sig, xs, us, rho, hn, fscale, fd], [ca.vertcat(*res), err2])
+
+
+@lru_cache(maxsize=64)
+def layout(P: int, N: int, nx: int) -> Layout:
+    """Index maps of the decision vector for P phases of N intervals and nx states (cached)."""
+    stretch = np.arange(P)
+    x0 = P + np.arange(nx)
+    xc = np.zeros((P, N, DEGREE, nx), dtype=int)
+    uu = np.zeros((P, N, 1), dtype=int)
+    k = P + nx
+    for j in range(P):
+        for i in range(N):
+            # ca.vec is column-major: element (m, r) of the (nx, DEGREE) block sits at r*nx + m
+            for r in range(DEGREE):
+                xc[j, i, r, :] = k + r * nx + np.arange(nx)
+            k += nx * DEGREE
+            uu[j, i, 0] = k
+            k += 1
+    return Layout(stretch=stretch, x0=x0, xc=xc, u=uu, n=k)
+
+
+_CACHE: dict[tuple[Structure, tuple[tuple[str, object], ...]], Program] = {}
+_CACHE_LOCK = threading.Lock()
+CACHE_SIZE = 8  # built programs kept per process (tens of MB each), least recently used evicted
+#: called with "build" before a program is built and "built" once it is cached (a service worker tells its
+#: parent, which then keeps a build that outlives a request's deadline instead of killing it)
+BUILD_OBSERVERS: list[Callable[[str], None]] = []
+
+
+def solver_for(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Program:
+    """The cached :class:`Program` for this structure and options (built on first use; LRU of CACHE_SIZE)."""
+    key = (st, tuple(sorted((k, str(v)) for k, v in ipopt_options.items())))
+    with _CACHE_LOCK:
+        prog = _CACHE.pop(key, None)
+        if prog is not None:
+            _CACHE[key] = prog  # most recently used last
+    if prog is None:
+        for observe in BUILD_OBSERVERS:
+            observe("build")
+        prog = build(plant, st, ipopt_options)
+        with _CACHE_LOCK:
+            while len(_CACHE) >= CACHE_SIZE:
+                _CACHE.pop(next(iter(_CACHE)))
+            _CACHE[key] = prog
+        for observe in BUILD_OBSERVERS:
+            observe("built")
+    return prog
+
+
+def clear_cache() -> None:
+    """Forget every built program (used by benchmarks to measure build cost)."""
+    with _CACHE_LOCK:
+        _CACHE.clear()

@@ -1,0 +1,1 @@
+"""Analytic references (analytic), their fallback within limits (fallback), the reference type (trajectory)."""

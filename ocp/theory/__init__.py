@@ -1,0 +1,1 @@
+"""Reversal theory of the seed paper (reversal) and zero crossings of sampled profiles (crossings)."""

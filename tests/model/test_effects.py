@@ -1,0 +1,103 @@
+"""Effect catalogue: numpy and CasADi backends agree, phase-sign form matches the smooth one, the
+parameter-file format round-trips, and bad names/values are errors naming the key."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from ocp.errors import ParameterError
+from ocp.model.effects import CATALOGUE, InputDelay, load_plant, make_effect, plant_to_mapping
+from ocp.model.params import MotorParams, load_params
+from ocp.model.plant import CASADI, NUMPY, DCMotorPlant
+from ocp.simulate.open_loop import simulate_zoh
+
+#: a non-trivial value for every fitted parameter (SI)
+VALUES = {
+    "coulomb_friction": {"tau_c": 0.003}, "stribeck": {"tau_s": 0.006, "omega_s": 3.0},
+    "drag_asymmetry": {"dc_tau": 0.8e-6}, "thrust_asymmetry": {"dc_f": 0.3e-4}, "force_offset": {"f0": 0.03},
+    "voltage_deadband": {"v_db": 0.4}, "brush_drop": {"v_b": 0.3}, "current_offset": {"i0": 0.03},
+    "input_delay": {"delay": 0.004}, "thrust_lag": {"tau": 0.03}, "cogging": {"tau_sin": 0.003, "periods": 2.0},
+}
+
+
+def test_every_catalogue_effect_has_test_values() -> None:
+    assert set(VALUES) == set(CATALOGUE)
+
+
+@pytest.mark.parametrize("name", sorted(CATALOGUE))
+def test_numpy_and_casadi_backends_agree(name: str, rig: MotorParams) -> None:
+    plant = DCMotorPlant(rig, (make_effect(name, VALUES[name]),))
+    n = len(plant.state_names)
+    rng = np.random.default_rng(3)
+    x0 = np.concatenate([[23.0, 0.2], 0.01 * rng.standard_normal(n - 2)])
+    xs, us = ca.SX.sym("x", n), ca.SX.sym("u")
+    f = ca.Function("f", [xs, us], [ca.vertcat(*plant.rhs([xs[m] for m in range(n)], us, CASADI)),
+                                    plant.thrust([xs[m] for m in range(n)], CASADI)])
+    dx_ca, thr_ca = f(x0, 2.5)
+    np.testing.assert_allclose(np.asarray(dx_ca).ravel(), plant.rhs(list(x0), 2.5, NUMPY), rtol=1e-12, atol=1e-9)
+    assert float(thr_ca) == pytest.approx(float(plant.thrust(list(x0))), rel=1e-12, abs=1e-15)
+
+
+@pytest.mark.parametrize("name", ["coulomb_friction", "stribeck", "drag_asymmetry", "thrust_asymmetry"])
+@pytest.mark.parametrize("w", [-40.0, 40.0])
+def test_phase_sign_form_matches_smooth_form_away_from_zero(name: str, w: float) -> None:
+    eff = make_effect(name, VALUES[name])
+    sgn = math.copysign(1.0, w)
+    assert eff.load_torque(w, NUMPY, sgn) == pytest.approx(eff.load_torque(w, NUMPY, None), rel=1e-9, abs=1e-15)
+    assert eff.thrust(0.1, w, NUMPY, sgn) == pytest.approx(eff.thrust(0.1, w, NUMPY, None), rel=1e-9)
+
+
+def test_input_delay_delays_a_slow_sine(rig: MotorParams) -> None:
+    """Pade(2) of a 5 ms delay: a 2 Hz voltage reaches the armature 5 ms late (to 1 % of its amplitude)."""
+    eff = InputDelay(delay=0.005)
+    t = np.arange(0.0, 1.0, 1e-4)
+    v = np.sin(2 * np.pi * 2.0 * t)
+    z = eff.observe(t, v, v, v, None)
+    out = np.array([eff.bound_drive_voltage(z[:, k], v[k]) for k in range(t.size)])
+    late = t > 0.2
+    np.testing.assert_allclose(out[late], np.sin(2 * np.pi * 2.0 * (t[late] - 0.005)), atol=0.01)
+
+
+def test_stateful_effects_grow_the_state_and_simulate(rig: MotorParams) -> None:
+    plant = load_plant({**rig.model_dump(), "effects": {"thrust_lag": {"tau": 0.03}, "input_delay": {"delay": 0.003}}})
+    assert plant.state_names == ("omega", "current", "thrust_lag.thrust", "input_delay.z1", "input_delay.z2")
+    t = np.arange(0.0, 0.6, 1e-3)
+    sim = simulate_zoh(plant, t, np.full_like(t, 3.0), [0.0] * 5)
+    static = rig.c_f * sim.state("omega") ** 2
+    assert sim.thrust[-1] == pytest.approx(static[-1], rel=1e-3)  # settled: lag state = static thrust
+    assert np.max(static[:100] - sim.thrust[:100]) > 0.01  # while spinning up it lags
+
+
+def test_parameter_file_round_trip(tmp_path: Path, rig: MotorParams) -> None:
+    plant = DCMotorPlant(rig, tuple(make_effect(n, v) for n, v in VALUES.items()))
+    path = tmp_path / "cal.json"
+    path.write_text(json.dumps(plant_to_mapping(plant, name="cal")), encoding="utf-8")
+    back = load_plant(path)
+    assert back == plant
+    assert load_params(path) == rig  # the constants alone still load as plain MotorParams
+
+
+@pytest.mark.parametrize(("block", "key"), [
+    ({"coulomb_frictin": {"tau_c": 0.1}}, "effects.coulomb_frictin"),
+    ({"coulomb_friction": {"tauc": 0.1}}, "effects.coulomb_friction.tauc"),
+    ({"coulomb_friction": {"tau_c": "big"}}, "effects.coulomb_friction.tau_c"),
+    ({"thrust_lag": {"tau": -1.0}}, "thrust_lag.tau"),
+    ([1, 2], "effects"),
+    ({"coulomb_friction": 3}, "effects.coulomb_friction"),
+    ({"coulomb_friction": "ab"}, "effects.coulomb_friction"),
+])
+def test_bad_effect_blocks_name_the_key(block: object, key: str, rig: MotorParams) -> None:
+    with pytest.raises(ParameterError) as err:
+        load_plant({**rig.model_dump(), "effects": block})
+    assert err.value.field == key
+
+
+def test_preset_loads_as_plant_without_effects(rig: MotorParams) -> None:
+    plant = load_plant("paper-rig")
+    assert plant.params == rig and plant.effects == ()

@@ -1,0 +1,69 @@
+"""The page's model tab with an ESC sweep (real uvicorn server, Debian's headless Chromium): the read
+options reach the server (pole pairs and the rest: tests/test_readers_api.py), the answer lists the
+equations checked and not, the verdict names the asymmetry."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from tests.logfiles import Thruster, thruster_sweep, write_csv
+from tests.page.test_page import ARGS, CHROMIUM, LONG, open_tab, shot, sync_api
+from tests.service.test_service_support import Server, start_server
+
+pytestmark = pytest.mark.integration
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    tmp = tmp_path_factory.mktemp("readers-page")
+    srv = start_server(tmp, {"THRUSTSHAPE_DB_PATH": str(tmp / "jobs.sqlite")})
+    try:
+        yield srv
+    finally:
+        srv.stop()
+
+
+@pytest.fixture(scope="module")
+def page(tmp_path_factory: pytest.TempPathFactory, server: Server) -> Iterator[Any]:
+    profile = tmp_path_factory.mktemp("chromium-profile")
+    with sync_api.sync_playwright() as pw:
+        ctx = pw.chromium.launch_persistent_context(str(profile), executable_path=str(CHROMIUM), args=ARGS,
+                                                    headless=True, viewport={"width": 1400, "height": 1000})
+        pg = ctx.new_page()
+        errors: list[str] = []
+        pg.on("pageerror", lambda e: errors.append(str(e)))
+        pg.set_default_timeout(30_000)
+        try:
+            yield pg
+            assert errors == [], f"script errors on the page: {errors}"
+        finally:
+            ctx.close()
+
+
+def _custom_params(page: Any, params: dict[str, float]) -> None:
+    page.select_option("#m-preset", "__custom__")
+    page.fill("#m-params", json.dumps(params))
+
+
+def test_page_diagnoses_an_esc_sweep_and_lists_the_equations(page: Any, server: Server, tmp_path: Path) -> None:
+    th = Thruster(ratio=0.8)
+    write_csv(thruster_sweep(th), tmp_path / "sweep.csv", title="Thruster at 16 V")
+    open_tab(page, server, "model")
+    page.set_input_files("#m-log", str(tmp_path / "sweep.csv"))
+    _custom_params(page, th.params())
+    page.click("#m-diagnose")
+    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    assert page.get_attribute("#m-verdict", "data-verdict") == "thrust_asymmetry"
+    eq = page.locator("#m-diag-equations li")
+    states = {eq.nth(k).get_attribute("data-equation"): eq.nth(k).get_attribute("data-checked")
+              for k in range(eq.count())}
+    assert states == {"thrust": "true", "mechanical": "false", "electrical": "false", "power": "true"}
+    assert "supply" in page.inner_text("#m-diag-equations li[data-equation=electrical]")
+    assert "fitted thrust reverse/forward 0.8" in page.inner_text("#m-diag-equations")
+    shot(page, "esc-sweep")
+
