@@ -40,7 +40,8 @@ from ocp.model.plant import NUMPY
 EQS = ("mechanical", "electrical", "thrust")
 CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 #: logger artefacts every model fits and no verdict names: ``current_lag``, the current sensor's lag [samples]
-#: (a firmware filter): the true current is ``i + lag dt i'``, in both the torque and the armature equation
+#: (a firmware filter) in the torque equation, where the true current is ``i + lag dt i'`` (in the armature
+#: equation the same lag looks like an inductance: an unresolved ``L`` takes it up there)
 NUISANCES: tuple[str, ...] = ("current_lag",)
 #: effects found by regression (input_delay is found by the alignment)
 REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")
@@ -166,11 +167,9 @@ def constant_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
 
 def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
     """(3, M) per logger artefact (:data:`NUISANCES`) at one unit: a one-sample current lag leaves
-    ``-k_t di`` in the torque and ``+R di`` in the armature residual (``di`` the current's step over the
-    interval; the armature's ``L di'`` part is second order and left out)."""
+    ``-k_t di`` in the torque residual (``di`` the current's step over the interval)."""
     z = np.zeros_like(s.w)
-    di = s.i1 - s.i0
-    return {"current_lag": np.vstack([-p.k_t * di if s.dt > 0 else z, p.R * di if s.dt > 0 else z, z])}
+    return {"current_lag": np.vstack([-p.k_t * (s.i1 - s.i0) if s.dt > 0 else z, z, z])}
 
 
 def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> np.ndarray:
@@ -318,7 +317,8 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
     return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
                   sigma, periods, [float(v) for v in spectrum], unresolved(p, log),
-                  1.0 if s.dt == 0 else min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt))
+                  1.0 if s.dt == 0 else min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt,
+                                            s.dt / (2.0 * tau) if tau > 0 else 1.0))  # (speed view's memory)
 
 
 def unresolved(p: MotorParams, log: Log) -> dict[str, str]:

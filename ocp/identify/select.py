@@ -143,13 +143,20 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
         if progress is not None:
             progress((r + 1) / (max_items + 1))
         ok = bool(tried) and _worst(design, current) > noise_floor \
-            and tried[0][1].score <= (1 - min_improvement) * current.score
+            and tried[0][1].score <= (1 - max(min_improvement, _scatter(design))) * current.score
         steps.append(Step(current, tried, tried[0][0] if ok else None))
         if not ok:
             break
         items.append(tried[0][0])
         current = tried[0][1]
     return Selection(current, steps, _challenge(design, items, pool, current, tol, margin))
+
+
+def _scatter(design: Design) -> float:
+    """Two standard errors of a held-out RMS over its independent rows, ``2 / sqrt(2 n)`` (relative): a
+    smaller fall of the score is sampling noise (low-passed rows are correlated, :attr:`Design.independence`)."""
+    live = design.n_test > 0
+    return 2.0 / math.sqrt(2.0 * max(float(design.n_test[live].sum()) * design.independence, 1.0))
 
 
 def _worst(design: Design, f: Fitted) -> float:
@@ -164,9 +171,7 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
     """Adopted items that another item explains as well on held-out data: within ``margin``, or within the
     held-out score's own sampling scatter (two standard errors of an RMS over the independent held-out
     rows, ``2 / sqrt(2 n)``), whichever is wider."""
-    live = design.n_test > 0
-    n_eff = float(design.n_test[live].sum()) * design.independence
-    margin = max(margin, 2.0 / math.sqrt(2.0 * max(n_eff, 1.0)))
+    margin = max(margin, _scatter(design))
     out = []
     for a, b in itertools.product(items, pool):
         if b in items:

@@ -15,8 +15,8 @@ from ocp.identify.explain import explain
 from ocp.identify.regression import Signals, speed_view, visible_torque
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
-from ocp.params import MotorParams
-from ocp.plant import DCMotorPlant
+from ocp.model.params import MotorParams
+from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import make_case
 
 
@@ -60,7 +60,7 @@ def test_visible_torque_is_the_steady_state_sensitivity(rig: MotorParams) -> Non
 
 def test_a_challengers_out_of_range_fit_is_words_not_a_crash(rig: MotorParams) -> None:
     text = explain("stribeck", {"tau_s": 1e6, "omega_s": 3.0}, rig, None, None)  # type: ignore[arg-type]
-    assert "outside the catalogue's range" in text and "tau_s" in text
+    assert "outside its physical range" in text and "tau_s" in text
 
 
 @pytest.mark.parametrize("seed", [1001, 1020, 1091, 1022])
