@@ -71,7 +71,8 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         logged = cast(Runner, TaskLog(runner, tasks))  # one log line per batch item, like every request's task
         batch_runner = None if tasks.batch_item is None else BatchRunner(
             store, logged, tasks.batch_item, concurrency=settings.workers, timeout=settings.batch_item_timeout_s,
-            attempts=settings.batch_attempts)
+            attempts=settings.batch_attempts, key=tasks.batch_key, lookahead=settings.batch_lookahead,
+            group_s=settings.batch_write_group_s)
         app.state.settings, app.state.tasks, app.state.store = settings, tasks, store
         app.state.pool, app.state.batches, app.state.fallback_pool = pool, batch_runner, fallback_pool
         # start-up off the first requests; a fallback worker also runs one small fallback (imports, caches)

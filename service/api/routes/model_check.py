@@ -23,9 +23,10 @@ from typing import Annotated, Any, Literal
 from fastapi import APIRouter, Depends, File, Form, Query, UploadFile
 from fastapi.responses import HTMLResponse
 
-from ocp.errors import MissionError, ThrustshapeError
+from ocp.errors import ThrustshapeError
 from service.api.deps import PoolDep, SettingsDep, TasksDep
 from service.api.problems import TooLarge, error_responses
+from service.errors import FeatureUnavailable
 from service.modelcheck import PARAMS_HELP, READ_FIELDS, Op, parse_columns, parse_effects, parse_params, parse_read
 from service.schemas import CheckPublic, DiagnosePublic, FitPublic
 from service.settings import Settings
@@ -34,7 +35,7 @@ from service.workers import WorkerPool
 
 PREFIX = "/v1/model-check"
 router = APIRouter(prefix=PREFIX, tags=["model check"])
-_ERRORS = error_responses(401, 413, 422, 503, 504)
+_ERRORS = error_responses(401, 413, 422, 501, 503, 504)
 
 LogFile = Annotated[UploadFile, File(description="measurement log: CSV (header row) or Parquet; columns t, voltage, "
                                                  "current, omega and/or theta, thrust (SI) or as `columns` maps them")]
@@ -94,7 +95,7 @@ async def _run(op: Op, log: UploadFile, params: str, columns: str | None, steady
 async def _checked(op: Op, log: UploadFile, params: str, columns: str | None, steady_state: bool | None,
                    settings: Settings, pool: WorkerPool, tasks: TaskSet, **extra: Any) -> dict[str, Any]:
     if tasks.model_check is None:  # the routes are only registered when the backend exists
-        raise MissionError("route", "model checks are not available on this server")
+        raise FeatureUnavailable("model checks", "ocp.identify")
     source = parse_params(params)
     column_map = parse_columns(columns)
     if log.size is not None and log.size > settings.max_upload_bytes:
