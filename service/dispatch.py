@@ -11,10 +11,10 @@ fewest keys, whose cache loses least):
 1. a call passed over ``patience`` times, whatever its key: nothing starves;
 2. a call whose key the worker holds: no build;
 3. a call without a key, or whose key no worker holds or is running: a build nobody else does;
-4. a call whose key a busy worker holds, when more than ``crowd`` such calls per holder wait: a second build
-   pays off against that queue.
+4. a call whose key only busy workers hold, when each of them has more than ``crowd`` waiting calls of keys it
+   holds: a second build pays off against that queue.
 
-Any other call waits for the worker that holds its key (a duplicate build costs more than a short wait).
+Any other call waits for the worker that holds its key (a duplicate build costs more than a short queue).
 
 Single-threaded: use it from the event loop only.
 """
@@ -46,7 +46,7 @@ class Dispatcher(Generic[W]):
 
     def __init__(self, workers: Sequence[W], slots: int = 8, patience: int = 32, crowd: int = 8) -> None:
         """``slots``: keys remembered per worker (its cache size); ``patience``: how often a waiting call may be
-        passed over; ``crowd``: waiting calls per holder of a key beyond which another worker builds it too."""
+        passed over; ``crowd``: a holder's queue beyond which another worker builds its key too."""
         self._idle: list[W] = list(workers)
         self._waiting: list[_Waiter[W]] = []
         self._held: dict[W, OrderedDict[Hashable, None]] = {w: OrderedDict() for w in workers}
@@ -96,10 +96,16 @@ class Dispatcher(Generic[W]):
         """Pair idle workers with waiting calls, best rank first, until no acceptable pair is left."""
         self._waiting = [x for x in self._waiting if not x.future.done()]
         while self._idle and self._waiting:
-            holders = Counter(k for w in self._held for k in set(self._held[w]) | {self._running.get(w)})
             queued = Counter(x.key for x in self._waiting)
+            holds = {w: set(self._held[w]) | ({self._running[w]} if w in self._running else set()) for w in self._held}
+            backlog = {w: sum(queued[k] for k in keys) for w, keys in holds.items()}
+            # per key: the shortest queue among the workers that hold it (absent: nobody holds it)
+            shortest: dict[Hashable | None, int] = {}
+            for w, keys in holds.items():
+                for k in keys:
+                    shortest[k] = min(shortest.get(k, backlog[w]), backlog[w])
             pairs = [(rank, x.seq, len(self._held[w]), i, x, w) for i, w in enumerate(self._idle)
-                     for x in self._waiting if (rank := self._rank(w, x, holders, queued)) is not None]
+                     for x in self._waiting if (rank := self._rank(w, x, shortest)) is not None]
             if not pairs:
                 return
             *_, waiter, worker = min(pairs, key=lambda p: p[:4])
@@ -112,8 +118,7 @@ class Dispatcher(Generic[W]):
             self._running[worker] = waiter.key
             waiter.future.set_result(worker)
 
-    def _rank(self, worker: W, x: _Waiter[W], holders: Counter[Hashable | None], queued: Counter[Hashable | None]
-              ) -> int | None:
+    def _rank(self, worker: W, x: _Waiter[W], shortest: dict[Hashable | None, int]) -> int | None:
         if x.urgent:
             return 0
         if x.skipped >= self.patience:
@@ -122,6 +127,6 @@ class Dispatcher(Generic[W]):
             return 3
         if x.key in self._held[worker]:
             return 2
-        if not holders[x.key]:
+        if x.key not in shortest:
             return 3
-        return 4 if queued[x.key] > self.crowd * holders[x.key] else None
+        return 4 if shortest[x.key] > self.crowd else None

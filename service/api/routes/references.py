@@ -8,6 +8,7 @@ from typing import Any, cast
 from fastapi import APIRouter, Request
 
 from ocp.errors import MissionError
+from service.api.answers import json_answer
 from service.api.deps import PoolDep, SettingsDep, TasksDep, check_mission_limits
 from service.api.logging import TaskLog
 from service.api.problems import error_responses
@@ -62,8 +63,9 @@ async def optimize(mission: MissionRequest, request: Request, settings: Settings
     solve_budget = max(total - settings.fallback_reserve_s, 0.0)
     payload = mission.model_dump(mode="json")
     try:
-        return await pool.run(tasks.optimize, payload, solve_budget, deadline=start + solve_budget,
-                              min_run=min(1.0, 0.5 * solve_budget))
+        return json_answer(OptimizePublic, await pool.run(tasks.optimize, payload, solve_budget,
+                                                          deadline=start + solve_budget,
+                                                          min_run=min(1.0, 0.5 * solve_budget)))
     except TaskTimeout as exc:
         reason = "deadline: " + _SOLVER_OUT[exc.phase].format(solve_budget)
     except TaskFailed as exc:
@@ -72,8 +74,9 @@ async def optimize(mission: MissionRequest, request: Request, settings: Settings
     detail = ""
     for _ in range(2):  # a fallback process that dies (killed, out of memory) gets one more try
         try:
-            return await fallbacks.run(tasks.fallback, {"mission": payload, "reason": reason}, total,
-                                       deadline=start + total)
+            return json_answer(OptimizePublic, await fallbacks.run(tasks.fallback, {"mission": payload,
+                                                                                   "reason": reason},
+                                                                   total, deadline=start + total))
         except TaskTimeout as exc:
             raise DeadlineExceeded(total, f"{reason}; then the fallback ran out while "
                                           f"{PHASES[exc.phase]} ({exc.phase})") from None
