@@ -8,11 +8,12 @@ Usage::
 
 The missions are drawn from a fixed seed: one and two reversals (cosine or ramp), a sampled sine profile,
 levels 0.15-0.45 N, two motors (the ``paper-rig`` preset and a mapping), regularities ``bounded`` (60 %),
-``continuous-current`` (25 %) and ``continuous-voltage`` (15 %), 40 or 60 collocation intervals: about 16
-solver structures mixed in random order. They are written to one file and run by the real CLI in a subprocess (worker start-up,
-solver builds and the summary included in the wall time). ``--before DIR`` runs the same file with the code in
-``DIR`` (e.g. ``git archive <commit> | tar -x -C DIR``) right before, for a side-by-side row in one run. The
-machine's load (``uptime``) is printed beside each row: on a shared machine the figures move with it.
+``continuous-current`` (25 %) and ``continuous-voltage`` (15 %), 40 or 60 collocation intervals: 12 solver
+structures mixed in random order. They are written to one file and run by the real CLI in a subprocess
+(worker start-up, solver builds and the summary included in the wall time). ``--before DIR`` runs the same
+file with the code in ``DIR`` (e.g. ``git archive <commit> | tar -x -C DIR``) right before, for a side-by-side
+row in one run. The machine's load (``uptime``) is printed beside each row: on a shared machine the
+figures move with it.
 This is a benchmark, not a test: it prints a table and never fails the build.
 """
 

@@ -265,7 +265,7 @@ def _rounds(code: Path, label: str, workers: int, queue: int, requests: int,
         proc, url = _start(workers, queue, Path(tmp) / "jobs.sqlite3", code)
         try:
             for kind, path, body in kinds:
-                asyncio.run(_round(url, path, body, 1, 2))  # warm the workers' caches
+                asyncio.run(_round(url, path, body, workers, 2 * workers))  # warm every worker's cache
                 for mult in (1, 2, 4):
                     n = requests if mult < 4 else 2 * requests
                     row = asyncio.run(_round(url, path, body, mult * workers, n))
