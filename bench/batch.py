@@ -5,6 +5,7 @@
 Usage::
 
     python bench/batch.py [--n 1000] [--workers 2] [--seed 7] [--before DIR] [--json]
+    python bench/batch.py --builds [--n 200]    # solver builds with and without structure affinity
 
 The missions are drawn from a fixed seed: one and two reversals (cosine or ramp), a sampled sine profile,
 levels 0.15-0.45 N, two motors (the ``paper-rig`` preset and a mapping), regularities ``bounded`` (60 %),
@@ -102,6 +103,31 @@ def run(code: Path, path: Path, workers: int) -> dict[str, Any]:
             "load_before": load_before, "load_after": _load()}
 
 
+def pool_run(payloads: list[dict[str, Any]], workers: int, affinity: bool) -> dict[str, Any]:
+    """The missions on a :class:`service.workers.WorkerPool` directly (what ``batch --local`` does), with or
+    without structure affinity; the solver builds each worker reported."""
+    import asyncio
+
+    from service.tasks import optimize_mission, structure_key
+    from service.workers import WorkerPool
+
+    async def go() -> dict[str, Any]:
+        pool = WorkerPool(workers, 0, 1, preload=("ocp.optimize.mission", "ocp.optimize.solve", "service.tasks"))
+        try:
+            await pool.warm()
+            keys = [structure_key(p) if affinity else None for p in payloads]
+            t0 = time.perf_counter()
+            await asyncio.gather(*(pool.run(optimize_mission, p, 300.0, wait=True, affinity=k)
+                                   for p, k in zip(payloads, keys, strict=True)), return_exceptions=True)
+            return {"wall_s": time.perf_counter() - t0, "builds": pool.builds()}
+        finally:
+            pool.close()
+
+    load_before = _load()
+    out = asyncio.run(go())
+    return {**out, "load_before": load_before, "load_after": _load()}
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=1000)
@@ -109,7 +135,20 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=7)
     ap.add_argument("--before", type=Path, default=None, help="a checkout of older code to run first, for comparison")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--builds", action="store_true",
+                    help="instead: run the missions on the worker pool in this process with and without structure "
+                         "affinity, and count the solver builds")
     args = ap.parse_args(argv)
+    if args.builds:
+        sys.path.insert(0, str(ROOT))
+        payloads = missions(args.n, args.seed)
+        print(f"{args.n} mixed missions on WorkerPool({args.workers}), worker start-up excluded")
+        print(f"{'affinity':<9} {'wall s':>7} {'builds per worker':<18} load average before -> after")
+        for affinity in (False, True):
+            r = pool_run(payloads, args.workers, affinity)
+            print(f"{'on' if affinity else 'off':<9} {r['wall_s']:>7.1f} {r['builds']!s:<18} "
+                  f"{r['load_before']} -> {r['load_after']}")
+        return 0
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "missions.json"
