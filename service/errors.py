@@ -4,7 +4,7 @@
 
     ServiceError                      root: ``status`` and ``title`` of the answer, optional field/reason
     ├── TooLarge                 413  a request within the body limit asks for more than a configured cap
-    │   └── BodyTooLarge         413  the body itself is over ``max_body_bytes`` (also a Starlette HTTPException)
+    │   └── BodyTooLarge         413  the body is over ``max_body_bytes`` (service.api.problems; an HTTPException too)
     ├── IdempotencyConflict      422  an Idempotency-Key reused with a different body
     ├── FeatureUnavailable       501  the route's core backend is not installed on this server
     ├── TaskFailed               500  a task raised an unexpected exception or its worker process died

@@ -187,7 +187,7 @@ def test_grouped_writes_lose_no_result_when_the_server_is_killed(tmp_path: Path)
     lands once."""
     db = tmp_path / "jobs.sqlite3"
     env = {"TS_TEST_TASKS": "slow-batch", "TS_TEST_ITEM_SECONDS": "0.15", "THRUSTSHAPE_DB_PATH": str(db),
-           "THRUSTSHAPE_WORKERS": "2", "THRUSTSHAPE_BATCH_WRITE_GROUP_S": "0.4"}
+           "THRUSTSHAPE_WORKERS": "2", "THRUSTSHAPE_FALLBACK_WORKERS": "1", "THRUSTSHAPE_BATCH_WRITE_GROUP_S": "0.4"}
     missions = [mission(f"g{i}", amplitude=0.1 + 0.01 * i) for i in range(16)]
     first = start_server(tmp_path, env)
     try:
