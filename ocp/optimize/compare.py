@@ -22,9 +22,7 @@ import numpy as np
 from scipy.integrate import trapezoid
 
 from ocp.errors import MissionError
-from ocp.model.plant import DCMotorPlant
 from ocp.optimize.mission import Mission
-from ocp.optimize.problem import make_plant
 from ocp.optimize.result import OptimizeResult, json_ready
 from ocp.optimize.solve import optimize
 from ocp.reference.analytic import PiecewiseProfile, SinReversal, reference
@@ -66,7 +64,7 @@ class CompareResult:
 
 def _figures(m: Mission, c: Candidate, t_des: np.ndarray, f_des: np.ndarray, exponents: list[float],
              unbounded: bool) -> dict[str, Any]:
-    plant = make_plant(m)
+    plant = m.drive_plant()
     energy = math.inf if unbounded else float(trapezoid(c.voltage * c.current, c.t))
     figures: dict[str, Any] = {
         "duration_s": float(c.t[-1] - c.t[0]),
@@ -78,9 +76,10 @@ def _figures(m: Mission, c: Candidate, t_des: np.ndarray, f_des: np.ndarray, exp
         "within_limits": (not unbounded) and float(np.max(np.abs(c.current))) <= m.limits.current * 1.001
         and float(np.max(np.abs(c.voltage))) <= m.limits.voltage * 1.001,
     }
-    if isinstance(plant, DCMotorPlant):
+    voltage_plant = plant.voltage_plant()  # the Section V loop commands a voltage
+    if voltage_plant is not None:
         theta = np.concatenate([[0.0], np.cumsum(0.5 * (c.omega[1:] + c.omega[:-1]) * np.diff(c.t))])
-        loop = track(plant, c.t, c.thrust, c.omega, theta, feedforward=c.voltage)
+        loop = track(voltage_plant, c.t, c.thrust, c.omega, theta, feedforward=c.voltage)
         lm = loop.metrics
         figures.update({"loop_thrust_rms_n": lm.thrust_rms, "loop_speed_rms_rad_s": lm.speed_rms,
                         "loop_local_speed_error_rad_s": lm.local_speed_error,
@@ -141,7 +140,7 @@ def compare(m: Mission, qs: tuple[int, ...] = (0, 1, 2, 3)) -> CompareResult:
     cands[0].figures = _figures(m, cands[0], a["t"], a["thrust_desired"], [c["exponent"] for c in opt.crossings],
                                 False)
     windows = mission_reversals(t_des, f_des)
-    q_min = min_sin_q(m.regularity, m.plant == "dc-motor")
+    q_min = min_sin_q(m.regularity, m.drive_plant().voltage_driven)
     t = np.linspace(0.0, float(t_des[-1]), max(2, round(float(t_des[-1]) * 1000) + 1))
     for q in qs:
         prof = PiecewiseProfile(tuple(SinReversal(w.t_s, q, w.before, w.after, w.fall, w.rise) for w in windows),

@@ -131,13 +131,10 @@ def mesh_guess(problem: Problem, data: ProblemData, previous: OptimizeResult) ->
     t = (edges[:-1, None] + taus[None, :] * h[:, None]).reshape(P, N, col.DEGREE)
     fine = previous.fine
     guess[lay.stretch] = stretch
-    guess[lay.xc[:, :, :, 0]] = np.interp(t, fine["t"], fine["omega"]) / xs[0]
-    if "torque" in fine:
-        command = fine["torque"]
-    else:
-        command = fine["voltage"]
-        guess[lay.xc[:, :, :, 1]] = np.interp(t, fine["t"], fine["current"]) / xs[1]
-    chain_values = [command]
+    for k, name in enumerate(problem.plant.state_names):  # speed, current: what the answer carries
+        if name in fine:
+            guess[lay.xc[:, :, :, k]] = np.interp(t, fine["t"], fine[name]) / xs[k]
+    chain_values = [fine[problem.plant.input_name]]
     for _ in range(chain):
         chain_values.append(np.gradient(chain_values[-1], fine["t"]))
     for c in range(chain):

@@ -13,13 +13,12 @@ from typing import Any
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
-from ocp.model.plant import DCMotorPlant
 from ocp.optimize import collocation as col
 from ocp.optimize.data import ProblemData
 from ocp.optimize.mission import output_grid
 from ocp.optimize.problem import Problem
 from ocp.optimize.result import OptimizeResult
-from ocp.optimize.verify import channels, simulate_response, torque_plant_commands, verification
+from ocp.optimize.verify import channels, simulate_response, verification
 
 COMMAND_SUBSTEPS = 4  # held pieces per collocation interval of a continuous command (simulation and output)
 
@@ -106,12 +105,7 @@ def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: P
     thrust = np.asarray(plant.thrust([x[i] for i in range(npx)]), float)
     arrays = {"t": t, "thrust": thrust, "thrust_desired": f_des, "omega": x[0],
               "theta": cumulative_trapezoid(x[0], t, initial=0.0)}
-    dc = isinstance(plant, DCMotorPlant)
-    if dc:
-        arrays["current"], arrays["voltage"] = x[1], u
-    else:
-        arrays["torque"] = u
-        arrays["current"], arrays["voltage"] = torque_plant_commands(m, x[0], u)
+    arrays.update(plant.channels(x, u))
     arrays["command_t"], arrays["command"] = knots, np.append(u_knots, u_knots[-1])
     fine = channels(m, resp)
     report = verification(m, arrays, f_plan, fine)

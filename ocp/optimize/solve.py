@@ -124,15 +124,13 @@ def _interval_excess(problem: Problem, result: OptimizeResult) -> np.ndarray:
     simulated response (on its integration grid) on each collocation interval and its two neighbours (a
     node bounds the polynomials on both sides), shape (P, N)."""
     P, N = problem.structure.n_phases, problem.structure.intervals
-    lim, arr = problem.mission.limits, result.fine
+    arr = result.fine
     phase_edges = np.concatenate([[0.0], np.cumsum(np.asarray(result.stretch) * problem.phases.durations)])
     t = arr["t"]
     j = np.clip(np.searchsorted(phase_edges, t, side="right") - 1, 0, P - 1)
     k = np.clip(((t - phase_edges[j]) / np.diff(phase_edges)[j] * N).astype(int), 0, N - 1)
-    if "torque" in arr:  # the torque channel: its bound is the only one the program keeps
-        ratio = np.abs(arr["torque"]) * problem.mission.motor().J / problem.mission.torque_limit()
-    else:
-        ratio = np.maximum(np.abs(arr["current"]) / lim.current, np.abs(arr["voltage"]) / lim.voltage)
+    # the drive's limits the program keeps (current and voltage; the torque channel's torque)
+    ratio = np.max(list(problem.plant.limit_ratios(arr, problem.mission.bounds()).values()), axis=0)
     per = np.zeros(P * N)
     np.maximum.at(per, j * N + k, ratio)
     padded = np.concatenate([[0.0], per, [0.0]])
