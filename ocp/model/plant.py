@@ -157,7 +157,6 @@ class ReferenceLike(Protocol):
     (:class:`ocp.reference.trajectory.Reference`): arrays (M,) of speed [rad/s], its derivative [rad/s^2],
     current [A] and voltage [V] of the nominal motor."""
 
-
     @property
     def omega(self) -> np.ndarray: ...
 
@@ -223,7 +222,7 @@ class DrivenPlant(Plant, Protocol):
         ...
 
     def peak_report(self, peak: Callable[[str], float], bounds: DriveBounds,
-                    tolerance: float) -> tuple[dict[str, float], bool]:
+                    tolerance: float) -> tuple[dict[str, Any], bool]:
         """Extra peak fields [SI] of a verification from ``peak(channel)`` (the largest |value|), and whether the
         drive limits hold within ``tolerance`` (relative, e.g. 1.001)."""
         ...
@@ -343,7 +342,7 @@ class DCMotorPlant:
                 "limits.voltage": np.abs(channels["voltage"]) / bounds.voltage}
 
     def peak_report(self, peak: Callable[[str], float], bounds: DriveBounds,
-                    tolerance: float) -> tuple[dict[str, float], bool]:
+                    tolerance: float) -> tuple[dict[str, Any], bool]:
         return {}, peak("current") <= bounds.current * tolerance and peak("voltage") <= bounds.voltage * tolerance
 
 
@@ -418,7 +417,7 @@ class TorquePlant:
         return {"limits.torque": np.abs(channels["torque"]) * self._motor().J / bounds.torque}
 
     def peak_report(self, peak: Callable[[str], float], bounds: DriveBounds,
-                    tolerance: float) -> tuple[dict[str, float], bool]:
+                    tolerance: float) -> tuple[dict[str, Any], bool]:
         tau_max = peak("torque") * self._motor().J  # the drive owns i and V (reported as the DC equivalent)
         return {"max_abs_torque": tau_max, "torque_margin": bounds.torque - tau_max}, \
             tau_max <= bounds.torque * tolerance
@@ -430,30 +429,3 @@ class TorquePlant:
 
     def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
         return thrust_from_speed(x[0], self.c_f, ops, sign)
-
-
-# eq:sys2  x2' = -2k sign(x2)|x2|^(3/2) + 2 sqrt|x2| u
-def normal_form_rhs(x2: np.ndarray | float, u: np.ndarray | float, k: float) -> np.ndarray:
-    """Normalised-thrust dynamics of eq. sys2; ``x2 = w|w|`` [rad^2/s^2], ``u`` [rad/s^2]."""
-    x2 = np.asarray(x2, dtype=float)
-    return -2.0 * k * np.sign(x2) * np.abs(x2) ** 1.5 + 2.0 * np.sqrt(np.abs(x2)) * u
-
-
-def normal_form_drift(x2: np.ndarray | float, k: float) -> np.ndarray:
-    """Drift ``f2(x2) = -2k sign(x2)|x2|^(3/2)`` of eq. sys2 (Fig. f2_map)."""
-    return normal_form_rhs(x2, 0.0, k)
-
-
-def normal_form_gain(x2: np.ndarray | float) -> np.ndarray:
-    """Input gain ``g2(x2) = 2 sqrt|x2|`` of eq. sys2; vanishes at thrust reversal (Fig. f2_map)."""
-    return 2.0 * np.sqrt(np.abs(np.asarray(x2, dtype=float)))
-
-
-# eq:inv_u  u = y'' / (2 sqrt|y'|) + k y'
-def inverse_input(ydot: np.ndarray | float, yddot: np.ndarray | float, k: float) -> np.ndarray:
-    """Unique input reproducing ``(y', y'')`` away from reversal; +-inf where ``y' = 0, y'' != 0``."""
-    yd = np.asarray(ydot, dtype=float)
-    ydd = np.asarray(yddot, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        u = ydd / (2.0 * np.sqrt(np.abs(yd))) + k * yd
-    return np.where((yd == 0) & (ydd == 0), 0.0, u)

@@ -13,7 +13,6 @@ voltage as feedforward.
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -21,9 +20,10 @@ from typing import Any
 import numpy as np
 from scipy.integrate import trapezoid
 
+from ocp.encoding import jsonable
 from ocp.errors import MissionError
 from ocp.optimize.mission import Mission
-from ocp.optimize.result import OptimizeResult, json_ready
+from ocp.optimize.result import OptimizeResult, Source
 from ocp.optimize.solve import optimize
 from ocp.reference.analytic import PiecewiseProfile, SinReversal, reference
 from ocp.simulate.closed_loop import track
@@ -54,22 +54,24 @@ class CompareResult:
         return [{"label": c.label, **c.figures} for c in self.candidates]
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: the table and every candidate's arrays (unbounded samples are ``null``)."""
+        """JSON-ready (:func:`ocp.encoding.jsonable`): the table (an unbounded shape's peaks and energy are ``null``)
+        and every candidate's arrays (unbounded samples are ``"inf"`` / ``"-inf"``)."""
         curves = [{"label": c.label, **{k: np.asarray(getattr(c, k), float).tolist()
                                          for k in ("t", "thrust", "omega", "current", "voltage")}}
                   for c in self.candidates]
-        return {"mission": self.mission, "table": json_ready(self.table()), "candidates": json_ready(curves),
+        return {"mission": self.mission, "table": jsonable(self.table()), "candidates": jsonable(curves),
                 "optimized_source": self.optimized.source, "optimized_reason": self.optimized.reason}
 
 
 def _figures(m: Mission, c: Candidate, t_des: np.ndarray, f_des: np.ndarray, exponents: list[float],
              unbounded: bool) -> dict[str, Any]:
     plant = m.drive_plant()
-    energy = math.inf if unbounded else float(trapezoid(c.voltage * c.current, c.t))
+    # an unbounded ideal command has no peak and no energy: None (JSON null)
+    energy = None if unbounded else float(trapezoid(c.voltage * c.current, c.t))
     figures: dict[str, Any] = {
         "duration_s": float(c.t[-1] - c.t[0]),
-        "peak_current_a": math.inf if unbounded else float(np.max(np.abs(c.current))),
-        "peak_voltage_v": math.inf if unbounded else float(np.max(np.abs(c.voltage))),
+        "peak_current_a": None if unbounded else float(np.max(np.abs(c.current))),
+        "peak_voltage_v": None if unbounded else float(np.max(np.abs(c.voltage))),
         "energy_j": energy,
         "thrust_rms_error_n": float(np.sqrt(np.mean((c.thrust - np.interp(c.t, t_des, f_des)) ** 2))),
         "crossing_exponents": exponents,
@@ -135,9 +137,9 @@ def compare(m: Mission, qs: tuple[int, ...] = (0, 1, 2, 3)) -> CompareResult:
     t_des = t_des - t_des[0]
     opt = optimize(m)
     a = opt.arrays
-    cands = [Candidate("optimized" if opt.source == "optimized" else "fallback", a["t"], a["thrust"], a["omega"],
+    cands = [Candidate("optimized" if opt.source is Source.OPTIMIZED else "fallback", a["t"], a["thrust"], a["omega"],
                        a["current"], a["voltage"])]
-    cands[0].figures = _figures(m, cands[0], a["t"], a["thrust_desired"], [c["exponent"] for c in opt.crossings],
+    cands[0].figures = _figures(m, cands[0], a["t"], a["thrust_desired"], [c.exponent for c in opt.crossings],
                                 False)
     windows = mission_reversals(t_des, f_des)
     q_min = min_sin_q(m.regularity, m.drive_plant().voltage_driven)

@@ -18,6 +18,7 @@ import numpy as np
 from ocp.errors import MissionError
 from ocp.model.plant import CASADI, Plant
 from ocp.optimize.mission import Mission
+from ocp.optimize.result import Verification
 from ocp.simulate.open_loop import rk4
 
 PATH_TOLERANCE = 1e-3  # relative excess over a limit accepted as rounding
@@ -108,7 +109,7 @@ def channels(m: Mission, resp: Response) -> dict[str, np.ndarray]:
 
 
 def verification(m: Mission, arrays: dict[str, np.ndarray], f_plan: np.ndarray,
-                  fine: dict[str, np.ndarray]) -> dict[str, Any]:
+                 fine: dict[str, np.ndarray]) -> Verification:
     """Reproduction error (simulated vs planned thrust) on the output grid; peaks and margins of the
     simulated response on the integration grid ``fine`` (between the output samples too)."""
     err = arrays["thrust"] - f_plan
@@ -119,16 +120,11 @@ def verification(m: Mission, arrays: dict[str, np.ndarray], f_plan: np.ndarray,
     i_max, v_max, w_max = peak("current"), peak("voltage"), peak("omega")
     lim = m.limits
     tol = 1.0 + PATH_TOLERANCE
-    out: dict[str, Any] = {
-        "thrust_rms_error": float(np.sqrt(np.mean(err**2))),
-        "thrust_max_error": float(np.max(np.abs(err))),
-        "tracking_rms_error": float(np.sqrt(np.mean((arrays["thrust"] - arrays["thrust_desired"]) ** 2))),
-        "max_abs_current": i_max, "max_abs_voltage": v_max, "max_abs_speed": w_max,
-        "current_margin": lim.current - i_max, "voltage_margin": lim.voltage - v_max,
-    }
     extra, path_ok = m.drive_plant().peak_report(peak, m.bounds(), tol)  # the drive's own limits
-    out.update(extra)
     if lim.speed is not None:
         path_ok = path_ok and w_max <= lim.speed * tol
-    out["path_ok"] = bool(path_ok)
-    return out
+    return Verification(
+        thrust_rms_error=float(np.sqrt(np.mean(err**2))), thrust_max_error=float(np.max(np.abs(err))),
+        tracking_rms_error=float(np.sqrt(np.mean((arrays["thrust"] - arrays["thrust_desired"]) ** 2))),
+        max_abs_current=i_max, max_abs_voltage=v_max, max_abs_speed=w_max,
+        current_margin=lim.current - i_max, voltage_margin=lim.voltage - v_max, path_ok=bool(path_ok), **extra)

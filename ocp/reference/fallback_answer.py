@@ -14,13 +14,13 @@ import numpy as np
 from ocp.errors import InfeasibleError, MissionError
 from ocp.model.equilibrium import equilibrium
 from ocp.optimize.mission import Mission, output_grid
-from ocp.optimize.result import OptimizeResult
+from ocp.optimize.result import Crossing, OptimizeResult, SolverStats, Source, Status
 from ocp.optimize.verify import channels, simulate_response, verification
 from ocp.reference.analytic import reference
 from ocp.reference.fallback import DESIGN_STEPS, DriveLimits, design_sin, hold_limit, plan_reversals
 
 
-def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | None = None) -> OptimizeResult:
+def analytic_fallback(m: Mission, reason: str, solver_info: SolverStats | None = None) -> OptimizeResult:
     """Analytic reference within the mission's limits: hold levels joined by local polynomial reversals
     of the order the regularity needs (``alpha (t - t_s)^p chi``), or, for a profile that never
     reverses, the ``A sin^(2q+1)`` design at the mission's peak thrust. For the torque channel the
@@ -72,12 +72,12 @@ def _binding(m: Mission, res: OptimizeResult | None) -> str:
     peaks = {k: max(float(np.max(np.abs(res.arrays[k]))), float(np.max(np.abs(v)))) for k, v in res.fine.items()}
     ratios = {k: float(r) for k, r in m.drive_plant().limit_ratios(peaks, m.bounds()).items()}
     if m.limits.speed is not None:
-        ratios["limits.speed"] = res.verification["max_abs_speed"] / m.limits.speed
+        ratios["limits.speed"] = res.verification.max_abs_speed / m.limits.speed
     return max(ratios, key=lambda k: ratios[k] if math.isfinite(ratios[k]) else math.inf)
 
 
 def _fallback_try(m: Mission, drive: DriveLimits, cap: float, stretch: float, reason: str,
-                  solver_info: dict[str, Any] | None) -> tuple[OptimizeResult, float]:
+                  solver_info: SolverStats | None) -> tuple[OptimizeResult, float]:
     """One fallback design with hold levels capped at ``cap`` [N] and time stretched ``stretch`` x, simulated
     and verified; returns it and the smallest level / desired level."""
     params = m.motor()
@@ -111,7 +111,7 @@ def _fallback_try(m: Mission, drive: DriveLimits, cap: float, stretch: float, re
 
 
 def _fallback_result(m: Mission, prof: Any, t: np.ndarray, t_d: np.ndarray, f_d: np.ndarray, reason: str,
-                     solver_info: dict[str, Any] | None) -> OptimizeResult:
+                     solver_info: SolverStats | None) -> OptimizeResult:
     """Closed-form reference of ``prof`` on ``t`` (M,), simulated on the mission's plant and verified."""
     params, plant = m.motor(), m.drive_plant()
     ref = reference(prof, params, t)
@@ -128,8 +128,9 @@ def _fallback_result(m: Mission, prof: Any, t: np.ndarray, t_d: np.ndarray, f_d:
     f_sim = np.asarray(plant.thrust([resp.at_out[k] for k in range(resp.at_out.shape[0])]), float)
     fine = channels(m, resp)
     report = verification(m, {**arrays, "thrust": f_sim}, ref.thrust, fine)
-    crossings = [{"t": float(ts), "exponent": float(p or 0), "sign_change": True}
+    crossings = [Crossing(t=float(ts), exponent=float(p or 0), sign_change=True)
                  for ts, p in zip(ref.crossing_times, ref.crossing_orders, strict=True) if 0.0 < ts < t[-1]]
-    return OptimizeResult(name=m.name, source="analytic-fallback", status="fallback", reason=reason, arrays=arrays,
-                          crossings=crossings, stretch=[], verification=report, solver=solver_info or {},
+    return OptimizeResult(name=m.name, source=Source.ANALYTIC_FALLBACK, status=Status.FALLBACK, reason=reason,
+                          arrays=arrays, crossings=crossings, stretch=[], verification=report,
+                          solver=solver_info if solver_info is not None else SolverStats(),
                           fine=fine)
