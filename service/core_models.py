@@ -16,7 +16,17 @@ from typing import Any, Literal, Union
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
-from ocp.optimize.result import ARRAYS, Crossing, MeshStep, SolverStats, Source, Status, Verification
+from ocp.optimize.result import (
+    ARRAYS,
+    COMPARE_CURVES,
+    COMPARE_FIGURES,
+    Crossing,
+    MeshStep,
+    SolverStats,
+    Source,
+    Status,
+    Verification,
+)
 
 #: a number in the core's JSON: finite, "inf" / "-inf" where unbounded, null where it does not exist
 Real = float | Literal["inf", "-inf"] | None
@@ -98,3 +108,33 @@ def _optimize_fields() -> dict[str, Any]:
 OptimizePublic = create_model(
     "OptimizePublic", __base__=_Open, **_optimize_fields(),
     __doc__=":meth:`ocp.optimize.result.OptimizeResult.to_dict`: the reference, who answered and how it was checked.")
+
+
+def _list_of(model: type[BaseModel]) -> Any:
+    return list[model]  # type: ignore[valid-type]
+
+
+def _compare_models() -> tuple[type[BaseModel], type[BaseModel]]:
+    row: dict[str, Any] = {"label": (str, Field(description="the shape: optimized (or fallback), sin^(2q+1)"))}
+    for name, (unit, doc) in COMPARE_FIGURES.items():
+        kind: Any = bool if name == "within_limits" else list[Real] if name == "crossing_exponents" else Real
+        loop = name.startswith("loop_")
+        row[name] = (kind | None if loop else kind,
+                     Field(default=None if loop else ..., description=f"{doc} [{unit}]" if unit else doc))
+    units = dict(zip(COMPARE_CURVES, ("s", "N", "rad/s", "A", "V"), strict=True))
+    curve: dict[str, Any] = {"label": (str, Field(description="the shape"))}
+    curve.update({k: (list[Real], Field(description=f'shape (M,) [{u}]; "inf" where unbounded'))
+                  for k, u in units.items()})
+    return (create_model("CompareRowPublic", __base__=_Open, **row),
+            create_model("CompareCurvePublic", __base__=_Open, **curve))
+
+
+CompareRowPublic, CompareCurvePublic = _compare_models()
+ComparePublic = create_model(
+    "ComparePublic", __base__=_Open,
+    mission=(str, Field(description="the mission's name")),
+    table=(_list_of(CompareRowPublic), Field(description="one row per shape")),
+    candidates=(_list_of(CompareCurvePublic), Field(description="each shape's arrays")),
+    optimized_source=(Source, Field(description="who answered the optimised candidate")),
+    optimized_reason=(str, Field(description="why the fallback answered (empty when optimised)")),
+    __doc__=":meth:`ocp.optimize.compare.CompareResult.to_dict`: optimised vs analytic shapes of one mission.")

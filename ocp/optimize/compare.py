@@ -23,6 +23,7 @@ from scipy.integrate import trapezoid
 from ocp.encoding import jsonable
 from ocp.errors import MissionError
 from ocp.optimize.mission import Mission
+from ocp.optimize.result import COMPARE_CURVES as CURVES
 from ocp.optimize.result import OptimizeResult, Source
 from ocp.optimize.solve import optimize
 from ocp.reference.analytic import PiecewiseProfile, SinReversal, reference
@@ -56,8 +57,7 @@ class CompareResult:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (:func:`ocp.encoding.jsonable`): the table (an unbounded shape's peaks and energy are ``null``)
         and every candidate's arrays (unbounded samples are ``"inf"`` / ``"-inf"``)."""
-        curves = [{"label": c.label, **{k: np.asarray(getattr(c, k), float).tolist()
-                                         for k in ("t", "thrust", "omega", "current", "voltage")}}
+        curves = [{"label": c.label, **{k: np.asarray(getattr(c, k), float) for k in CURVES}}
                   for c in self.candidates]
         return {"mission": self.mission, "table": jsonable(self.table()), "candidates": jsonable(curves),
                 "optimized_source": self.optimized.source, "optimized_reason": self.optimized.reason}

@@ -187,6 +187,25 @@ ARRAYS: dict[str, tuple[str, str]] = {
 }
 
 
+#: the comparison table's columns (:mod:`ocp.optimize.compare`) besides ``label``: unit and doc (the Section V
+#: loop's only for a voltage plant)
+COMPARE_FIGURES: dict[str, tuple[str, str]] = {
+    "duration_s": ("s", "length of the shape"),
+    "peak_current_a": ("A", "peak |current| of the ideal feedforward; null: unbounded"),
+    "peak_voltage_v": ("V", "peak |voltage| of the ideal feedforward; null: unbounded"),
+    "energy_j": ("J", "electrical energy of the ideal feedforward; null: unbounded"),
+    "thrust_rms_error_n": ("N", "RMS of the shape's thrust - the desired thrust"),
+    "crossing_exponents": ("1", "local thrust exponent g at each reversal"),
+    "within_limits": ("", "the ideal feedforward keeps the current and voltage limits"),
+    "loop_thrust_rms_n": ("N", "Section V closed loop: thrust RMS error"),
+    "loop_speed_rms_rad_s": ("rad/s", "Section V closed loop: speed RMS error"),
+    "loop_local_speed_error_rad_s": ("rad/s", "Section V closed loop: speed error around the reversals"),
+    "loop_peak_voltage_v": ("V", "Section V closed loop: peak |voltage|"),
+    "loop_peak_current_a": ("A", "Section V closed loop: peak |current|"),
+}
+COMPARE_CURVES = ("t", "thrust", "omega", "current", "voltage")  # each candidate's arrays: s, N, rad/s, A, V
+
+
 @dataclass
 class OptimizeResult:
     """A reference and how it was obtained. Arrays have shape (N,) on ``t`` [s], SI units (:data:`ARRAYS`).

@@ -11,10 +11,11 @@ from typing import Any
 import pytest
 from pydantic import BaseModel
 
+from ocp.optimize.compare import compare
 from ocp.optimize.mission import mission_from_mapping
 from ocp.optimize.solve import optimize
 from ocp.reference.fallback_answer import analytic_fallback
-from service.core_models import OptimizePublic
+from service.core_models import ComparePublic, OptimizePublic
 from service.schemas import OptimizePublic as RouteModel
 
 EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
@@ -41,8 +42,9 @@ def test_the_route_serves_the_generated_model() -> None:
     assert RouteModel is OptimizePublic
 
 
-def test_every_numeric_field_is_documented_with_its_unit() -> None:
-    schema = OptimizePublic.model_json_schema()
+@pytest.mark.parametrize("model", [OptimizePublic, ComparePublic])
+def test_every_numeric_field_is_documented_with_its_unit(model: type[BaseModel]) -> None:
+    schema = model.model_json_schema()
     missing = []
     for name, props in [("OptimizePublic", schema), *schema["$defs"].items()]:
         for field, spec in props.get("properties", {}).items():
@@ -51,7 +53,14 @@ def test_every_numeric_field_is_documented_with_its_unit() -> None:
             if numeric and "[" not in spec.get("description", ""):
                 missing.append(f"{name}.{field}")
     assert missing == []
-    assert "[N m]" in schema["$defs"]["VerificationPublic"]["properties"]["max_abs_torque"]["description"]
+
+
+def test_the_units_are_the_fields_own() -> None:
+    defs = OptimizePublic.model_json_schema()["$defs"]
+    assert "[N m]" in defs["VerificationPublic"]["properties"]["max_abs_torque"]["description"]
+    assert defs["SolverStatsPublic"]["properties"]["solve_time_s"]["description"].endswith("[s]")
+    assert "[J]" in ComparePublic.model_json_schema()["$defs"]["CompareRowPublic"]["properties"]["energy_j"][
+        "description"]
 
 
 @pytest.mark.parametrize("plant", ["dc-motor", "torque"])
@@ -69,3 +78,12 @@ def test_a_min_time_answer_matches_the_model() -> None:
     assert _undeclared(OptimizePublic, d) == []
     OptimizePublic.model_validate(d)
     assert "min_time_note" in d["verification"]
+
+
+def test_a_comparison_matches_the_model() -> None:
+    """sin^1 has an unbounded ideal command: its peaks are null; samples are numbers or "inf"/"-inf"."""
+    d = compare(mission_from_mapping(EXAMPLE), (0,)).to_dict()
+    assert _undeclared(ComparePublic, d) == []
+    ComparePublic.model_validate(d)
+    assert d["table"][1]["peak_current_a"] is None and d["table"][1]["energy_j"] is None
+    assert all(isinstance(v, float) or v in ("inf", "-inf") for v in d["candidates"][1]["current"])
