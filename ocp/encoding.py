@@ -7,8 +7,9 @@ service's answers, gallery files):
   command at a reversal it cannot make);
 * ``NaN`` -> ``null`` (no value: a quantity that does not exist for this answer).
 
-A figure that is unbounded *by definition* of its result (e.g. a comparison's peak current of a shape whose
-ideal command is unbounded) is stored as ``None`` by that result, so it reads ``null``.
+A result may decide that an unbounded quantity has no value instead: a comparison stores the peaks of a shape
+whose ideal command is unbounded as ``None`` and its unbounded samples as NaN (both ``null``: the page leaves a
+gap), while a closed-form reference keeps them (``"inf"``).
 
 Dataclasses become objects of their fields (a field with ``metadata={"json": False}`` is left out; an object
 with a ``__json__()`` method chooses its own fields), enums their values, numpy arrays lists, numpy scalars plain

@@ -123,7 +123,7 @@ def _compare_models() -> tuple[type[BaseModel], type[BaseModel]]:
                      Field(default=None if loop else ..., description=f"{doc} [{unit}]" if unit else doc))
     units = dict(zip(COMPARE_CURVES, ("s", "N", "rad/s", "A", "V"), strict=True))
     curve: dict[str, Any] = {"label": (str, Field(description="the shape"))}
-    curve.update({k: (list[Real], Field(description=f'shape (M,) [{u}]; "inf" where unbounded'))
+    curve.update({k: (list[Real], Field(description=f"shape (M,) [{u}]; null where unbounded"))
                   for k, u in units.items()})
     return (create_model("CompareRowPublic", __base__=_Open, **row),
             create_model("CompareCurvePublic", __base__=_Open, **curve))

@@ -56,11 +56,16 @@ class CompareResult:
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (:func:`ocp.encoding.jsonable`): the table (an unbounded shape's peaks and energy are ``null``)
-        and every candidate's arrays (unbounded samples are ``"inf"`` / ``"-inf"``)."""
-        curves = [{"label": c.label, **{k: np.asarray(getattr(c, k), float) for k in CURVES}}
+        and every candidate's arrays (an unbounded sample has no value: NaN, ``null``; a plot leaves a gap)."""
+        curves = [{"label": c.label, **{k: _finite_or_nan(getattr(c, k)) for k in CURVES}}
                   for c in self.candidates]
         return {"mission": self.mission, "table": jsonable(self.table()), "candidates": jsonable(curves),
                 "optimized_source": self.optimized.source, "optimized_reason": self.optimized.reason}
+
+
+def _finite_or_nan(a: np.ndarray) -> np.ndarray:
+    a = np.asarray(a, float)
+    return np.where(np.isfinite(a), a, np.nan)
 
 
 def _figures(m: Mission, c: Candidate, t_des: np.ndarray, f_des: np.ndarray, exponents: list[float],
