@@ -59,8 +59,8 @@ class CompareResult:
         and every candidate's arrays (an unbounded sample has no value: NaN, ``null``; a plot leaves a gap)."""
         curves = [{"label": c.label, **{k: _finite_or_nan(getattr(c, k)) for k in CURVES}}
                   for c in self.candidates]
-        return {"mission": self.mission, "table": jsonable(self.table()), "candidates": jsonable(curves),
-                "optimized_source": self.optimized.source, "optimized_reason": self.optimized.reason}
+        return dict(jsonable({"mission": self.mission, "table": self.table(), "candidates": curves,
+                              "optimized_source": self.optimized.source, "optimized_reason": self.optimized.reason}))
 
 
 def _finite_or_nan(a: np.ndarray) -> np.ndarray:
