@@ -31,6 +31,7 @@ from service.api.middleware import ApiKeyGate, BodyLimit
 from service.api.routes import batches, compare, health, info, model_check, page, references
 from service.api.routes import stream as stream_route
 from service.batches import BatchRunner
+from service.checkjobs import CheckJobRunner, CheckJobStore
 from service.dask_runner import DaskRunner
 from service.jobs import JobStore, StoreLocked, lock_store
 from service.settings import Settings
@@ -64,8 +65,8 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         # the analytic fallback runs in its own processes: killable, and never queued behind the solves
         fallback_pool = WorkerPool(settings.fallback_workers, settings.queue_size + settings.workers,
                                    settings.retry_after_s,
-                                   preload=("ocp.reference.analytic", "ocp.reference.fallback", "ocp.optimize.result",
-                                            "service.tasks"))
+                                   preload=("ocp.reference.analytic", "ocp.reference.fallback",
+                                            "ocp.reference.fallback_answer", "service.tasks"))
         dask = await DaskRunner.connect(settings.dask_address) if settings.dask_address else None
         runner: Runner = dask if dask is not None else pool
         logged = cast(Runner, TaskLog(runner, tasks))  # one log line per batch item, like every request's task
@@ -73,7 +74,12 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
             store, logged, tasks.batch_item, concurrency=settings.workers, timeout=settings.batch_item_timeout_s,
             attempts=settings.batch_attempts, key=tasks.batch_key, lookahead=settings.batch_lookahead,
             group_s=settings.batch_write_group_s)
+        check_jobs = None if tasks.model_check is None else CheckJobRunner(  # model checks as jobs (progress)
+            CheckJobStore(store), cast(Runner, TaskLog(pool, tasks)), tasks.model_check,
+            timeout=settings.batch_item_timeout_s, attempts=settings.batch_attempts,
+            max_pending=settings.workers + settings.queue_size, retry_after=settings.retry_after_s)
         app.state.settings, app.state.tasks, app.state.store = settings, tasks, store
+        app.state.check_jobs = check_jobs
         app.state.pool, app.state.batches, app.state.fallback_pool = pool, batch_runner, fallback_pool
         # start-up off the first requests; a fallback worker also runs one small fallback (imports, caches)
         warming = [asyncio.create_task(pool.warm()),
@@ -81,6 +87,8 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
                                        else fallback_pool.warm())]
         if batch_runner is not None:
             batch_runner.start()
+        if check_jobs is not None:
+            check_jobs.resume()
         try:
             yield
         finally:
@@ -88,6 +96,8 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
                 w.cancel()
             if batch_runner is not None:
                 await batch_runner.close()
+            if check_jobs is not None:
+                await check_jobs.close()
             if dask is not None:
                 await dask.close()
             pool.close()

@@ -76,26 +76,22 @@ def analytic_reference(payload: Payload) -> Payload:
 
 
 def optimize_mission(payload: Payload) -> Payload:
-    """Mission -> :meth:`ocp.optimize.solve.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
+    """Mission -> :meth:`ocp.optimize.result.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
     build is reported to the worker's parent (:func:`service.workers.report_phase`): it survives the deadline."""
-    from ocp.optimize import collocation
+    from ocp.optimize.collocation import SolveContext
     from service.workers import report_phase, time_left
 
-    if report_phase not in collocation.BUILD_OBSERVERS:
-        collocation.BUILD_OBSERVERS.append(report_phase)
     module = importlib.import_module("ocp.optimize.solve")
     left = time_left()  # IPOPT stops early enough to verify and answer before the worker would be killed
-    module.SOLVE_DEADLINE[0] = math.inf if left is None else time.perf_counter() + left - SOLVE_MARGIN_S
-    try:
-        return module.optimize(untrusted_mission(payload)).to_dict()
-    finally:
-        module.SOLVE_DEADLINE[0] = math.inf  # no later task (a compare) inherits this call's deadline
+    context = SolveContext(deadline=math.inf if left is None else time.perf_counter() + left - SOLVE_MARGIN_S,
+                           on_build=report_phase)
+    return module.optimize(untrusted_mission(payload), context=context).to_dict()
 
 
 def fallback_mission(payload: Payload) -> Payload:
     """``{"mission": ..., "reason": ...}`` -> the analytic fallback answer (cheap, no IPOPT; within the limits or
     :class:`~ocp.errors.InfeasibleError`)."""
-    analytic_fallback = importlib.import_module("ocp.optimize.result").analytic_fallback
+    analytic_fallback = importlib.import_module("ocp.reference.fallback_answer").analytic_fallback
     mission = untrusted_mission(payload["mission"])
     return analytic_fallback(mission, str(payload["reason"])).to_dict()
 
@@ -116,7 +112,7 @@ def structure_key(payload: Payload) -> str | None:
     Missions with one key are solved by one cached program. Validates with the untrusted rule, so a bad mission
     is refused (:class:`~ocp.errors.MissionError` naming the field) before it takes a worker; ``None`` when the
     structure cannot be told here (the worker then decides)."""
-    from ocp.optimize.solve import problem_for
+    from ocp.optimize.problem import problem_for
 
     mission = untrusted_mission(payload)
     try:
@@ -159,7 +155,7 @@ class TaskSet:
 
 def available_tasks() -> TaskSet:
     """Tasks whose core modules exist in this install (checked when the app is created)."""
-    has_opt = _has("ocp.optimize.solve", "optimize", "analytic_fallback")
+    has_opt = _has("ocp.optimize.solve", "optimize") and _has("ocp.reference.fallback_answer", "analytic_fallback")
     has_cmp = _has("ocp.optimize.compare", "compare")
     has_mc = _has("ocp.identify", "check", "diagnose", "fit")
     from service.modelcheck import model_check
