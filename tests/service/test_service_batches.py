@@ -151,7 +151,7 @@ def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path
         pool = WorkerPool(2, 0, 1, preload=("tests.service.test_service_support",))
         # every item claimed at once (lookahead): each free worker has the whole choice
         runner = BatchRunner(store, pool, slow_item, concurrency=2, timeout=60, attempts=1, key=structure_key,
-                             lookahead=len(missions), group_s=0.1)
+                             lookahead=len(missions), group_s=1.0)
         runner.start()
         try:
             end = time.monotonic() + 120
