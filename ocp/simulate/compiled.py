@@ -100,7 +100,7 @@ def _source(fn: ca.Function) -> str:
 
 
 def _key(fn: ca.Function, source: str) -> str:
-    h = hashlib.sha256("\n".join([source, " ".join(FLAGS), ca.__version__]).encode())
+    h = hashlib.sha256("\n".join([source, " ".join(FLAGS), str(ca.CasadiMeta.version())]).encode())
     return f"{fn.name()}_{h.hexdigest()[:20]}"
 
 

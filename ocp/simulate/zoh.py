@@ -57,7 +57,7 @@ def _jacobian_function(plant: Any) -> ca.Function:
     return ca.Function("rhs_jacobian", [x, u], [ca.jacobian(rhs, x)])
 
 
-def fastest_rate(plant: Plant, x0: Sequence[float], u0: float) -> float:
+def fastest_rate(plant: Plant, x0: Sequence[float] | np.ndarray, u0: float) -> float:
     """Largest |eigenvalue| [1/s] of the plant's Jacobian at ``x0`` (nx,) and at ``x0`` with the speed zero."""
     jac = _jacobian_function(cast(Hashable, plant))
     at_rest = np.array(x0, float)
@@ -66,7 +66,7 @@ def fastest_rate(plant: Plant, x0: Sequence[float], u0: float) -> float:
                                                                                           at_rest))
 
 
-def step_limit(plant: Plant, x0: Sequence[float], u0: float, max_step: float = SIM_STEP) -> float:
+def step_limit(plant: Plant, x0: Sequence[float] | np.ndarray, u0: float, max_step: float = SIM_STEP) -> float:
     """Longest step [s] (``SUBSTEPS`` RK4 sub-steps): each sub-step keeps ``|h lambda| <= RK4_STIFFNESS`` for the
     fastest eigenvalue (:func:`fastest_rate`; 2500 1/s for the paper rig's winding, a 20 uH winding makes it
     100x faster and a fixed step would diverge), and the step is at most ``max_step`` [s]."""
@@ -150,7 +150,7 @@ def simulate_held(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarray, 
     return Response(at_out=states[:, idx], t=fine, x=states, u=np.append(u, u[-1]))
 
 
-def steps_per_sample(plant: Plant, dt: float, x0: Sequence[float], u0: float, max_step: float = np.inf) -> int:
+def steps_per_sample(plant: Plant, dt: float, x0: Sequence[float] | np.ndarray, u0: float, max_step: float = np.inf) -> int:
     """Steps of :func:`step_limit` per held sample of ``dt`` [s] (uniform samples)."""
     return max(1, int(np.ceil(dt / step_limit(plant, x0, u0, max_step))))
 
