@@ -150,7 +150,8 @@ def simulate_held(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarray, 
     return Response(at_out=states[:, idx], t=fine, x=states, u=np.append(u, u[-1]))
 
 
-def steps_per_sample(plant: Plant, dt: float, x0: Sequence[float] | np.ndarray, u0: float, max_step: float = np.inf) -> int:
+def steps_per_sample(plant: Plant, dt: float, x0: Sequence[float] | np.ndarray, u0: float,
+                     max_step: float = np.inf) -> int:
     """Steps of :func:`step_limit` per held sample of ``dt`` [s] (uniform samples)."""
     return max(1, int(np.ceil(dt / step_limit(plant, x0, u0, max_step))))
 
