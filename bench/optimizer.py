@@ -10,7 +10,7 @@ profiles sampled at 200 Hz, binding current limits, ``bounded`` and ``continuous
 issue's targets; the default runs both suites side by side.
 
 For every mission of a suite, the same collocation program (states, scaling, Radau degree 3, weights
-``ocp.optimize.solve.WEIGHTS``, bounds, phases, initial guess: all taken from ``problem_for``/``problem_data``)
+``ocp.optimize.data.WEIGHTS``, bounds, phases, initial guess: all taken from ``problem_for``/``problem_data``)
 is solved three ways, interleaved so that machine noise hits all of them alike:
 
 * **thrustshape** -- ``optimize_mesh(mission)`` (one mesh; a min-time mission is not refined here): the
@@ -55,9 +55,14 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench.user_missions import USER, user_missions
 from ocp.model.plant import CASADI
 from ocp.optimize import collocation as col
+from ocp.optimize.collocation import ipopt_options, solver_options
+from ocp.optimize.data import ProblemData, problem_data
 from ocp.optimize.mission import Mission, mission_from_mapping
-from ocp.optimize.result import OptimizeResult, extract, simulate_response
-from ocp.optimize.solve import Problem, ipopt_options, optimize_mesh, problem_data, problem_for, solver_options
+from ocp.optimize.problem import Problem, problem_for
+from ocp.optimize.result import OptimizeResult
+from ocp.optimize.solution import extract
+from ocp.optimize.solve import optimize_mesh
+from ocp.optimize.verify import simulate_response
 
 # targets of issue 3 (2 s single-reversal mission for the absolute times; suite medians for ratios)
 TARGET_WARM_S = 0.030
@@ -147,14 +152,12 @@ class Unpacked:
     weights: np.ndarray
 
 
-def unpack(problem: Problem, data: dict[str, np.ndarray]) -> tuple[Unpacked, col.Layout]:
+def unpack(problem: Problem, data: ProblemData) -> tuple[Unpacked, col.Layout]:
     st = problem.structure
     nx = len(problem.plant.state_names) + st.chain
-    sl = col._param_slices(st, nx)
-    p = data["p"]
-    up = Unpacked(fd=p[sl["fd"]].reshape(st.n_phases, st.intervals * col.DEGREE), sigma=p[sl["sigma"]],
-                  dur=p[sl["dur"]], xs=p[sl["xscale"]], us=float(p[sl["uscale"]][0]), rho=p[sl["rho"]],
-                  fscale=float(p[sl["fscale"]][0]), weights=p[sl["weights"]])
+    sc = data.scales
+    up = Unpacked(fd=data.fd.reshape(st.n_phases, st.intervals * col.DEGREE), sigma=data.signs,
+                  dur=data.durations, xs=sc.x, us=sc.u, rho=data.rho, fscale=sc.f, weights=np.asarray(data.weights))
     return up, col.layout(st.n_phases, st.intervals, nx)
 
 
@@ -210,12 +213,12 @@ def _blocks_of(vec: Any, lay: col.Layout) -> tuple[Any, Any, list[list[Any]], li
 class Evaluator:
     """Objective and max constraint violation of a decision vector (thrustshape layout, scaled)."""
 
-    def __init__(self, problem: Problem, data: dict[str, np.ndarray]) -> None:
+    def __init__(self, problem: Problem, data: ProblemData) -> None:
         up, lay = unpack(problem, data)
         x = ca.SX.sym("x", lay.n)
         f, g = transcribe(problem, up, *_blocks_of(x, lay))
         self.fn = ca.Function("fg", [x], [f, g])
-        self.lbx, self.ubx = data["lbx"], data["ubx"]
+        self.lbx, self.ubx = data.lbx, data.ubx
 
     def __call__(self, x: np.ndarray) -> tuple[float, float]:
         f, g = self.fn(x)
@@ -225,7 +228,7 @@ class Evaluator:
         return float(f), viol
 
 
-def replay_peak(problem: Problem, prog: col.Program, data: dict[str, np.ndarray], x: np.ndarray) -> float:
+def replay_peak(problem: Problem, prog: col.Program, data: ProblemData, x: np.ndarray) -> float:
     """max |current| / current limit of the plant's response to the command of decision vector ``x`` on
     the integration grid, between the nodes (the same check thrustshape applies to its own answers)."""
     sol = extract(problem, prog, x, data)
@@ -280,7 +283,7 @@ def solve_opti(mission: Mission) -> Run:
     opti.subject_to(g == 0)
     xvec = ca.vertcat(stretch, x0, *[ca.vertcat(ca.vec(xc[j][k]), u[j][k]) for j in range(st.n_phases)
                                      for k in range(st.intervals)])
-    lb, ub = data["lbx"], data["ubx"]
+    lb, ub = data.lbx, data.ubx
     eq = np.flatnonzero(lb == ub)
     both = np.flatnonzero(np.isfinite(lb) & np.isfinite(ub) & (lb < ub))
     lo = np.flatnonzero(np.isfinite(lb) & ~np.isfinite(ub))
@@ -293,7 +296,7 @@ def solve_opti(mission: Mission) -> Run:
         opti.subject_to(xvec[lo.tolist()] >= lb[lo])
     if hi.size:
         opti.subject_to(xvec[hi.tolist()] <= ub[hi])
-    guess = data["x0"]
+    guess = data.x0
     opti.set_initial(stretch, guess[lay.stretch])
     opti.set_initial(x0, guess[lay.x0])
     for j in range(st.n_phases):
@@ -367,7 +370,7 @@ def solve_rockit(mission: Mission) -> Run:
     npx = len(plant.state_names)
     nx = npx + st.chain
     P, N, D = st.n_phases, st.intervals, col.DEGREE
-    lb, ub, guess = data["lbx"], data["ubx"], data["x0"]
+    lb, ub, guess = data.lbx, data.ubx, data.x0
     w_track, w_time, w_stretch, w_smooth, w_effort = (float(w) for w in up.weights)
     total = float(np.sum(up.dur))
     n_u = P * N
@@ -516,7 +519,9 @@ def bench_mission(spec: dict[str, Any], repeats: int, log: Callable[[str], None]
     opti_run = rockit_run = None
     for _ in range(repeats):
         cold = optimize_mesh(mission, warm=False)
-        ts_x = prog.last["x"].copy()
+        last = prog.last_solution
+        assert last is not None
+        ts_x = last
         times["cold_ipopt"].append(cold.solve_time_s)
         times["cold_solution"].append(solution_time(cold))
         times["cold_total"].append(cold.total_time_s)

@@ -64,8 +64,8 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         # the analytic fallback runs in its own processes: killable, and never queued behind the solves
         fallback_pool = WorkerPool(settings.fallback_workers, settings.queue_size + settings.workers,
                                    settings.retry_after_s,
-                                   preload=("ocp.reference.analytic", "ocp.reference.fallback", "ocp.optimize.result",
-                                            "service.tasks"))
+                                   preload=("ocp.reference.analytic", "ocp.reference.fallback",
+                                            "ocp.reference.fallback_answer", "service.tasks"))
         dask = await DaskRunner.connect(settings.dask_address) if settings.dask_address else None
         runner: Runner = dask if dask is not None else pool
         logged = cast(Runner, TaskLog(runner, tasks))  # one log line per batch item, like every request's task

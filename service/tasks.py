@@ -62,19 +62,15 @@ def analytic_reference(payload: Payload) -> Payload:
 def optimize_mission(payload: Payload) -> Payload:
     """Mission -> :meth:`ocp.optimize.solve.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
     build is reported to the worker's parent (:func:`service.workers.report_phase`): it survives the deadline."""
-    from ocp.optimize import collocation
+    from ocp.optimize.collocation import SolveContext
     from ocp.optimize.mission import Mission
     from service.workers import report_phase, time_left
 
-    if report_phase not in collocation.BUILD_OBSERVERS:
-        collocation.BUILD_OBSERVERS.append(report_phase)
     module = importlib.import_module("ocp.optimize.solve")
     left = time_left()  # IPOPT stops early enough to verify and answer before the worker would be killed
-    module.SOLVE_DEADLINE[0] = math.inf if left is None else time.perf_counter() + left - SOLVE_MARGIN_S
-    try:
-        return module.optimize(Mission.model_validate(payload)).to_dict()
-    finally:
-        module.SOLVE_DEADLINE[0] = math.inf  # no later task (a compare) inherits this call's deadline
+    context = SolveContext(deadline=math.inf if left is None else time.perf_counter() + left - SOLVE_MARGIN_S,
+                           on_build=report_phase)
+    return module.optimize(Mission.model_validate(payload), context=context).to_dict()
 
 
 def fallback_mission(payload: Payload) -> Payload:
@@ -82,7 +78,7 @@ def fallback_mission(payload: Payload) -> Payload:
     :class:`~ocp.errors.InfeasibleError`)."""
     from ocp.optimize.mission import Mission
 
-    analytic_fallback = importlib.import_module("ocp.optimize.result").analytic_fallback
+    analytic_fallback = importlib.import_module("ocp.reference.fallback_answer").analytic_fallback
     mission = Mission.model_validate(payload["mission"])
     return analytic_fallback(mission, str(payload["reason"])).to_dict()
 
@@ -126,7 +122,7 @@ class TaskSet:
 
 def available_tasks() -> TaskSet:
     """Tasks whose core modules exist in this install (checked when the app is created)."""
-    has_opt = _has("ocp.optimize.solve", "optimize", "analytic_fallback")
+    has_opt = _has("ocp.optimize.solve", "optimize") and _has("ocp.reference.fallback_answer", "analytic_fallback")
     has_cmp = _has("ocp.optimize.compare", "compare")
     has_mc = _has("ocp.identify", "check", "diagnose", "fit")
     from service.modelcheck import model_check

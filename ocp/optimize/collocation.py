@@ -15,14 +15,21 @@ Everything that changes between calls is data: parameters (desired thrust, signs
 weights) and variable bounds (limits, sign constraints, boundary and crossing conditions). The NLP
 depends only on :class:`Structure`, and one solver per structure is cached (:func:`solver_for`).
 All decision variables are scaled to O(1) by per-call scale parameters.
+
+The :class:`Program` owns its parameter layout (:meth:`Program.pack` checks named parts against the
+builder's slices), its lock, its warm-start memory and its wall-time stop (:meth:`Program.solve`); a
+caller's limits of one call (deadline, build observer) come in a :class:`SolveContext`.
 """
 
 from __future__ import annotations
 
+import math
 import threading
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -94,9 +101,98 @@ class Layout:
     n: int
 
 
+#: IPOPT's own wall-time cap [s]: a backstop equal to the largest ``time_limit_s``; a call's own limit is
+#: enforced by the program's :class:`_Deadline`, so one built solver serves every time limit
+MAX_WALL_TIME_S = 600.0
+
+
+def ipopt_options(time_limit: float | None = None) -> dict[str, object]:
+    """IPOPT options; ``time_limit`` [s] sets ``max_wall_time`` (fixed when the solver is built, so the cached
+    solvers leave it at :data:`MAX_WALL_TIME_S` and stop at the call's limit through :class:`_Deadline`)."""
+    return {
+        "ipopt.print_level": 0, "print_time": False, "ipopt.sb": "yes",
+        "ipopt.tol": 1e-7, "ipopt.acceptable_tol": 1e-4, "ipopt.acceptable_iter": 5,
+        "ipopt.max_iter": 1000, "ipopt.max_wall_time": float(time_limit or MAX_WALL_TIME_S),
+        "ipopt.mu_strategy": "adaptive", "ipopt.linear_solver": "mumps",
+    }
+
+
+def solver_options() -> dict[str, object]:
+    """Options of the cached collocation solvers (the cache key :func:`ocp.optimize.solve.optimize` uses): the
+    wall-time limit is not among them (see :class:`_Deadline`)."""
+    return ipopt_options()
+
+
+@dataclass(frozen=True)
+class SolveContext:
+    """What a caller imposes on one call beyond the mission (a service worker's, say).
+
+    Attributes:
+        deadline: ``time.perf_counter()`` time [s] past which IPOPT stops whatever the mission's time limit (a
+            worker sets it before its process would be killed); inf: none
+        on_build: called with ``"build"`` before a program is built and ``"built"`` once it is cached (a worker
+            tells its parent, which then keeps a build that outlives a request's deadline)
+    """
+
+    deadline: float = math.inf
+    on_build: Callable[[str], None] | None = None
+
+
+class _Deadline(ca.Callback):
+    """IPOPT iteration callback that asks IPOPT to stop (``User_Requested_Stop``) once ``perf_counter()``
+    passes ``until`` [s]. Its inputs are empty (0x0): no iterate is copied. One per program, set under its lock,
+    so the solver cache is not keyed by the time limit."""
+
+    def __init__(self) -> None:
+        ca.Callback.__init__(self)
+        self.until = math.inf
+        self.construct("deadline", {})
+
+    def get_n_in(self) -> int:
+        return int(ca.nlpsol_n_out())
+
+    def get_n_out(self) -> int:
+        return 1
+
+    def get_name_in(self, i: int) -> str:
+        return str(ca.nlpsol_out(i))
+
+    def get_name_out(self, i: int) -> str:
+        return "stop"
+
+    def get_sparsity_in(self, i: int) -> ca.Sparsity:
+        return ca.Sparsity(0, 0)
+
+    def eval(self, arg: Any) -> list[float]:
+        return [1.0 if time.perf_counter() > self.until else 0.0]
+
+
+@dataclass(frozen=True)
+class Solved:
+    """One IPOPT run of a program.
+
+    Attributes:
+        x: decision vector (scaled), shape (layout.n,)
+        status: IPOPT return status
+        success: IPOPT succeeded or stopped at its acceptable level
+        iterations: IPOPT iterations
+        objective: objective value [1]
+        constraint_violation: largest |g| of the (scaled) collocation residuals
+        solve_time_s: wall time of the run [s]
+    """
+
+    x: np.ndarray
+    status: str
+    success: bool
+    iterations: int
+    objective: float
+    constraint_violation: float
+    solve_time_s: float
+
+
 @dataclass
 class Program:
-    """A built NLP with its solver, layout and a warm-start memory."""
+    """A built NLP with its solver, layout, a warm-start memory, a lock and a wall-time stop."""
 
     structure: Structure
     nx: int
@@ -105,12 +201,64 @@ class Program:
     layout: Layout
     n_params: int
     n_g: int
-    last: dict[str, np.ndarray] = field(default_factory=dict)
-    lock: threading.Lock = field(default_factory=threading.Lock)
+    deadline: _Deadline = field(repr=False)
+    _last: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     @cached_property
     def param_slices(self) -> dict[str, slice]:
         return _param_slices(self.structure, self.nx)
+
+    def pack(self, **named: np.ndarray | float | tuple[float, ...]) -> np.ndarray:
+        """The parameter vector from its named parts (the keys of :attr:`param_slices`: fd, sigma, dur, xscale,
+        uscale, rho, fscale, weights), each checked against the builder's slice; shape (n_params,)."""
+        slices = self.param_slices
+        if set(named) != set(slices):
+            raise ValueError(f"pack needs exactly {sorted(slices)}; got {sorted(named)}")
+        p = np.empty(self.n_params)
+        for name, sl in slices.items():
+            part = np.ravel(np.asarray(named[name], float))
+            if part.size != sl.stop - sl.start:
+                raise ValueError(f"parameter {name!r} has {part.size} values; the program takes {sl.stop - sl.start}")
+            p[sl] = part
+        return p
+
+    @property
+    def last_solution(self) -> np.ndarray | None:
+        """A copy of the decision vector of the last solve (scaled), None before the first (benchmarks)."""
+        with self._lock:
+            return self._last["x"].copy() if "x" in self._last else None
+
+    def unpack(self, p: np.ndarray) -> dict[str, np.ndarray]:
+        """The named parts of a parameter vector (views), the inverse of :meth:`pack`."""
+        return {name: p[sl] for name, sl in self.param_slices.items()}
+
+    def solve(self, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray, warm: bool = False,
+              until: float = math.inf) -> Solved:
+        """One IPOPT run from ``x0`` (or, ``warm``, from this program's last solution and multipliers, clipped
+        into the bounds), stopped once ``perf_counter()`` passes ``until`` [s]. Thread-safe."""
+        args: dict[str, Any] = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": 0.0, "ubg": 0.0}
+        with self._lock:
+            if warm and "x" in self._last and self._last["x"].size == x0.size:
+                args["x0"] = np.clip(self._last["x"], lbx, ubx)
+                args["lam_x0"], args["lam_g0"] = self._last["lam_x"], self._last["lam_g"]
+            t0 = time.perf_counter()
+            self.deadline.until = until
+            try:
+                sol = self.solver(**args)
+            finally:
+                self.deadline.until = math.inf
+            solve_time = time.perf_counter() - t0
+            stats = self.solver.stats()
+            x = np.asarray(sol["x"]).ravel()
+            self._last = {"x": x, "lam_x": np.asarray(sol["lam_x"]).ravel(),
+                          "lam_g": np.asarray(sol["lam_g"]).ravel()}
+        status = str(stats.get("return_status", "unknown"))
+        return Solved(x=x, status=status,
+                      success=bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level",
+                      iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]),
+                      constraint_violation=float(np.max(np.abs(np.asarray(sol["g"])))) if self.n_g else 0.0,
+                      solve_time_s=solve_time)
 
 
 def _param_slices(st: Structure, nx: int) -> dict[str, slice]:
@@ -180,10 +328,11 @@ def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Prog
         for k in range(N):
             xs_list += [ca.vec(xc[j][k]), u[j][k]]
     xvec = ca.vertcat(*xs_list)
+    deadline = _Deadline()
     solver = ca.nlpsol("collocation", "ipopt", {"x": xvec, "f": obj, "g": ca.vertcat(*g), "p": par},
-                       dict(ipopt_options))  # type: ignore[arg-type]
+                       {**ipopt_options, "iteration_callback": deadline})  # type: ignore[dict-item]
     return Program(structure=st, nx=nx, n_plant_states=npx, solver=solver, layout=layout(P, N, nx),
-                   n_params=n_par, n_g=int(ca.vertcat(*g).numel()))
+                   n_params=n_par, n_g=int(ca.vertcat(*g).numel()), deadline=deadline)
 
 
 def _interval_function(plant: Plant, st: Structure, nx: int, npx: int) -> ca.Function:
@@ -230,28 +379,27 @@ def layout(P: int, N: int, nx: int) -> Layout:
 _CACHE: dict[tuple[Structure, tuple[tuple[str, object], ...]], Program] = {}
 _CACHE_LOCK = threading.Lock()
 CACHE_SIZE = 8  # built programs kept per process (tens of MB each), least recently used evicted
-#: called with "build" before a program is built and "built" once it is cached (a service worker tells its
-#: parent, which then keeps a build that outlives a request's deadline instead of killing it)
-BUILD_OBSERVERS: list[Callable[[str], None]] = []
 
 
-def solver_for(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Program:
-    """The cached :class:`Program` for this structure and options (built on first use; LRU of CACHE_SIZE)."""
+def solver_for(plant: Plant, st: Structure, ipopt_options: dict[str, object],
+               on_build: Callable[[str], None] | None = None) -> Program:
+    """The cached :class:`Program` for this structure and options (built on first use; LRU of CACHE_SIZE);
+    ``on_build`` (:attr:`SolveContext.on_build`) hears of a build."""
     key = (st, tuple(sorted((k, str(v)) for k, v in ipopt_options.items())))
     with _CACHE_LOCK:
         prog = _CACHE.pop(key, None)
         if prog is not None:
             _CACHE[key] = prog  # most recently used last
     if prog is None:
-        for observe in BUILD_OBSERVERS:
-            observe("build")
+        if on_build is not None:
+            on_build("build")
         prog = build(plant, st, ipopt_options)
         with _CACHE_LOCK:
             while len(_CACHE) >= CACHE_SIZE:
                 _CACHE.pop(next(iter(_CACHE)))
             _CACHE[key] = prog
-        for observe in BUILD_OBSERVERS:
-            observe("built")
+        if on_build is not None:
+            on_build("built")
     return prog
 
 

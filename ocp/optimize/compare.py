@@ -24,8 +24,9 @@ from scipy.integrate import trapezoid
 from ocp.errors import MissionError
 from ocp.model.plant import DCMotorPlant
 from ocp.optimize.mission import Mission
+from ocp.optimize.problem import make_plant
 from ocp.optimize.result import OptimizeResult, json_ready
-from ocp.optimize.solve import make_plant, optimize
+from ocp.optimize.solve import optimize
 from ocp.reference.analytic import PiecewiseProfile, SinReversal, reference
 from ocp.simulate.closed_loop import track
 from ocp.theory.crossings import sign_change_times

@@ -1,7 +1,7 @@
 """Minimum-time answers that converge with the mesh: solve, double the intervals, warm-start, repeat.
 
 A min-time solve (``objective: "min-time"``) minimises the duration: no effort term, and a smoothness
-term of weight :data:`ocp.optimize.solve.MIN_TIME_SMOOTHING` = 1e-10 that only conditions IPOPT (it moves the
+term of weight :data:`ocp.optimize.data.MIN_TIME_SMOOTHING` = 1e-10 that only conditions IPOPT (it moves the
 duration by less than 1e-5 of it, within IPOPT's own precision, tested against the same solve without it),
 so the optimum is the discretised minimum time. That value still depends on the mesh: a jump of the
 optimal voltage (at the start, onto and off the current limit, at a reversal) takes about one collocation
@@ -25,16 +25,15 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ocp.optimize import collocation as col
+from ocp.optimize.data import ProblemData
 from ocp.optimize.mission import MAX_INTERVALS, Collocation, Mission
+from ocp.optimize.problem import Problem
 from ocp.optimize.result import OptimizeResult
-
-if TYPE_CHECKING:
-    from ocp.optimize.solve import Problem
 
 #: stop refining when one doubling changes the minimum time by less than this share of it
 RTOL = 5e-3
@@ -113,16 +112,16 @@ def summary(result: OptimizeResult, history: list[tuple[int, float]], note: str,
             "min_time_note": note, "analytic_min_time_s": analytic_min_time}
 
 
-def mesh_guess(problem: Problem, data: dict[str, np.ndarray], previous: OptimizeResult) -> np.ndarray:
+def mesh_guess(problem: Problem, data: ProblemData, previous: OptimizeResult) -> np.ndarray:
     """Initial guess for ``problem``'s program from a coarser answer ``previous`` (scaled, clipped into the
     bounds): its phase stretches, and its simulated speed, current and input (``previous.fine``)
     interpolated at the new collocation points at the same share of each phase; states it does not
-    carry (effect states) keep ``data["x0"]``'s guess."""
-    st, lay = problem.structure, col.layout(problem.structure.n_phases, problem.structure.intervals,
-                                            data["xscale"].size)
-    P, N, chain, xs = st.n_phases, st.intervals, st.chain, data["xscale"]
+    carry (effect states) keep ``data.x0``'s guess."""
+    xs = data.scales.x
+    st, lay = problem.structure, col.layout(problem.structure.n_phases, problem.structure.intervals, xs.size)
+    P, N, chain = st.n_phases, st.intervals, st.chain
     npx = len(problem.plant.state_names)
-    guess = data["x0"].copy()
+    guess = data.x0.copy()
     stretch = np.asarray(previous.stretch, float)
     if stretch.size != P:
         return guess
@@ -144,5 +143,5 @@ def mesh_guess(problem: Problem, data: dict[str, np.ndarray], previous: Optimize
     for c in range(chain):
         guess[lay.xc[:, :, :, npx + c]] = np.interp(t, fine["t"], chain_values[c]) / xs[npx + c]
     mid = (edges[:-1, None] + (np.arange(N)[None, :] + 0.5) / N * h[:, None])  # (P, N) interval middles
-    guess[lay.u[:, :, 0]] = np.interp(mid, fine["t"], chain_values[chain]) / float(data["uscale"][0])
-    return np.clip(guess, data["lbx"], data["ubx"])
+    guess[lay.u[:, :, 0]] = np.interp(mid, fine["t"], chain_values[chain]) / data.scales.u
+    return np.clip(guess, data.lbx, data.ubx)

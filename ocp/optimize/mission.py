@@ -286,6 +286,15 @@ class Mission(_Strict):
         return self._desired[1], self._desired[2]
 
 
+def output_grid(total: float) -> np.ndarray:
+    """Output times [s] at OUTPUT_RATE over ``total``; a horizon over MAX_OUTPUT_S (a min-time solve's
+    free horizon) is refused rather than sampled."""
+    if not total <= MAX_OUTPUT_S:
+        raise MissionError("retiming", f"the reference would last {total:.4g} s; at most {MAX_OUTPUT_S:g} s")
+    n = max(2, math.ceil(total * OUTPUT_RATE) + 1)
+    return np.linspace(0.0, total, n)
+
+
 def segment_samples(segments: list[Segment], rate: float = SEGMENT_RATE) -> int:
     """How many samples :func:`sample_segments` makes of ``segments`` (without making them)."""
     return 1 + sum(max(2, math.ceil(seg.duration * rate)) for seg in segments)
