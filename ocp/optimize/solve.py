@@ -35,8 +35,12 @@ MAX_REFINEMENTS = 3  # back-off rounds when the simulated response exceeds a lim
 NO_CONTEXT = SolveContext()
 
 
-def optimize(mission: Mission, warm: bool = False, context: SolveContext = NO_CONTEXT) -> OptimizeResult:
+def optimize(mission: Mission, warm: bool | None = None, context: SolveContext = NO_CONTEXT) -> OptimizeResult:
     """Optimised reference for ``mission`` (or the analytic fallback with the reason).
+
+    ``warm``: start from the cached program's last solution (primal and dual) when it is plausibly close
+    (``None``, the default: batch items and repeated requests of one structure, :mod:`ocp.optimize.warm`),
+    always when its size fits (``True``), or never (``False``: cold, from the static inverse).
 
     A min-time mission is solved on successively doubled meshes until its duration converges
     (:func:`ocp.optimize.min_time.refine`); any other mission on its own mesh (:func:`optimize_mesh`).
@@ -56,7 +60,7 @@ def _mesh_size(mission: Mission) -> int:
     return st.intervals * st.n_phases
 
 
-def optimize_mesh(mission: Mission, warm: bool = False, previous: OptimizeResult | None = None,
+def optimize_mesh(mission: Mission, warm: bool | None = None, previous: OptimizeResult | None = None,
                   context: SolveContext = NO_CONTEXT) -> OptimizeResult:
     """Optimised reference for ``mission`` on its own mesh (or the analytic fallback with the reason);
     ``previous``: a coarser answer of the same mission to start from (min-time refinement).
@@ -75,7 +79,7 @@ def optimize_mesh(mission: Mission, warm: bool = False, previous: OptimizeResult
     return result
 
 
-def _optimize_mesh(mission: Mission, warm: bool, previous: OptimizeResult | None, context: SolveContext,
+def _optimize_mesh(mission: Mission, warm: bool | None, previous: OptimizeResult | None, context: SolveContext,
                    started: float) -> OptimizeResult | Unsolved:
     problem = problem_for(mission)
     try:
@@ -87,7 +91,7 @@ def _optimize_mesh(mission: Mission, warm: bool, previous: OptimizeResult | None
     if previous is not None:  # min-time refinement: start from the coarser mesh's answer
         data = dataclasses.replace(data, x0=min_time.mesh_guess(problem, data, previous))
     setup = time.perf_counter() - started
-    result = solve_problem(problem, data, warm and previous is None, context=context)
+    result = solve_problem(problem, data, False if previous is not None else warm, context=context)
     build = result.solver.get("build_time_s", 0)
     totals = {k: result.solver.get(k, 0) for k in ("solve_time_s", "verify_time_s", "iterations")}
     backoff, rounds = np.ones((problem.structure.n_phases, problem.structure.intervals)), 0
@@ -139,7 +143,7 @@ def _interval_excess(problem: Problem, result: OptimizeResult) -> np.ndarray:
     return np.maximum(np.maximum(padded[:-2], padded[1:-1]), padded[2:]).reshape(P, N)
 
 
-def solve_problem(problem: Problem, data: ProblemData, warm: bool, time_limit: float | None = None,
+def solve_problem(problem: Problem, data: ProblemData, warm: bool | None, time_limit: float | None = None,
                   context: SolveContext = NO_CONTEXT) -> OptimizeResult | Unsolved:
     """Solve the cached program; IPOPT stops after ``time_limit`` [s] of solving (default the mission's
     ``time_limit_s``; building the program is not counted, as with IPOPT's own ``max_wall_time``) or at the
@@ -150,8 +154,10 @@ def solve_problem(problem: Problem, data: ProblemData, warm: bool, time_limit: f
     build_time = time.perf_counter() - build_start
     budget = m.time_limit_s if time_limit is None else time_limit
     p = prog.pack(**data.params())
-    run = prog.solve(p, data.lbx, data.ubx, data.x0, warm, min(time.perf_counter() + budget, context.deadline))
+    run = prog.solve(p, data.lbx, data.ubx, data.x0, warm, min(time.perf_counter() + budget, context.deadline),
+                     data.path_bound)
     solver_info = {"status": run.status, "iterations": run.iterations, "solve_time_s": run.solve_time_s,
+                   "warm_start": run.warm,
                    "build_time_s": build_time, "objective": run.objective,
                    "constraint_violation": run.constraint_violation}
     if not run.success:
