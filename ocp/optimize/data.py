@@ -151,9 +151,10 @@ def problem_data(problem: Problem, backoff: float | np.ndarray = 1.0,
     x0 = initial_guess(problem, lay, x0, fd * sc.f, sc.x, sc.u, chain, lbx, ubx)
     if analytic_start and m.objective == "min-time" and P > 1:
         x0 = analytic_guess(problem, lay, x0, sc, lbx, ubx)
+    margin = 0.0 if m.objective == "min-time" else path_limits.PATH_MARGIN
+    path_bound = path_limits.path_bounds(np.broadcast_to(np.asarray(backoff, float), (P, N)), margin)
     return ProblemData(fd=fd, signs=problem.phases.signs, durations=dur, scales=sc, rho=rho,
-                       weights=WEIGHTS[m.objective], lbx=lbx, ubx=ubx, x0=x0,
-                       path_bound=path_limits.path_bounds(np.broadcast_to(np.asarray(backoff, float), (P, N))))
+                       weights=WEIGHTS[m.objective], lbx=lbx, ubx=ubx, x0=x0, path_bound=path_bound)
 
 
 def _residual_scaling(plant: Plant, xscale: np.ndarray, u_nom: float, N: int, d_nom: float, npx: int,
