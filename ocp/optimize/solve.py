@@ -35,12 +35,13 @@ MAX_REFINEMENTS = 3  # back-off rounds when the simulated response exceeds a lim
 NO_CONTEXT = SolveContext()
 
 
-def optimize(mission: Mission, warm: bool | None = None, context: SolveContext = NO_CONTEXT) -> OptimizeResult:
+def optimize(mission: Mission, warm: bool | None = False, context: SolveContext = NO_CONTEXT) -> OptimizeResult:
     """Optimised reference for ``mission`` (or the analytic fallback with the reason).
 
-    ``warm``: start from the cached program's last solution (primal and dual) when it is plausibly close
-    (``None``, the default: batch items and repeated requests of one structure, :mod:`ocp.optimize.warm`),
-    always when its size fits (``True``), or never (``False``: cold, from the static inverse).
+    ``warm``: start from the cached program's last solution (primal and dual) never (``False``, the default:
+    cold, from the static inverse), when it is plausibly close (``None``: what the service's workers ask, so
+    batch items and repeated requests of one structure start warm, :mod:`ocp.optimize.warm`), or always when
+    its size fits (``True``).
 
     A min-time mission is solved on successively doubled meshes until its duration converges
     (:func:`ocp.optimize.min_time.refine`); any other mission on its own mesh (:func:`optimize_mesh`).
@@ -60,7 +61,7 @@ def _mesh_size(mission: Mission) -> int:
     return st.intervals * st.n_phases
 
 
-def optimize_mesh(mission: Mission, warm: bool | None = None, previous: OptimizeResult | None = None,
+def optimize_mesh(mission: Mission, warm: bool | None = False, previous: OptimizeResult | None = None,
                   context: SolveContext = NO_CONTEXT) -> OptimizeResult:
     """Optimised reference for ``mission`` on its own mesh (or the analytic fallback with the reason);
     ``previous``: a coarser answer of the same mission to start from (min-time refinement).
@@ -110,6 +111,7 @@ def _optimize_mesh(mission: Mission, warm: bool | None, previous: OptimizeResult
         left = max(mission.time_limit_s - totals["solve_time_s"], 1e-3)
         result = solve_problem(problem, data, warm=mission.objective != "min-time", time_limit=left, context=context)
         rounds += 1
+        build += result.solver.get("build_time_s", 0)  # the warm solver is built on its first use
         for k in totals:
             totals[k] += result.solver.get(k, 0)
     # the report covers every round: times and iterations add up, the build happened in the first
@@ -158,7 +160,7 @@ def solve_problem(problem: Problem, data: ProblemData, warm: bool | None, time_l
                      data.path_bound)
     solver_info = {"status": run.status, "iterations": run.iterations, "solve_time_s": run.solve_time_s,
                    "warm_start": run.warm,
-                   "build_time_s": build_time, "objective": run.objective,
+                   "build_time_s": build_time + run.warm_build_s, "objective": run.objective,
                    "constraint_violation": run.constraint_violation}
     if not run.success:
         stopped = "Wall" in run.status or "CPU" in run.status or run.status == "User_Requested_Stop"

@@ -70,12 +70,12 @@ def test_a_repeated_request_starts_warm_and_lands_on_the_cold_answer() -> None:
             if key in seg:
                 seg[key] *= -1.0
     cold = optimize(base, warm=False)
-    near = optimize(mission_from_mapping(scaled))
-    again = optimize(base)
+    near = optimize(mission_from_mapping(scaled), warm=None)  # warm=None: what the service's workers ask
+    again = optimize(base, warm=None)
     assert not cold.solver["warm_start"] and near.solver["warm_start"] and again.solver["warm_start"]
     assert again.source == cold.source == "optimized"
     f_cold = cold.solver["objective"]
     assert f_cold * (1.0 - 1e-3) <= again.solver["objective"] <= f_cold * (1.0 + 1e-6)
-    far = optimize(mission_from_mapping(mirrored))
+    far = optimize(mission_from_mapping(mirrored), warm=None)
     assert not far.solver["warm_start"]
     assert far.source == "optimized" and math.isclose(far.solver["objective"], cold.solver["objective"], rel_tol=1e-3)
