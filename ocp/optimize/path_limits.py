@@ -48,11 +48,13 @@ def _basis(nodes: np.ndarray, tau: Any) -> list[Any]:
 
 
 def applies(plant: Plant, chain: int) -> bool:
-    """Whether the program bounds the current inside its intervals: a plant with a winding (the DC motor) under a
-    held voltage (``chain == 0``). A continuous voltage (``chain >= 1``) has no jumps, hence no transients
-    between the nodes; there the extra inequalities bought nothing and made IPOPT's path erratic (the
-    continuous-voltage reversal took 34 to 271 iterations depending on bounds that never became active)."""
-    return isinstance(plant, DCMotorPlant) and chain == 0
+    """Whether the program bounds the current inside its intervals: the plain DC motor (no effects: an effect
+    may change the voltage that reaches the winding, a delay or a deadband, which this closed form does not
+    know; such plants keep the back-off rounds) under a held voltage (``chain == 0``). A continuous voltage
+    (``chain >= 1``) has no jumps, hence no transients between the nodes; there the extra inequalities bought
+    nothing and made IPOPT's path erratic (the continuous-voltage reversal took 34 to 271 iterations depending
+    on bounds that never became active)."""
+    return isinstance(plant, DCMotorPlant) and not plant.effects and chain == 0
 
 
 def current_terms(plant: Plant, nodes: np.ndarray, chain: int, npx: int, pts: ca.SX, uk: ca.SX, xs: ca.SX,
