@@ -181,8 +181,7 @@ class Solved:
         objective: objective value [1]
         constraint_violation: largest |g| of the (scaled) collocation residuals
         solve_time_s: wall time of the run [s]
-        warm: started from the program's last solution (the warm solver)
-        warm_build_s: time [s] spent building the warm solver in this call (its first warm start), else ~0
+        warm, warm_build_s: started from the program's last solution; time [s] spent building the warm solver
     """
 
     x: np.ndarray
@@ -198,11 +197,9 @@ class Solved:
 
 @dataclass
 class Program:
-    """A built NLP with its solvers (cold, and warm once a warm start is used: :mod:`ocp.optimize.warm`), layout,
-    a warm-start memory, a lock and a wall-time stop.
-
-    The constraints are the collocation residuals (``n_g``, equalities) followed by the current inside each
-    interval (``n_path``, bounded by :func:`ocp.optimize.path_limits.path_bounds`; 0 without a winding)."""
+    """A built NLP with its solvers (cold; warm, built on a warm start: :mod:`ocp.optimize.warm`), layout, a
+    warm-start memory, a lock and a wall-time stop. Constraints: the collocation residuals (``n_g``, equalities),
+    then the current inside each interval (``n_path``, :func:`ocp.optimize.path_limits.path_bounds`)."""
 
     structure: Structure
     nx: int
@@ -215,6 +212,7 @@ class Program:
     n_path: int = 0
     nlp: dict[str, ca.SX] = field(default_factory=dict, repr=False)  # for the warm solver's build
     ipopt_options: dict[str, object] = field(default_factory=dict, repr=False)
+    build_s: float = 0.0  # time the cold solver took to build [s]
     warm_solver: ca.Function | None = field(default=None, repr=False)
     _last: warm_.Memory | None = field(default=None, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
@@ -247,8 +245,11 @@ class Program:
         """The named parts of a parameter vector (views), the inverse of :meth:`pack`."""
         return {name: p[sl] for name, sl in self.param_slices.items()}
 
-    def _warm_solver(self) -> ca.Function:
-        """The warm solver, built on first use (under the lock)."""
+    def _warm_solver(self, until: float) -> ca.Function:
+        """The warm solver, built on first use (under the lock) if the call's stop ``until`` leaves room for three
+        cold builds (``build_s``); else, until a roomier call builds it, the cold solver."""
+        if self.warm_solver is None and until - time.perf_counter() < 3.0 * self.build_s:
+            return self.solver
         if self.warm_solver is None:
             self.warm_solver = ca.nlpsol("collocation_warm", "ipopt", self.nlp,
                                          {**self.ipopt_options, **warm_.WARM_OPTIONS,  # type: ignore[dict-item]
@@ -261,10 +262,8 @@ class Program:
         bounds; the warm solver) when ``warm`` is True or, ``None``, when the last solve is plausibly close;
         stopped once ``perf_counter()`` passes ``until`` [s]. ``path_bound``: bounds of the in-interval current
         (|i| / limit, shape (n_path,); default 1). Thread-safe."""
-        lbg, ubg = np.zeros(self.n_g + self.n_path), np.zeros(self.n_g + self.n_path)
-        if self.n_path:
-            bound = np.ones(self.n_path) if path_bound is None else path_bound
-            lbg[self.n_g:], ubg[self.n_g:] = -bound, bound
+        bound = np.ones(self.n_path) if path_bound is None or not self.n_path else path_bound
+        lbg, ubg = np.concatenate([np.zeros(self.n_g), -bound]), np.concatenate([np.zeros(self.n_g), bound])
         args: dict[str, Any] = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
         with self._lock:
             solver, t_lock = self.solver, time.perf_counter()
@@ -272,7 +271,7 @@ class Program:
             if started_warm and self._last is not None:
                 args["x0"] = np.clip(self._last.x, lbx, ubx)
                 args["lam_x0"], args["lam_g0"] = self._last.lam_x, self._last.lam_g
-                solver = self._warm_solver()  # built on first use: its time is reported apart
+                solver = self._warm_solver(until)  # built on first use: its time is reported apart
             t0 = time.perf_counter()
             self.deadline.until = until
             try:
@@ -315,6 +314,7 @@ def _param_slices(st: Structure, nx: int) -> dict[str, slice]:
 
 def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Program:
     """Build the NLP for ``plant`` with structure ``st`` (seconds at most; then cached)."""
+    started = time.perf_counter()
     npx = len(plant.state_names)
     nx = npx + st.chain
     P, N = st.n_phases, st.intervals
@@ -372,7 +372,7 @@ def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Prog
     return Program(structure=st, nx=nx, n_plant_states=npx, solver=solver, layout=layout(P, N, nx),
                    n_params=n_par, n_g=int(ca.vertcat(*g).numel()), deadline=deadline,
                    n_path=int(ca.vertcat(*g_path).numel()) if g_path else 0, nlp=nlp,
-                   ipopt_options=dict(ipopt_options))
+                   ipopt_options=dict(ipopt_options), build_s=time.perf_counter() - started)
 
 
 def _interval_function(plant: Plant, st: Structure, nx: int, npx: int) -> ca.Function:
