@@ -309,11 +309,69 @@ class Client:
 
     def diagnose(self, log: LogSource, params: str | Mapping[str, Any], *, columns: Mapping[str, Any] | None = None,
                  steady_state: bool | None = None, read: ReadFields = None, max_effects: int | None = None,
-                 corrections: bool | None = None) -> dict[str, Any]:
-        """Which catalogue effects are missing (``verdict``), candidates ranked by held-out error."""
+                 corrections: bool | None = None, tolerance: float | None = None,
+                 max_logging_skew: float | None = None) -> dict[str, Any]:
+        """Which catalogue effects are missing (``verdict``), candidates ranked by held-out error (synchronous:
+        bounded by the server's task timeout; :meth:`submit_model_check` runs it as a job)."""
         files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
-                                       max_effects=max_effects, corrections=corrections)
+                                       max_effects=max_effects, corrections=corrections, tolerance=tolerance,
+                                       max_logging_skew=max_logging_skew)
         return self._request("POST", "/v1/model-check/diagnose", files=files, data=data).json()
+
+    def submit_model_check(self, op: str, log: LogSource, params: str | Mapping[str, Any], *,
+                           columns: Mapping[str, Any] | None = None, steady_state: bool | None = None,
+                           read: ReadFields = None, **fields: Any) -> dict[str, Any]:
+        """Submit a model check as a job (``op``: check, diagnose, fit, design); returns ``{"id", "status",
+        "progress", ...}``. ``fields``: the op's form fields (``max_effects``, ``corrections``, ``tolerance``,
+        ``max_logging_skew``, ``effects``, ``refine``, ``voltage``, ``current``, ``duration_s``, ``rivals``:
+        a list of lists of items or the text ``"a;b,c"``)."""
+        rivals = fields.get("rivals")
+        if rivals is not None and not isinstance(rivals, str):
+            fields["rivals"] = ";".join(",".join(r) for r in rivals)
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
+                                       op=op, **fields)
+        return self._request("POST", "/v1/model-check/jobs", files=files, data=data).json()
+
+    def model_check_job(self, job_id: str) -> dict[str, Any]:
+        """A model-check job's ``status`` and ``progress``."""
+        return self._request("GET", f"/v1/model-check/jobs/{job_id}").json()
+
+    def model_check_result(self, job_id: str) -> dict[str, Any]:
+        """A finished job's result; a failed job raises its problem (e.g. :class:`InvalidInput` naming the field)."""
+        return self._request("GET", f"/v1/model-check/jobs/{job_id}/result").json()
+
+    def wait_model_check(self, job_id: str, *, poll: float = 0.3, timeout: float | None = None,
+                         on_progress: Callable[[float], None] | None = None, reconnects: int = 5,
+                         backoff: float = 0.5) -> dict[str, Any]:
+        """Poll a job until it finished (``on_progress(fraction)`` each time), then return its result (or raise
+        its problem). Dropped connections are retried like :meth:`wait_batch`'s; raises :class:`Timeout`."""
+        end = None if timeout is None else time.monotonic() + timeout
+        failures = 0
+        while True:
+            try:
+                status = self.model_check_job(job_id)
+            except TransportError:
+                failures += 1
+                if failures > reconnects or (end is not None and time.monotonic() > end):
+                    raise
+                time.sleep(self._spec.reconnect_delay(failures, backoff))
+                continue
+            failures = 0
+            if on_progress is not None:
+                on_progress(1.0 if status["status"] == "done" else float(status["progress"]))
+            if status["status"] in ("done", "failed"):
+                return self.model_check_result(job_id)
+            if end is not None and time.monotonic() > end:
+                raise Timeout(f"model-check job {job_id} not finished after {timeout} s")
+            time.sleep(poll)
+
+    def design_experiment(self, log: LogSource, params: str | Mapping[str, Any], *,
+                          on_progress: Callable[[float], None] | None = None, timeout: float | None = None,
+                          **fields: Any) -> dict[str, Any]:
+        """Diagnose ``log`` and design the experiment that settles it (a job; see :meth:`submit_model_check` for
+        ``fields``); returns the design with its ``mission`` and its ``diagnosis``."""
+        job = self.submit_model_check("design", log, params, **fields)
+        return self.wait_model_check(job["id"], timeout=timeout, on_progress=on_progress)
 
     def fit(self, log: LogSource, params: str | Mapping[str, Any], effects: str | Iterable[str], *,
             columns: Mapping[str, Any] | None = None, steady_state: bool | None = None, read: ReadFields = None,
@@ -431,11 +489,29 @@ class AsyncClient:
 
     async def diagnose(self, log: LogSource, params: str | Mapping[str, Any], *,
                        columns: Mapping[str, Any] | None = None, steady_state: bool | None = None,
-                       read: ReadFields = None,
-                       max_effects: int | None = None, corrections: bool | None = None) -> dict[str, Any]:
+                       read: ReadFields = None, max_effects: int | None = None, corrections: bool | None = None,
+                       tolerance: float | None = None, max_logging_skew: float | None = None) -> dict[str, Any]:
         files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
-                                       max_effects=max_effects, corrections=corrections)
+                                       max_effects=max_effects, corrections=corrections, tolerance=tolerance,
+                                       max_logging_skew=max_logging_skew)
         return await self._json("POST", "/v1/model-check/diagnose", files=files, data=data)
+
+    async def submit_model_check(self, op: str, log: LogSource, params: str | Mapping[str, Any], *,
+                                 columns: Mapping[str, Any] | None = None, steady_state: bool | None = None,
+                                 read: ReadFields = None, **fields: Any) -> dict[str, Any]:
+        """See :meth:`Client.submit_model_check`."""
+        rivals = fields.get("rivals")
+        if rivals is not None and not isinstance(rivals, str):
+            fields["rivals"] = ";".join(",".join(r) for r in rivals)
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
+                                       op=op, **fields)
+        return await self._json("POST", "/v1/model-check/jobs", files=files, data=data)
+
+    async def model_check_job(self, job_id: str) -> dict[str, Any]:
+        return await self._json("GET", f"/v1/model-check/jobs/{job_id}")
+
+    async def model_check_result(self, job_id: str) -> dict[str, Any]:
+        return await self._json("GET", f"/v1/model-check/jobs/{job_id}/result")
 
     async def fit(self, log: LogSource, params: str | Mapping[str, Any], effects: str | Iterable[str], *,
                   columns: Mapping[str, Any] | None = None, steady_state: bool | None = None, read: ReadFields = None,

@@ -31,6 +31,7 @@ from service.api.middleware import ApiKeyGate, BodyLimit
 from service.api.routes import batches, compare, health, info, model_check, page, references
 from service.api.routes import stream as stream_route
 from service.batches import BatchRunner
+from service.checkjobs import CheckJobRunner, CheckJobStore
 from service.dask_runner import DaskRunner
 from service.jobs import JobStore, StoreLocked, lock_store
 from service.settings import Settings
@@ -72,7 +73,12 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         batch_runner = None if tasks.batch_item is None else BatchRunner(
             store, logged, tasks.batch_item, concurrency=settings.workers, timeout=settings.batch_item_timeout_s,
             attempts=settings.batch_attempts)
+        check_jobs = None if tasks.model_check is None else CheckJobRunner(  # model checks as jobs (progress)
+            CheckJobStore(store), cast(Runner, TaskLog(pool, tasks)), tasks.model_check,
+            timeout=settings.batch_item_timeout_s, attempts=settings.batch_attempts,
+            max_pending=settings.workers + settings.queue_size, retry_after=settings.retry_after_s)
         app.state.settings, app.state.tasks, app.state.store = settings, tasks, store
+        app.state.check_jobs = check_jobs
         app.state.pool, app.state.batches, app.state.fallback_pool = pool, batch_runner, fallback_pool
         # start-up off the first requests; a fallback worker also runs one small fallback (imports, caches)
         warming = [asyncio.create_task(pool.warm()),
@@ -80,6 +86,8 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
                                        else fallback_pool.warm())]
         if batch_runner is not None:
             batch_runner.start()
+        if check_jobs is not None:
+            check_jobs.resume()
         try:
             yield
         finally:
@@ -87,6 +95,8 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
                 w.cancel()
             if batch_runner is not None:
                 await batch_runner.close()
+            if check_jobs is not None:
+                await check_jobs.close()
             if dask is not None:
                 await dask.close()
             pool.close()

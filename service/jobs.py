@@ -197,6 +197,10 @@ class JobStore:
                     raise StoreUnavailable(f"the job store write failed: {exc}") from None
                 raise
 
+    def transaction(self) -> contextlib.AbstractContextManager[sqlite3.Connection]:
+        """One write transaction (see ``_tx``) for other tables of this file (the model-check jobs)."""
+        return self._tx()
+
     def close(self) -> None:
         with self._lock:
             self._db.close()

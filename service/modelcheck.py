@@ -18,7 +18,7 @@ from typing import Any, Literal
 from ocp.errors import LogError, ParameterError, SolverError, ThrustshapeError
 
 Payload = dict[str, Any]
-Op = Literal["check", "diagnose", "fit"]
+Op = Literal["check", "diagnose", "fit", "design"]
 
 PARQUET_MAGIC = b"PAR1"
 PARAMS_HELP = "a preset name or the JSON text of a parameter mapping (J, B, ..., optional 'effects')"
@@ -224,9 +224,56 @@ def _blame(plant: Any, log: Any, exc: BaseException) -> ThrustshapeError:
     return SolverError("log", f"the model check failed on this log: {detail}")
 
 
+def _progress(payload: Payload) -> Any:
+    """The job's progress callback (``payload["progress"]``: the job store file and the job id), or None."""
+    spec = payload.get("progress")
+    if not isinstance(spec, dict):
+        return None
+    from service.checkjobs import ProgressWriter
+
+    return ProgressWriter(str(spec["db"]), str(spec["id"]))
+
+
+def parse_rivals(text: str | None) -> list[list[str]] | None:
+    """Rival explanations for ``/design``: sets separated by ``;``, items of a set by ``,`` (at least two sets)."""
+    if text is None or not text.strip():
+        return None
+    try:
+        sets = [parse_effects(part) for part in text.split(";") if part.strip()]
+    except ThrustshapeError as exc:
+        raise ParameterError("rivals", exc.reason) from None
+    if len(sets) < 2:
+        raise ParameterError("rivals", "give at least two rival explanations separated by ';' "
+                                       "(e.g. 'coulomb_friction;param:B')")
+    if len(sets) > 6:
+        raise ParameterError("rivals", f"{len(sets)} rivals; at most 6")
+    return sets
+
+
+def _design(plant: Any, log: Any, payload: Payload, options: dict[str, Any], report: Any) -> Payload:
+    """Diagnose, then design the experiment that settles it (:func:`ocp.identify.design.design`)."""
+    from ocp.identify import DiagnoseOptions, diagnose
+    from ocp.identify.design import DesignOptions, design
+    from ocp.identify.equations import annotate as with_equations
+
+    res = diagnose(plant, log, DiagnoseOptions(**options), progress=None if report is None else
+                   (lambda f: report(0.3 * f)))
+    opts = dict(payload.get("design") or {})
+    if opts.get("rivals") is not None:
+        opts["rivals"] = tuple(tuple(r) for r in opts["rivals"])
+    out = design(plant, log, res, DesignOptions(**opts), progress=None if report is None else
+                 (lambda f: report(0.3 + 0.7 * f))).to_dict()
+    out["diagnosis"] = with_equations(res.to_dict(), log)
+    return out
+
+
 def _run(op: Op, plant: Any, log: Any, payload: Payload, options: dict[str, Any]) -> Payload:
     from ocp.identify import CheckOptions, DiagnoseOptions, FitOptions, check, diagnose, fit
     from ocp.identify.equations import annotate as with_equations
+
+    report = _progress(payload)
+    if op == "design":
+        return _design(plant, log, payload, options, report)
 
     if op == "check":
         res = check(plant, log, CheckOptions(**options))
@@ -236,7 +283,7 @@ def _run(op: Op, plant: Any, log: Any, payload: Payload, options: dict[str, Any]
             return {"html": html_report(res, log, plant=plant)}
         return with_equations(res.to_dict(), log)
     if op == "diagnose":
-        return with_equations(diagnose(plant, log, DiagnoseOptions(**options)).to_dict(), log)
+        return with_equations(diagnose(plant, log, DiagnoseOptions(**options), progress=report).to_dict(), log)
     fitted = fit(plant, log, list(payload["effects"]), FitOptions(**options))
     out = with_equations(fitted.to_dict(), log)
     out.setdefault("calibrated_params", fitted.calibrated())

@@ -219,6 +219,24 @@ class FitPublic(_Open):
     calibrated_params: dict[str, Any]
 
 
+class ExperimentDesignPublic(_Open):
+    """:meth:`ocp.identify.design.DesignResult.to_dict` plus ``diagnosis`` (the diagnosis it settles): why an
+    experiment is needed, the rival explanations, every candidate excitation's separation, the chosen mission."""
+
+    needed: bool = Field(description="false: not ambiguous and the log covers reversals, low speed and a speed range")
+    reasons: list[str]
+    coverage: dict[str, Any] = Field(description="reversal, low_speed, speed_range (bool) and the fractions behind")
+    rivals: list[dict[str, Any]] = Field(description="[{name, items}] the explanations to separate")
+    candidates: list[dict[str, Any]] = Field(description="every excitation: runnable, separation per rival pair")
+    separation: float | None = Field(description="the chosen experiment's smallest pairwise separation z "
+                                                 "[noise standard deviations]")
+    misclassification: float | None = Field(description="Phi(-z/2): probability a likelihood-ratio test confuses "
+                                                        "the closest pair")
+    mission: dict[str, Any] | None = Field(description="the proposed mission (POST it to /v1/references/optimize)")
+    message: str
+    diagnosis: dict[str, Any]
+
+
 class BatchCreate(_Strict):
     model_config = ConfigDict(json_schema_extra={"examples": [{"missions": [MISSION_EXAMPLE]}]})
 
@@ -328,3 +346,20 @@ class Problem(_Open):
     field: str | None = Field(default=None, description="the input at fault: a dotted body path "
                               "(limits.current, segments.1.duration), a form field, a log column or a header")
     reason: str | None = Field(default=None, description="why that input was refused")
+
+
+ModelCheckOp = Literal["check", "diagnose", "fit", "design"]
+JobStatus = Literal["queued", "running", "done", "failed"]
+
+
+class ModelCheckJobPublic(_Strict):
+    """A model-check job: ``status``, ``progress`` (0..1, while running), the error once failed."""
+
+    id: str
+    op: ModelCheckOp
+    status: JobStatus
+    progress: float = Field(ge=0, le=1)
+    attempts: int
+    created_at: float = Field(description="Unix time [s]")
+    finished_at: float | None = None
+    error: ItemError | None = None

@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from ocp.errors import ParameterError
 from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
 from ocp.identify.regression import CONSTANTS, Design
 from ocp.identify.select import Fitted
@@ -93,7 +94,10 @@ def explain(item: str, values: dict[str, float], p: MotorParams, design: Design,
                 f"({100 * x:+.1f} %). Signature: {SIGNATURE[item]}")
     if not values or not all(math.isfinite(v) for v in values.values()):
         return item
-    eff = make_effect(item, values)
+    try:
+        eff = make_effect(item, values)
+    except ParameterError as exc:  # a candidate fitted outside the physical range (e.g. Stribeck far from zero speed)
+        return f"{item}: fitted outside its physical range ({exc.field}: {exc.reason})"
     text = eff.describe() if isinstance(eff, EffectBase) else item
     if item == "cogging":
         amp = math.hypot(values.get("tau_sin", 0.0), values.get("tau_cos", 0.0))

@@ -6,6 +6,7 @@ import { $, initApiKey, initTabs, showError, showFieldError, showToast, api } fr
 import { initDesign, loadExampleIfEmpty, setDesignChoices } from "./design.js";
 import { initCompare } from "./compare.js";
 import { initModel, setModelChoices } from "./model.js";
+import { initExperiment } from "./experiment.js";
 import { initBatch } from "./batch.js";
 
 const FALLBACK_PRESETS = ["paper-rig"];
@@ -37,6 +38,7 @@ function init() {
   initDesign();
   initCompare();
   initModel();
+  initExperiment();
   initBatch();
   loadInfo().then(loadExampleIfEmpty).catch((err) => showError($("#tab-design"), err));
 }

@@ -200,7 +200,7 @@ export function useParams(params) {
   $("#d-params").value = typeof params === "string" ? params : JSON.stringify(params, null, 1);
 }
 
-function fillMission(m) {
+export function fillMission(m) {
   clearErrors($("#tab-design"));
   $("#d-name").value = m.name || "mission";
   const p = m.params === undefined ? "paper-rig" : m.params;

@@ -13,7 +13,7 @@ const CHANNEL_UNITS = { omega: "rad/s", current: "A", thrust: "N" };
 
 /* ------------------------------------------------------------------ the request */
 
-function modelForm(extra) {
+export function modelForm(extra) {
   if (!state.modelLog) throw new FieldError("log", "choose a log file or use the bundled example");
   const fd = new FormData();
   fd.append("log", state.modelLog.blob, state.modelLog.name);
@@ -145,7 +145,7 @@ function showCheck(res, reportHtml) {
   showReportFigures(reportHtml);
 }
 
-function showDiagnose(res) {
+export function showDiagnose(res) {
   $("#m-diag-results").hidden = false;
   showEquations("#m-diag-equations", res);
   const verdict = res.verdict || [];

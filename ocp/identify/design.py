@@ -1,0 +1,320 @@
+"""Design the experiment that settles it: an excitation chosen to SEPARATE rival explanations of a log.
+
+When :func:`ocp.identify.diagnose` cannot tell explanations apart on a log (``ambiguous``: Coulomb friction
+or a viscous ``B`` change on one operating speed, ...) or an effect cannot show in it (no reversal, no time
+at low speed, one speed only), :func:`design` proposes a mission for the optimiser whose command makes the
+rivals' predicted outputs differ the most relative to the log's noise, and says how well it will separate
+them.
+
+**Rivals.** Ambiguity: the verdict, and the verdict with each ambiguous item swapped for its alternative,
+each fitted to the log (:func:`ocp.identify.fit`). Coverage gaps: the diagnosed plant, and the same plant with
+each effect the log cannot show at a *probe* size (:data:`PROBES`, relative to the plant's torque, thrust
+and voltage at the top speed): "would this experiment reveal a 5 % Coulomb friction?". ``rivals`` in
+:class:`DesignOptions` names the candidate sets instead.
+
+**Criterion** (:mod:`.separation`: T-optimal discrimination, Atkinson & Fedorov 1975, linearised). Every
+candidate excitation (:mod:`.excite`) is optimised within the limits (:func:`ocp.optimize.solve.optimize`, the
+diagnosed plant); a candidate the optimiser cannot run within them is dropped. Every rival is simulated open
+loop under the optimised voltage; for each pair, what one rival cannot explain of the other's predicted
+speed, current and thrust (in the log's noise units, refitting its own items freely and the other constants
+within about the tolerance) is the separation ``z`` [noise standard deviations]. The proposal maximises the
+smallest ``z`` over the pairs (the :data:`SHORTLIST` best by the raw difference are scored with the refit);
+a likelihood-ratio test then confuses the closest pair with probability ``Phi(-z / 2)``. The same ``z`` on
+the given log (its own voltage) says how little it separated them.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, field_validator
+
+from ocp.errors import LogError, ParameterError, ThrustshapeError
+from ocp.identify.candidates import candidate
+from ocp.identify.diagnose import DiagnoseResult, dynamic
+from ocp.identify.excite import Excitation, candidates, mission_for
+from ocp.identify.predict import CHANNELS, noise_levels
+from ocp.identify.separation import (
+    Rival,
+    confusion,
+    held_on_grid,
+    pair_separations,
+    with_constant,
+    with_effect,
+)
+from ocp.logs import Log
+from ocp.model.effects import plant_to_mapping
+from ocp.model.equilibrium import equilibrium
+from ocp.model.plant import DCMotorPlant
+
+#: probe sizes of effects a log cannot show: fraction of the load torque tau_top, thrust F_top, voltage limit
+#: V, top speed w_top, c_tau, c_f (the smallest a user of a thruster would want to know about)
+PROBES: dict[str, Callable[[dict[str, float]], dict[str, float]]] = {
+    "coulomb_friction": lambda s: {"tau_c": 0.05 * s["tau_top"]},
+    "stribeck": lambda s: {"tau_s": 0.1 * s["tau_top"], "omega_s": 0.05 * s["w_top"]},
+    "drag_asymmetry": lambda s: {"dc_tau": 0.2 * s["c_tau"]},
+    "thrust_asymmetry": lambda s: {"dc_f": 0.2 * s["c_f"]},
+    "voltage_deadband": lambda s: {"v_db": 0.05 * s["V"]},
+    "brush_drop": lambda s: {"v_b": 0.03 * s["V"]},
+}
+#: which probes each coverage gap calls for
+GAPS = {"reversal": ("drag_asymmetry", "thrust_asymmetry", "coulomb_friction", "voltage_deadband", "brush_drop"),
+        "low_speed": ("coulomb_friction", "stribeck"), "speed_range": ("param:B",)}
+GAP_TEXT = {"reversal": "the log never reverses", "low_speed": "the log spends no time at low speed",
+            "speed_range": "the log holds one speed only"}
+SHORTLIST = 3  # candidates whose separation is computed with the refit (best raw separations)
+
+
+class DesignOptions(BaseModel):
+    """Knobs of :func:`design`: limits [V, A] (default: the log's own peaks), duration [s] (default: 60
+    mechanical time constants within 2..20 s), rival candidate sets (default: from the diagnosis)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    voltage: float | None = Field(default=None, gt=0, le=1e4)
+    current: float | None = Field(default=None, gt=0, le=1e4)
+    duration_s: float | None = Field(default=None, ge=0.2, le=60.0)
+    rivals: tuple[tuple[str, ...], ...] | None = Field(default=None, min_length=2, max_length=6)
+    time_limit_s: float = Field(default=10.0, gt=0, le=600)  # per candidate optimisation [s]
+
+    @field_validator("rivals")
+    @classmethod
+    def _known(cls, v: tuple[tuple[str, ...], ...] | None) -> tuple[tuple[str, ...], ...] | None:
+        for r in v or ():
+            if not r or len(r) > 6:
+                raise ValueError("a rival is 1 to 6 effects or param:<key> corrections")
+            for name in r:
+                try:
+                    candidate(name)
+                except ThrustshapeError as exc:
+                    raise ValueError(f"{name!r}: {exc.reason}") from None
+        return v
+
+
+@dataclass(frozen=True)
+class Candidate:
+    """One excitation's scores: separation ``z`` per rival pair (after the refit; ``raw`` without it)."""
+
+    name: str
+    description: str
+    runnable: bool
+    note: str
+    raw: dict[str, float] = field(default_factory=dict)
+    separation: dict[str, float] = field(default_factory=dict)
+    rms_ratio: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def worst(self) -> float:
+        vals = self.separation or self.raw
+        return min(vals.values()) if vals and self.runnable else -math.inf
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"name": self.name, "description": self.description, "runnable": self.runnable, "note": self.note,
+                "separation": self.separation or None, "raw_separation": self.raw, "rms_ratio": self.rms_ratio}
+
+
+@dataclass(frozen=True)
+class DesignResult:
+    """The proposal: why an experiment is needed, the rivals, every candidate's scores, the chosen mission."""
+
+    needed: bool
+    reasons: list[str]
+    coverage: dict[str, Any]
+    rivals: list[Rival]
+    candidates: list[Candidate]
+    chosen: Candidate | None
+    mission: dict[str, Any] | None
+    current_log: dict[str, float]
+    verification: dict[str, Any]
+    noise: dict[str, float]
+    duration_s: float
+
+    def to_dict(self) -> dict[str, Any]:
+        worst = self.chosen.worst if self.chosen is not None else None
+        return {
+            "needed": self.needed, "reasons": self.reasons, "coverage": self.coverage,
+            "rivals": [{"name": r.name, "items": list(r.items)} for r in self.rivals],
+            "candidates": [c.to_dict() for c in self.candidates],
+            "chosen": self.chosen.to_dict() if self.chosen is not None else None,
+            "separation": _finite(worst), "misclassification": _finite(confusion(worst)) if worst is not None else None,
+            "current_log_separation": {k: _finite(v) for k, v in self.current_log.items()},
+            "verification": self.verification, "noise": {k: _finite(v) for k, v in self.noise.items()},
+            "duration_s": self.duration_s, "mission": self.mission, "message": self.message(),
+        }
+
+    def message(self) -> str:
+        if not self.needed:
+            return "nothing to settle: the diagnosis is not ambiguous and the log covers reversals, low speed " \
+                   "and a range of speeds"
+        if self.chosen is None:
+            return "no candidate experiment ran within the limits: " + "; ".join(c.note for c in self.candidates)
+        z = self.chosen.worst
+        before = min(self.current_log.values()) if self.current_log else math.nan
+        return (f"run '{self.chosen.name}' ({self.chosen.description}): the rivals differ by z = {z:.3g} noise "
+                f"standard deviations (this log: {before:.3g}); a likelihood-ratio test would confuse them with "
+                f"probability {confusion(z):.2g}")
+
+
+def _finite(x: float | None) -> float | None:
+    return float(x) if x is not None and math.isfinite(x) else None
+
+
+def coverage(log: Log) -> dict[str, Any]:
+    """What the log exercises: both directions (a reversal), time at low speed (< 10 % of its top speed),
+    a range of speeds (10th over 90th percentile of |w| below one half)."""
+    w = np.abs(log.omega)
+    top = float(np.percentile(w, 99)) or 1.0
+    pos, neg = float(np.mean(log.omega > 0.05 * top)), float(np.mean(log.omega < -0.05 * top))
+    low = float(np.mean(w < 0.1 * top))
+    spread = float(np.percentile(w, 10) / max(float(np.percentile(w, 90)), 1e-300))
+    return {"reversal": min(pos, neg) > 0.05, "low_speed": low > 0.05, "speed_range": spread < 0.5,
+            "forward_fraction": pos, "reverse_fraction": neg, "low_speed_fraction": low, "speed_spread": spread}
+
+
+def _scales(plant: DCMotorPlant, voltage: float, current: float) -> dict[str, float]:
+    """Top speed held within the limits [rad/s] and the load torque, thrust there; the constants used by probes."""
+    p = plant.params
+
+    def within(w: float) -> bool:  # the plant's effects included (a friction lowers the top speed)
+        try:
+            x, v = equilibrium(plant, w)
+        except ThrustshapeError:
+            return False
+        return abs(v) <= voltage and abs(float(x[1])) <= current
+
+    hi = 1.0
+    while within(hi) and hi < 1e7:  # bracket, then bisect: the fastest steady speed within both limits
+        hi *= 2.0
+    lo = 0.0
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if within(mid) else (lo, mid)
+    return {"w_top": lo, "tau_top": p.B * lo + p.c_tau * lo * lo, "F_top": p.c_f * lo * lo, "V": voltage,
+            "c_tau": p.c_tau, "c_f": p.c_f, "tau_m": p.J * p.R / (p.k_t * p.k_e),
+            # time to the top speed at the current limit (no load): a tight current limit slows every change
+            "tau_i": p.J * lo / (p.k_t * current)}
+
+
+def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignOptions,
+                scales: dict[str, float], cov: dict[str, Any]) -> tuple[list[Rival], list[str], bool]:
+    """The rival explanations (module doc), the reasons an experiment is needed, and whether the rivals are
+    probes (the diagnosed plant first: the experiment must *reveal* each probe, not tell probes apart)."""
+    from ocp.identify import FitOptions, fit
+
+    def fitted(items: Sequence[str]) -> Rival:
+        name = " + ".join(items) or "nothing missing"
+        body = fit(plant, log, list(items), FitOptions(refine=False)).plant if items else res.plant
+        return Rival(name, tuple(items), body)
+
+    if opt.rivals is not None:
+        return [fitted(r) for r in opt.rivals], ["rivals given by the user"], False
+    reasons, sets = [], []
+    gaps = [GAP_TEXT[g] for g in GAPS if not cov[g]]
+    if res.ambiguous:
+        sets.append(tuple(res.verdict))
+        for a in res.ambiguous:
+            reasons.append(str(a["reason"]))
+            sets.append(tuple(str(a["alternative"]) if v == a["adopted"] else v for v in res.verdict))
+        reasons += [f"{g} (an effect may hide there)" for g in gaps]
+        unique = list(dict.fromkeys(tuple(sorted(s)) for s in sets))
+        return [fitted(s) for s in unique], reasons, False
+    out = [Rival("diagnosed plant", tuple(res.verdict), res.plant)]
+    present = {e.name for e in res.plant.effects} | set(res.verdict)
+    for gap, probes in GAPS.items():
+        if cov[gap]:
+            continue
+        reasons.append(GAP_TEXT[gap])
+        for name in probes:
+            if name in present or any(r.name.startswith(name) for r in out):
+                continue
+            if name == "param:B":
+                body = with_constant(res.plant, "B", 0.5)
+                out.append(Rival("param:B (+50 %)", (*res.verdict, name), body))
+            else:
+                values = PROBES[name](scales)
+                out.append(Rival(f"{name} (probe)", (*res.verdict, name), with_effect(res.plant, name, values)))
+    return out, reasons, True
+
+
+def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: DesignOptions | None = None,
+           progress: Callable[[float], None] | None = None) -> DesignResult:
+    """Propose the experiment that separates the rival explanations of ``log`` (module doc)."""
+    from ocp.optimize.mission import Mission
+
+    opt = options or DesignOptions()
+    if not dynamic(log):
+        raise LogError("log", "designing an experiment needs a time series with armature voltage, current and "
+                              "speed (a sweep or a flight log is checked point by point)")
+    voltage = opt.voltage or float(np.max(np.abs(log.voltage)))
+    current = opt.current or float(np.max(np.abs(log.current)))
+    if voltage <= 0 or current <= 0:
+        raise ParameterError("voltage" if voltage <= 0 else "current", "the log has no non-zero peak; give the limit")
+    sc = _scales(diagnosis.plant, voltage, current)
+    tau = max(sc["tau_m"], sc["tau_i"])  # the time scale of the experiment's changes [s]
+    duration = opt.duration_s or float(np.clip(60.0 * tau, 2.0, 20.0))
+    cov = coverage(log)
+    rivals, reasons, detect = rivals_from(plant, log, diagnosis, opt, sc, cov)
+    noise = noise_levels(log)
+    sigma = np.array([noise[ch] for ch in CHANNELS])
+    rate = 1.0 / log.dt
+    base: dict[str, Any] = dict(needed=len(rivals) > 1, reasons=reasons, coverage=cov, rivals=rivals, noise=noise,
+                duration_s=duration)
+    if len(rivals) < 2:
+        return DesignResult(**base, candidates=[], chosen=None, mission=None, current_log={}, verification={})
+    tl, vl = held_on_grid(log.t, log.voltage, log.dt)
+    x0 = (float(log.omega[0]), float(log.current[0]))
+    before, _ = pair_separations(rivals, tl, vl, sigma, rate, diagnosis.tolerance, x0, detect)
+    params = plant_to_mapping(diagnosis.plant)
+    scored: list[tuple[Candidate, dict[str, Any], Any]] = []
+    excs = candidates(0.95 * sc["w_top"], duration, tau)
+    for k, exc in enumerate(excs):
+        scored.append(_score(exc, params, diagnosis.plant.params.c_f, voltage, current, opt, rivals, sigma, rate,
+                             log.dt, detect))
+        if progress is not None:
+            progress(0.1 + 0.6 * (k + 1) / len(excs))
+    top = sorted((s for s in scored if s[0].runnable), key=lambda s: -s[0].worst)[:SHORTLIST]
+    final = []
+    for k, (cand, mission, res) in enumerate(top):
+        t, v = held_on_grid(res.arrays["t"], res.arrays["voltage"], log.dt)
+        z, rms = pair_separations(rivals, t, v, sigma, rate, diagnosis.tolerance, detect=detect)
+        final.append((Candidate(cand.name, cand.description, True, cand.note, cand.raw, z, rms), mission, res))
+        if progress is not None:
+            progress(0.7 + 0.3 * (k + 1) / max(len(top), 1))
+    finals = {c.name: c for c, _, _ in final}
+    cands = [finals.get(c.name, c) for c, _, _ in scored]
+    if not final:
+        return DesignResult(**base, candidates=cands, chosen=None, mission=None, current_log=before, verification={})
+    best, mission, res = max(final, key=lambda s: s[0].worst)
+    Mission.model_validate(mission)  # what is proposed is a valid mission
+    ver = {"source": res.source, "max_abs_current": float(np.max(np.abs(res.arrays["current"]))),
+           "max_abs_voltage": float(np.max(np.abs(res.arrays["voltage"]))), "path_ok": res.path_ok,
+           "tracking_rms_error": res.verification.get("tracking_rms_error"), "duration_s": float(res.arrays["t"][-1]),
+           "limits": {"voltage": voltage, "current": current}}
+    return DesignResult(**base, candidates=cands, chosen=best, mission=mission, current_log=before, verification=ver)
+
+
+def _score(exc_: Excitation, params: dict[str, Any], c_f: float, voltage: float, current: float, opt: DesignOptions,
+           rivals: list[Rival], sigma: np.ndarray, rate: float, dt_log: float,
+           detect: bool) -> tuple[Candidate, dict[str, Any], Any]:
+    """Optimise one candidate within the limits; its raw separations (no refit) when it runs within them."""
+    from ocp.optimize.mission import Mission
+    from ocp.optimize.solve import optimize
+
+    mission = mission_for(exc_, params, c_f, voltage, current, opt.time_limit_s)
+    try:
+        res = optimize(Mission.model_validate(mission))
+    except ThrustshapeError as exc:  # nothing within the limits (the fallback too): this candidate cannot run
+        return Candidate(exc_.name, exc_.description, False, f"not run: {exc.field}: {exc.reason}"), mission, None
+    i_max, v_max = float(np.max(np.abs(res.arrays["current"]))), float(np.max(np.abs(res.arrays["voltage"])))
+    ok = res.source == "optimized" and i_max <= current * (1 + 1e-6) and v_max <= voltage * (1 + 1e-6)
+    note = (f"optimised within the limits (peak {i_max:.3g} A, {v_max:.3g} V)" if ok else
+            f"not run: {res.source} ({res.reason or 'limits exceeded'}; peak {i_max:.3g} A, {v_max:.3g} V)")
+    if not ok:
+        return Candidate(exc_.name, exc_.description, False, note), mission, res
+    t, v = held_on_grid(res.arrays["t"], res.arrays["voltage"], dt_log)
+    raw, rms = pair_separations(rivals, t, v, sigma, rate, None, detect=detect)
+    return Candidate(exc_.name, exc_.description, True, note, raw, {}, rms), mission, res

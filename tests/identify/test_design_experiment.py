@@ -1,0 +1,81 @@
+"""Design the experiment that settles it (issue #11 item 5): a proving-ground log where Coulomb friction
+and a drag change look alike (one operating speed) is turned into the right verdict by running the proposed
+mission on the same rig. The rig, its logger and its integrator are the proving ground's (no ``ocp`` code)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from clients.cli import main
+from ocp.identify import diagnose
+from ocp.identify.design import confusion, coverage
+from ocp.logs import log_from_arrays, write_log_csv
+from ocp.model.params import MotorParams
+from ocp.model.plant import DCMotorPlant
+from ocp.optimize.mission import Mission
+from ocp.optimize.solve import optimize
+from tests.proving_ground.experiment import draw, run_command, single_speed
+
+SEED = 6  # any rig whose single-speed log the identifier does not settle; the assertions hold whatever it is
+
+
+def _log(cols: dict[str, np.ndarray]):  # type: ignore[no-untyped-def]
+    return log_from_arrays(cols["t"], cols["voltage"], cols["current"], cols["thrust"], omega=cols["omega"],
+                           theta=cols.get("theta"), source="proving-ground")
+
+
+def test_the_proposed_experiment_turns_an_ambiguous_verdict_into_the_right_one(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rig = draw(SEED, "coulomb_friction")
+    log = _log(single_speed(rig, SEED))
+    plant = DCMotorPlant(MotorParams(**rig.nominal))
+    first = diagnose(plant, log)
+    cov = coverage(log)
+    assert not cov["reversal"] and not cov["low_speed"]  # one operating speed, by construction
+    assert first.ambiguous or first.verdict != ["coulomb_friction"], "the single-speed log already settles it"
+
+    csv, params, out = tmp_path / "rig.csv", tmp_path / "rig.json", tmp_path / "mission.json"
+    write_log_csv(log, csv)
+    params.write_text(json.dumps(rig.nominal))
+    current = 3.0 * float(np.max(np.abs(log.current)))
+    assert main(["design-experiment", str(csv), "--params", str(params), "--voltage", str(rig.truth.v_max),
+                 "--current", str(current), "--out", str(out), "--json"]) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["needed"] and d["mission"] == json.loads(out.read_text())
+    assert "coulomb_friction" in {i for r in d["rivals"] for i in r["items"]}
+    # the proposal separates every pair of rivals better than the log did, and says how well
+    chosen = d["chosen"]["separation"]
+    assert set(chosen) == set(d["current_log_separation"])
+    assert min(chosen.values()) > min(d["current_log_separation"].values())
+    assert d["separation"] == pytest.approx(min(chosen.values()))
+    assert d["misclassification"] == pytest.approx(confusion(d["separation"])) and d["misclassification"] < 0.05
+
+    # the mission runs in the optimiser within the limits
+    res = optimize(Mission.model_validate(json.loads(out.read_text())))
+    assert res.source == "optimized" and res.path_ok
+    assert np.max(np.abs(res.arrays["current"])) <= current * (1 + 1e-6)
+    assert np.max(np.abs(res.arrays["voltage"])) <= rig.truth.v_max * (1 + 1e-6)
+    # played on the same rig (the proving ground's own simulation of the command), the new log settles it
+    new = _log(run_command(rig, res.arrays["t"], res.arrays["voltage"], SEED + 7))
+    assert coverage(new)["reversal"]
+    second = diagnose(plant, new)
+    assert second.verdict == ["coulomb_friction"] and not second.ambiguous
+
+
+def test_design_refuses_what_it_cannot_use(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rig = draw(SEED, "coulomb_friction")
+    csv = tmp_path / "rig.csv"
+    write_log_csv(_log(single_speed(rig, SEED)), csv)
+    assert main(["design-experiment", str(csv), "--params", "paper-rig", "--rival", "coulomb_friction",
+                 "--json"]) == 1
+    err = json.loads(capsys.readouterr().err)
+    assert err["field"] == "--rival" and "two" in err["reason"]
+    assert main(["design-experiment", str(csv), "--params", "paper-rig", "--rival", "coulomb_friction",
+                 "--rival", "no_such_effect", "--json"]) == 1
+    assert "no_such_effect" in json.loads(capsys.readouterr().err)["reason"]
+    assert main(["design-experiment", str(csv), "--params", "paper-rig", "--voltage", "-3", "--json"]) == 1
+    assert json.loads(capsys.readouterr().err)["field"] == "--voltage"
