@@ -97,7 +97,7 @@ async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, to
 # ---------------------------------------------------------------------------------------------
 # 2x overload with faults (issue #12)
 
-LIMIT_TOL = 1.0 + 1e-3  # ocp.optimize.result.PATH_TOLERANCE
+LIMIT_TOL = 1.0 + 1e-3  # ocp.optimize.verify.PATH_TOLERANCE
 ADVERSARIAL = [
     {**OPTIMIZE, "name": "tiny-current", "limits": {"current": 0.05}},
     {**OPTIMIZE, "name": "60-reversals", "time_limit_s": 2.0,

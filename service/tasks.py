@@ -60,7 +60,7 @@ def analytic_reference(payload: Payload) -> Payload:
 
 
 def optimize_mission(payload: Payload) -> Payload:
-    """Mission -> :meth:`ocp.optimize.solve.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
+    """Mission -> :meth:`ocp.optimize.result.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
     build is reported to the worker's parent (:func:`service.workers.report_phase`): it survives the deadline."""
     from ocp.optimize.collocation import SolveContext
     from ocp.optimize.mission import Mission

@@ -16,7 +16,7 @@ import numpy as np
 
 from ocp.errors import MissionError
 from ocp.model.equilibrium import equilibrium, speed_for_thrust
-from ocp.model.plant import DCMotorPlant, Plant
+from ocp.model.plant import Plant
 from ocp.optimize import collocation as col
 from ocp.optimize import path_limits
 from ocp.optimize.guess import analytic_guess, initial_guess
@@ -77,12 +77,13 @@ def _path_bounds(problem: Problem, lay: col.Layout, sc: Scales, backoff: np.ndar
     else:
         lbx[lay.stretch], ubx[lay.stretch] = 1e-3, max(100.0, m.retiming.max_stretch)
     w_max = (lim.speed if lim.speed is not None else np.inf) / sc.x[0]
+    bounded = problem.plant.state_limits(m.bounds())
     for j, sign in enumerate(problem.phases.signs):
         w = lay.xc[j, :, :, 0]
         lbx[w], ubx[w] = (0.0, w_max) if sign > 0 else (-w_max, 0.0)
         b = backoff[j][:, None]  # (N, 1) over the interval's points
-        if isinstance(problem.plant, DCMotorPlant):
-            lbx[lay.xc[j, :, :, 1]], ubx[lay.xc[j, :, :, 1]] = -b, b
+        for k in bounded:  # scaled by its limit (ocp.optimize.problem.scales)
+            lbx[lay.xc[j, :, :, k]], ubx[lay.xc[j, :, :, k]] = -b, b
         if chain >= 1:
             lbx[lay.xc[j, :, :, npx]], ubx[lay.xc[j, :, :, npx]] = -b, b
         if chain >= 2 and lim.voltage_rate is not None:
@@ -127,13 +128,14 @@ def problem_data(problem: Problem, backoff: float | np.ndarray = 1.0,
     (:func:`ocp.optimize.guess.analytic_guess`).
     """
     m, st, plant = problem.mission, problem.structure, problem.plant
-    params, lim, dur = m.motor(), m.limits, problem.phases.durations
+    params, dur = m.motor(), problem.phases.durations
     P, N, chain = st.n_phases, st.intervals, st.chain
     npx = len(plant.state_names)
     x_start, u0 = equilibrium(plant, speed_for_thrust(plant, float(problem.f_desired[0]), params.c_f))
     w_full = math.sqrt(max(float(np.max(np.abs(problem.f_desired))), 1e-6) / params.c_f)
     sc = scales(problem, equilibrium(plant, w_full)[0])
-    if abs(u0) > sc.u_lim or (isinstance(plant, DCMotorPlant) and abs(x_start[1]) > lim.current):
+    over = [abs(x_start[k]) > limit for k, limit in plant.state_limits(m.bounds()).items()]
+    if abs(u0) > sc.u_lim or any(over):
         raise MissionError("limits", f"the initial thrust {problem.f_desired[0]:.4g} N needs more than the limits")
     rho = _residual_scaling(plant, sc.x, sc.u_lim, N, float(np.mean(dur)), npx, chain)
     # desired thrust at the collocation points, at the same normalised time of each desired phase

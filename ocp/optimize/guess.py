@@ -8,17 +8,12 @@ import math
 import numpy as np
 
 from ocp.errors import MissionError
-from ocp.model.plant import TorquePlant, speed_from_thrust
+from ocp.model.plant import speed_from_thrust
 from ocp.optimize import collocation as col
 from ocp.optimize.mission import Mission
 from ocp.optimize.problem import Problem, Scales
 from ocp.reference.analytic import SinProfile, reference
 from ocp.reference.fallback import design_sin
-
-
-def _torque_channel_limit(mission: Mission) -> float | None:
-    """The torque bound [N m] of a torque-plant mission, None for the DC motor (its limits are i and V)."""
-    return None if mission.plant == "dc-motor" else mission.torque_limit()
 
 
 def fastest_analytic(mission: Mission) -> SinProfile | None:
@@ -29,7 +24,7 @@ def fastest_analytic(mission: Mission) -> SinProfile | None:
     amp = max(abs(float(f[0])), abs(float(f[-1])))
     try:
         return design_sin(mission.motor(), mission.limits.current, mission.limits.voltage, mission.regularity,
-                          amplitude=amp, torque_limit=_torque_channel_limit(mission)).profile
+                          amplitude=amp, torque_limit=mission.drive_plant().torque_limit(mission.bounds())).profile
     except MissionError:
         return None
 
@@ -45,16 +40,11 @@ def initial_guess(problem: Problem, lay: col.Layout, x0: np.ndarray, fd: np.ndar
     start = x0[lay.x0]
     for j in range(P):
         w = problem.phases.signs[j] * np.abs(speed_from_thrust(fd[j], params.c_f).reshape(N, col.DEGREE))
-        if isinstance(problem.plant, TorquePlant):
-            i, u = np.zeros_like(w), problem.plant.k * w * np.abs(w)
-        else:
-            i = (params.B * w + params.c_tau * w * np.abs(w)) / params.k_t
-            u = params.R * i + params.k_e * w
-        for k in range(2, npx):
+        nominal, u = problem.plant.static_inverse(w)  # speed (and current) of the nominal plant
+        for k in range(len(nominal), npx):  # effect states
             guess[lay.xc[j, :, :, k]] = start[k]
-        guess[lay.xc[j, :, :, 0]] = w / xscale[0]
-        if npx > 1:
-            guess[lay.xc[j, :, :, 1]] = i / xscale[1]
+        for k, value in enumerate(nominal):
+            guess[lay.xc[j, :, :, k]] = value / xscale[k]
         if chain >= 1:
             guess[lay.xc[j, :, :, npx]] = u / xscale[npx]
         if chain == 0:
@@ -82,20 +72,15 @@ def analytic_guess(problem: Problem, lay: col.Layout, guess: np.ndarray, sc: Sca
     t = (edges[:-1, None] + taus[None, :] * h[:, None]).ravel()  # (P*N*DEGREE,) strictly increasing
     prof = SinProfile(fastest.amplitude, fastest.period, fastest.q, phase=0.5 * math.pi * problem.phases.signs[0])
     ref = reference(prof, m.motor(), t)
-    if isinstance(problem.plant, TorquePlant):
-        # eq:omega_dyn  u = w' + k w|w|
-        chain_0, current = ref.omega_dot + problem.plant.k * ref.omega * np.abs(ref.omega), None
-    else:
-        chain_0, current = ref.voltage, ref.current
+    nominal, chain_0 = problem.plant.feedforward(ref)  # speed (and current), input
     inputs = [chain_0]  # input, its slew, its second derivative at the points
     for _ in range(chain):
         inputs.append(np.gradient(inputs[-1], t))
     out = guess.copy()
     out[lay.stretch] = h / problem.phases.durations
     shape = (P, N, col.DEGREE)
-    out[lay.xc[:, :, :, 0]] = ref.omega.reshape(shape) / sc.x[0]
-    if current is not None:
-        out[lay.xc[:, :, :, 1]] = current.reshape(shape) / sc.x[1]
+    for k, value in enumerate(nominal):
+        out[lay.xc[:, :, :, k]] = value.reshape(shape) / sc.x[k]
     for c in range(chain):
         out[lay.xc[:, :, :, npx + c]] = inputs[c].reshape(shape) / sc.x[npx + c]
     out[lay.u[:, :, 0]] = inputs[chain].reshape(shape)[:, :, -1] / sc.u

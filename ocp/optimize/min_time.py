@@ -33,7 +33,7 @@ from ocp.optimize import collocation as col
 from ocp.optimize.data import ProblemData
 from ocp.optimize.mission import MAX_INTERVALS, Collocation, Mission
 from ocp.optimize.problem import Problem
-from ocp.optimize.result import OptimizeResult
+from ocp.optimize.result import MeshStep, OptimizeResult, Source
 
 #: stop refining when one doubling changes the minimum time by less than this share of it
 RTOL = 5e-3
@@ -60,7 +60,7 @@ def refine(mission: Mission, solve: MeshSolve, analytic_min_time: float | None,
     history = [(mesh_size(mission), _duration(result))]
     note = ""
     last_cost = time.perf_counter() - started
-    while result.source == "optimized":
+    while result.source is Source.OPTIMIZED:
         if len(history) >= 2 and abs(history[-1][1] - history[-2][1]) <= RTOL * history[-1][1]:
             break
         intervals = 2 * history[-1][0]
@@ -75,12 +75,13 @@ def refine(mission: Mission, solve: MeshSolve, analytic_min_time: float | None,
         t0 = time.perf_counter()
         finer = solve(mission.model_copy(update={"collocation": Collocation(intervals=intervals)}), result)
         last_cost = time.perf_counter() - t0
-        if finer.source != "optimized":
+        if finer.source is not Source.OPTIMIZED:
             note = f"refinement stopped: the {intervals}-interval solve fell back ({finer.reason})"
             break
         result = finer
         history.append((intervals, _duration(result)))
-    result.verification.update(summary(result, history, note, analytic_min_time))
+    for name, value in summary(result, history, note, analytic_min_time).items():
+        setattr(result.verification, name, value)
     result.total_time_s = time.perf_counter() - started  # every mesh
     return result
 
@@ -99,7 +100,7 @@ def summary(result: OptimizeResult, history: list[tuple[int, float]], note: str,
     solved, ``[{"intervals", "min_time_s"}]``; ``min_time_note``: why it is not a converged minimum ("" when
     it is); ``analytic_min_time_s``: the fastest analytic reversal within the same limits.
     """
-    optimised = result.source == "optimized"
+    optimised = result.source is Source.OPTIMIZED
     bound = abs(history[-1][1] - history[-2][1]) if optimised and len(history) >= 2 else None
     converged = bound is not None and bound <= RTOL * history[-1][1]
     if not optimised:
@@ -108,7 +109,7 @@ def summary(result: OptimizeResult, history: list[tuple[int, float]], note: str,
         note = "one mesh only: no error bound"
     return {"min_time_s": history[-1][1] if optimised else None,
             "min_time_error_bound_s": bound, "min_time_converged": converged,
-            "min_time_mesh": [{"intervals": n, "min_time_s": t} for n, t in history] if optimised else [],
+            "min_time_mesh": [MeshStep(intervals=n, min_time_s=t) for n, t in history] if optimised else [],
             "min_time_note": note, "analytic_min_time_s": analytic_min_time}
 
 
@@ -131,13 +132,10 @@ def mesh_guess(problem: Problem, data: ProblemData, previous: OptimizeResult) ->
     t = (edges[:-1, None] + taus[None, :] * h[:, None]).reshape(P, N, col.DEGREE)
     fine = previous.fine
     guess[lay.stretch] = stretch
-    guess[lay.xc[:, :, :, 0]] = np.interp(t, fine["t"], fine["omega"]) / xs[0]
-    if "torque" in fine:
-        command = fine["torque"]
-    else:
-        command = fine["voltage"]
-        guess[lay.xc[:, :, :, 1]] = np.interp(t, fine["t"], fine["current"]) / xs[1]
-    chain_values = [command]
+    for k, name in enumerate(problem.plant.state_names):  # speed, current: what the answer carries
+        if name in fine:
+            guess[lay.xc[:, :, :, k]] = np.interp(t, fine["t"], fine[name]) / xs[k]
+    chain_values = [fine[problem.plant.input_name]]
     for _ in range(chain):
         chain_values.append(np.gradient(chain_values[-1], fine["t"]))
     for c in range(chain):

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocp.errors import MissionError
-from ocp.model.plant import DCMotorPlant, Plant, TorquePlant
+from ocp.model.plant import DrivenPlant, Plant
 from ocp.optimize import collocation as col
 from ocp.optimize.mission import MAX_INTERVALS, Mission
 from ocp.theory.crossings import sign_change_times
@@ -64,23 +64,13 @@ def chain_order(mission: Mission) -> int:
     return base
 
 
-def make_plant(mission: Mission) -> Plant:
-    """The mission's plant: the DC motor with the effects of its parameter file (a calibrated plant
-    from ``thrustshape fit``), or the normalised torque channel (which takes no effects)."""
-    if mission.plant == "dc-motor":
-        return mission.dc_plant()
-    if isinstance(mission.params, dict) and mission.params.get("effects"):
-        raise MissionError("params.effects", "effects act on the dc-motor plant, not on the torque channel")
-    return TorquePlant.from_params(mission.motor())
-
-
 def crossing_order(mission: Mission) -> int:
     """Thrust exponent g imposed at reversals: the mission's, else 6 when the voltage must be continuous
     (current and voltage both vanish at the reversal, as for sin^5), else 2."""
     if mission.min_crossing_order is not None:
         return mission.min_crossing_order
     smooth_v = mission.regularity in (ReversalRegularity.CONTINUOUS_VOLTAGE, ReversalRegularity.C1_VOLTAGE)
-    return 6 if smooth_v and mission.plant == "dc-motor" else 2
+    return mission.drive_plant().smooth_reversal_order if smooth_v else 2
 
 
 @dataclass(frozen=True)
@@ -92,7 +82,7 @@ class Problem:
     """
 
     mission: Mission
-    plant: Plant
+    plant: DrivenPlant
     structure: col.Structure
     t_desired: np.ndarray
     f_desired: np.ndarray
@@ -114,7 +104,7 @@ def problem_for(mission: Mission) -> Problem:
     per_phase = max(MIN_INTERVALS_PER_PHASE[min(chain, 1)], total // n_phases)
     if per_phase * n_phases > 2 * MAX_INTERVALS:
         raise MissionError("collocation.intervals", f"{n_phases} phases need more than {2 * MAX_INTERVALS} intervals")
-    plant = make_plant(mission)
+    plant = mission.drive_plant()
     st = col.Structure(plant_key=_plant_key(plant), n_phases=n_phases, intervals=per_phase, chain=chain)
     return Problem(mission=mission, plant=plant, structure=st, t_desired=t, f_desired=f, phases=phases)
 
@@ -147,16 +137,14 @@ def scales(problem: Problem, x_full_speed: np.ndarray) -> Scales:
     if lim.speed is not None and lim.speed < w_scale * math.sqrt(0.999):
         raise MissionError("limits.speed", f"{lim.speed} rad/s cannot produce the desired peak thrust "
                                            f"{f_scale:.4g} N (needs {w_scale:.4g} rad/s)")
-    dc = isinstance(plant, DCMotorPlant)
-    if dc:
-        u_lim = lim.voltage
-    else:
-        u_lim = m.torque_limit() / params.J
+    u_lim = plant.input_limit(m.bounds())
     t_int = float(np.sum(dur)) / (st.n_phases * st.intervals)
     rate = lim.voltage_rate if lim.voltage_rate is not None else u_lim / t_int
-    # effect states: their size at full speed; an angle grows with time, scaled by the angle travelled
+    # a bounded state: its limit; an effect state: its size at full speed; an angle grows with time, scaled by
+    # the angle travelled
     angle = max(1.0, w_scale * float(np.sum(dur)))
-    effects = [angle if name.endswith(".theta") else max(abs(float(z)), 1e-3)
-               for name, z in zip(plant.state_names[2:], x_full_speed[2:], strict=True)] if dc else []
-    x = np.array([w_scale] + ([lim.current] if dc else []) + effects + [u_lim, rate][: st.chain])
+    bounded = plant.state_limits(m.bounds())
+    states = [bounded[k] if k in bounded else angle if name.endswith(".theta") else max(abs(float(z)), 1e-3)
+              for k, (name, z) in enumerate(zip(plant.state_names, x_full_speed, strict=True)) if k > 0]
+    x = np.array([w_scale, *states, *[u_lim, rate][: st.chain]])
     return Scales(x=x, u=[u_lim, rate, rate / t_int][st.chain], u_lim=u_lim, f=f_scale)

@@ -8,18 +8,16 @@ samples the command, simulates the plant under it (:mod:`ocp.optimize.verify`) a
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
-from ocp.model.plant import DCMotorPlant
 from ocp.optimize import collocation as col
 from ocp.optimize.data import ProblemData
 from ocp.optimize.mission import output_grid
 from ocp.optimize.problem import Problem
-from ocp.optimize.result import OptimizeResult
-from ocp.optimize.verify import channels, simulate_response, torque_plant_commands, verification
+from ocp.optimize.result import Crossing, OptimizeResult, SolverStats, Source
+from ocp.optimize.verify import channels, simulate_response, verification
 
 COMMAND_SUBSTEPS = 4  # held pieces per collocation interval of a continuous command (simulation and output)
 
@@ -76,7 +74,7 @@ def extract(problem: Problem, prog: col.Program, xopt: np.ndarray, data: Problem
 
 
 def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: ProblemData,
-                  solver_info: dict[str, Any]) -> OptimizeResult:
+                  solver_info: SolverStats) -> OptimizeResult:
     """Evaluate, verify and package a solved program.
 
     The returned speed, current and thrust are the plant's response to the returned command
@@ -106,18 +104,13 @@ def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: P
     thrust = np.asarray(plant.thrust([x[i] for i in range(npx)]), float)
     arrays = {"t": t, "thrust": thrust, "thrust_desired": f_des, "omega": x[0],
               "theta": cumulative_trapezoid(x[0], t, initial=0.0)}
-    dc = isinstance(plant, DCMotorPlant)
-    if dc:
-        arrays["current"], arrays["voltage"] = x[1], u
-    else:
-        arrays["torque"] = u
-        arrays["current"], arrays["voltage"] = torque_plant_commands(m, x[0], u)
+    arrays.update(plant.channels(x, u))
     arrays["command_t"], arrays["command"] = knots, np.append(u_knots, u_knots[-1])
     fine = channels(m, resp)
     report = verification(m, arrays, f_plan, fine)
     crossings = _crossings(sol, data.scales.x, data.scales.u)
     stretch = (np.diff(sol.phase_edges) / problem.phases.durations).tolist()
-    return OptimizeResult(name=m.name, source="optimized", status=solver_info["status"], reason="",
+    return OptimizeResult(name=m.name, source=Source.OPTIMIZED, status=solver_info.status, reason="",
                           arrays=arrays, crossings=crossings, stretch=stretch, verification=report,
                           solver=solver_info, fine=fine)
 
@@ -129,7 +122,7 @@ def _subdivide(edges: np.ndarray, parts: int) -> np.ndarray:
     return np.append(inner, edges[-1])
 
 
-def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[str, Any]]:
+def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[Crossing]:
     """Local exponent g (|F| ~ |t - t_s|^g) achieved at each phase boundary, exact from the ODE.
 
     At a boundary omega = 0 and omega' is proportional to the next element of the chain: current,
@@ -152,6 +145,6 @@ def _crossings(sol: Solution, xscale: np.ndarray, uscale: float) -> list[dict[st
             n += 1
         node_si = node * xscale
         volts = node_si[sol.n_plant_states] if sol.chain else right
-        out.append({"t": float(ts), "exponent": float(2 * n + 2), "sign_change": True,
-                    "current": float(node_si[1]) if node.size > 1 else None, "voltage": float(volts)})
+        out.append(Crossing(t=float(ts), exponent=float(2 * n + 2), sign_change=True,
+                            current=float(node_si[1]) if node.size > 1 else None, voltage=float(volts)))
     return out

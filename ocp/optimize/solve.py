@@ -27,7 +27,7 @@ from ocp.optimize.data import ProblemData, problem_data
 from ocp.optimize.guess import fastest_analytic
 from ocp.optimize.mission import Mission
 from ocp.optimize.problem import Problem, problem_for
-from ocp.optimize.result import OptimizeResult, Unsolved
+from ocp.optimize.result import OptimizeResult, SolverStats, Status, Unsolved
 from ocp.optimize.solution import finish_result
 from ocp.reference.fallback_answer import analytic_fallback
 
@@ -73,7 +73,7 @@ def optimize_mesh(mission: Mission, warm: bool | None = False, previous: Optimiz
     started = time.perf_counter()
     outcome = _optimize_mesh(mission, warm, previous, context, started)
     if isinstance(outcome, Unsolved):  # the one entry into the fallback
-        result = analytic_fallback(mission, outcome.reason, outcome.solver or None)
+        result = analytic_fallback(mission, outcome.reason, outcome.solver)
     else:
         result = outcome
     result.total_time_s = time.perf_counter() - started
@@ -93,8 +93,7 @@ def _optimize_mesh(mission: Mission, warm: bool | None, previous: OptimizeResult
         data = dataclasses.replace(data, x0=min_time.mesh_guess(problem, data, previous))
     setup = time.perf_counter() - started
     result = solve_problem(problem, data, False if previous is not None else warm, context=context)
-    build = result.solver.get("build_time_s", 0)
-    totals = {k: result.solver.get(k, 0) for k in ("solve_time_s", "verify_time_s", "iterations")}
+    first = result.solver
     backoff, rounds = np.ones((problem.structure.n_phases, problem.structure.intervals)), 0
     for _ in range(MAX_REFINEMENTS):
         if isinstance(result, Unsolved) or result.path_ok:
@@ -108,17 +107,21 @@ def _optimize_mesh(mission: Mission, warm: bool | None, previous: OptimizeResult
         # a min-time round restarts from the analytic guess: warm, it kept a worse local optimum
         # (51.47 vs 51.29 ms on the continuous-voltage reversal at 960 intervals); every back-off
         # round shares the mission's time limit
-        left = max(mission.time_limit_s - totals["solve_time_s"], 1e-3)
+        left = max(mission.time_limit_s - first.solve_time_s, 1e-3)
         result = solve_problem(problem, data, warm=mission.objective != "min-time", time_limit=left, context=context)
         rounds += 1
-        build += result.solver.get("build_time_s", 0)  # the warm solver is built on its first use
-        for k in totals:
-            totals[k] += result.solver.get(k, 0)
-    # the report covers every round: times and iterations add up, the build happened in the first
-    result.solver.update(totals, build_time_s=build, setup_time_s=setup, backoff_rounds=rounds,
-                         limit_backoff=float(np.min(backoff)), backoff_intervals=int(np.sum(backoff < 1.0)))
+        # the report covers every round: times and iterations add up; the warm solver is built on its first use
+        s = result.solver
+        first.build_time_s += s.build_time_s
+        first.solve_time_s += s.solve_time_s
+        first.verify_time_s += s.verify_time_s
+        first.iterations += s.iterations
+        first.status, first.objective, first.constraint_violation = s.status, s.objective, s.constraint_violation
+    first.setup_time_s, first.backoff_rounds = setup, rounds
+    first.limit_backoff, first.backoff_intervals = float(np.min(backoff)), int(np.sum(backoff < 1.0))
+    result.solver = first
     if isinstance(result, OptimizeResult) and not result.path_ok:
-        diverged = not math.isfinite(result.verification["max_abs_current"] + result.verification["max_abs_voltage"])
+        diverged = not math.isfinite(result.verification.max_abs_current + result.verification.max_abs_voltage)
         reason = ("the simulated response to the optimised command is not finite" if diverged else
                   f"the optimised response exceeds a limit between nodes after {rounds} back-off rounds")
         return Unsolved(reason, result.solver)
@@ -130,15 +133,13 @@ def _interval_excess(problem: Problem, result: OptimizeResult) -> np.ndarray:
     simulated response (on its integration grid) on each collocation interval and its two neighbours (a
     node bounds the polynomials on both sides), shape (P, N)."""
     P, N = problem.structure.n_phases, problem.structure.intervals
-    lim, arr = problem.mission.limits, result.fine
+    arr = result.fine
     phase_edges = np.concatenate([[0.0], np.cumsum(np.asarray(result.stretch) * problem.phases.durations)])
     t = arr["t"]
     j = np.clip(np.searchsorted(phase_edges, t, side="right") - 1, 0, P - 1)
     k = np.clip(((t - phase_edges[j]) / np.diff(phase_edges)[j] * N).astype(int), 0, N - 1)
-    if "torque" in arr:  # the torque channel: its bound is the only one the program keeps
-        ratio = np.abs(arr["torque"]) * problem.mission.motor().J / problem.mission.torque_limit()
-    else:
-        ratio = np.maximum(np.abs(arr["current"]) / lim.current, np.abs(arr["voltage"]) / lim.voltage)
+    # the drive's limits the program keeps (current and voltage; the torque channel's torque)
+    ratio = np.max(list(problem.plant.limit_ratios(arr, problem.mission.bounds()).values()), axis=0)
     per = np.zeros(P * N)
     np.maximum.at(per, j * N + k, ratio)
     padded = np.concatenate([[0.0], per, [0.0]])
@@ -158,14 +159,13 @@ def solve_problem(problem: Problem, data: ProblemData, warm: bool | None, time_l
     p = prog.pack(**data.params())
     run = prog.solve(p, data.lbx, data.ubx, data.x0, warm, min(time.perf_counter() + budget, context.deadline),
                      data.path_bound)
-    solver_info = {"status": run.status, "iterations": run.iterations, "solve_time_s": run.solve_time_s,
-                   "warm_start": run.warm,
-                   "build_time_s": build_time + run.warm_build_s, "objective": run.objective,
-                   "constraint_violation": run.constraint_violation}
+    status = Status.parse(run.status)
+    solver_info = SolverStats(status=status, iterations=run.iterations, solve_time_s=run.solve_time_s,
+                              build_time_s=build_time + run.warm_build_s, objective=run.objective,
+                              constraint_violation=run.constraint_violation, warm_start=run.warm)
     if not run.success:
-        stopped = "Wall" in run.status or "CPU" in run.status or run.status == "User_Requested_Stop"
-        return Unsolved("solver time limit reached" if stopped else f"IPOPT: {run.status}", solver_info)
+        return Unsolved("solver time limit reached" if status.stopped_by_time else f"IPOPT: {run.status}", solver_info)
     t0 = time.perf_counter()
     result = finish_result(problem, prog, run.x, data, solver_info)
-    result.solver["verify_time_s"] = time.perf_counter() - t0
+    result.solver.verify_time_s = time.perf_counter() - t0
     return result

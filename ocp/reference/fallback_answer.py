@@ -13,15 +13,14 @@ import numpy as np
 
 from ocp.errors import InfeasibleError, MissionError
 from ocp.model.equilibrium import equilibrium
-from ocp.model.plant import Plant, TorquePlant
 from ocp.optimize.mission import Mission, output_grid
-from ocp.optimize.result import OptimizeResult
-from ocp.optimize.verify import channels, simulate_response, torque_plant_commands, verification
+from ocp.optimize.result import Crossing, OptimizeResult, SolverStats, Source, Status
+from ocp.optimize.verify import channels, simulate_response, verification
 from ocp.reference.analytic import reference
-from ocp.reference.fallback import DESIGN_STEPS, DriveLimits, channel_torque, design_sin, hold_limit, plan_reversals
+from ocp.reference.fallback import DESIGN_STEPS, DriveLimits, design_sin, hold_limit, plan_reversals
 
 
-def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | None = None) -> OptimizeResult:
+def analytic_fallback(m: Mission, reason: str, solver_info: SolverStats | None = None) -> OptimizeResult:
     """Analytic reference within the mission's limits: hold levels joined by local polynomial reversals
     of the order the regularity needs (``alpha (t - t_s)^p chi``), or, for a profile that never
     reverses, the ``A sin^(2q+1)`` design at the mission's peak thrust. For the torque channel the
@@ -35,13 +34,12 @@ def analytic_fallback(m: Mission, reason: str, solver_info: dict[str, Any] | Non
     Raises :class:`~ocp.errors.InfeasibleError` naming the binding limit when nothing within the limits
     is found.
     """
-    params, lim = m.motor(), m.limits
+    params, lim, torque = m.motor(), m.limits, m.drive_plant().torque_limit(m.bounds())
     last: OptimizeResult | None = None
     error: InfeasibleError | None = None
     stretches = sorted({m.retiming.min_stretch, m.retiming.max_stretch})
     for margin, shrink in DESIGN_STEPS:
-        drive = DriveLimits(margin * lim.current, margin * lim.voltage,
-                            None if m.plant == "dc-motor" else margin * m.torque_limit())
+        drive = DriveLimits(margin * lim.current, margin * lim.voltage, None if torque is None else margin * torque)
         cap = shrink * hold_limit(params, drive, None if lim.speed is None else margin * lim.speed)
         best: tuple[float, OptimizeResult] | None = None
         for stretch in stretches:  # the shortest retiming unless it needs lower levels than the longest
@@ -70,24 +68,22 @@ def _binding(m: Mission, res: OptimizeResult | None) -> str:
     """The limit field the (failed) fallback exceeds most."""
     if res is None:
         return "limits"
-    v = res.verification
-    if "max_abs_torque" in v:
-        return "limits.torque"
-    ratios = {"limits.current": v["max_abs_current"] / m.limits.current,
-              "limits.voltage": v["max_abs_voltage"] / m.limits.voltage}
+    # the peaks the verification reports: over the returned arrays and the integration grid
+    peaks = {k: max(float(np.max(np.abs(res.arrays[k]))), float(np.max(np.abs(v)))) for k, v in res.fine.items()}
+    ratios = {k: float(r) for k, r in m.drive_plant().limit_ratios(peaks, m.bounds()).items()}
     if m.limits.speed is not None:
-        ratios["limits.speed"] = v["max_abs_speed"] / m.limits.speed
+        ratios["limits.speed"] = res.verification.max_abs_speed / m.limits.speed
     return max(ratios, key=lambda k: ratios[k] if math.isfinite(ratios[k]) else math.inf)
 
 
 def _fallback_try(m: Mission, drive: DriveLimits, cap: float, stretch: float, reason: str,
-                  solver_info: dict[str, Any] | None) -> tuple[OptimizeResult, float]:
+                  solver_info: SolverStats | None) -> tuple[OptimizeResult, float]:
     """One fallback design with hold levels capped at ``cap`` [N] and time stretched ``stretch`` x, simulated
     and verified; returns it and the smallest level / desired level."""
     params = m.motor()
     t_d, f_d = m.desired()
     t_d = (t_d - t_d[0]) * stretch
-    dc = m.plant == "dc-motor"
+    dc = m.drive_plant().voltage_driven
     t = output_grid(float(t_d[-1]))
     design = plan_reversals(params, t_d, f_d, drive.current, drive.voltage, m.regularity, dc, drive.torque,
                             level_cap=cap)
@@ -115,35 +111,26 @@ def _fallback_try(m: Mission, drive: DriveLimits, cap: float, stretch: float, re
 
 
 def _fallback_result(m: Mission, prof: Any, t: np.ndarray, t_d: np.ndarray, f_d: np.ndarray, reason: str,
-                     solver_info: dict[str, Any] | None) -> OptimizeResult:
+                     solver_info: SolverStats | None) -> OptimizeResult:
     """Closed-form reference of ``prof`` on ``t`` (M,), simulated on the mission's plant and verified."""
-    params = m.motor()
-    dc = m.plant == "dc-motor"
+    params, plant = m.motor(), m.drive_plant()
     ref = reference(prof, params, t)
     arrays = {"t": t, "thrust": ref.thrust, "thrust_desired": np.interp(t, t_d, f_d), "omega": ref.omega,
               "theta": ref.theta}
     # the closed forms are the nominal model's; the check runs the mission's plant, effects included
-    plant: Plant
-    if dc:
-        plant = m.dc_plant()
-        x0 = equilibrium(plant, float(ref.omega[0]))[0]
-        x0[1] = ref.current[0]
-        command = ref.voltage
-        arrays["current"], arrays["voltage"] = ref.current, ref.voltage
-    else:
-        plant = TorquePlant.from_params(params)
-        x0 = np.array([ref.omega[0]])
-        command = channel_torque(params, ref) / params.J  # normalised input u [rad/s^2]
-        arrays["torque"] = command
-        arrays["current"], arrays["voltage"] = torque_plant_commands(m, ref.omega, command)
+    nominal, command = plant.feedforward(ref)  # speed (and current), input [V or rad/s^2]
+    x0 = equilibrium(plant, float(ref.omega[0]))[0]  # effect states at rest
+    x0[: len(nominal)] = [s[0] for s in nominal]
+    arrays.update(plant.channels(np.array(nominal), command))
     u_knots = 0.5 * (command[:-1] + command[1:])
     resp = simulate_response(plant, t, u_knots, x0, t)
     arrays["command_t"], arrays["command"] = t, np.append(u_knots, u_knots[-1])
     f_sim = np.asarray(plant.thrust([resp.at_out[k] for k in range(resp.at_out.shape[0])]), float)
     fine = channels(m, resp)
     report = verification(m, {**arrays, "thrust": f_sim}, ref.thrust, fine)
-    crossings = [{"t": float(ts), "exponent": float(p or 0), "sign_change": True}
+    crossings = [Crossing(t=float(ts), exponent=float(p or 0), sign_change=True)
                  for ts, p in zip(ref.crossing_times, ref.crossing_orders, strict=True) if 0.0 < ts < t[-1]]
-    return OptimizeResult(name=m.name, source="analytic-fallback", status="fallback", reason=reason, arrays=arrays,
-                          crossings=crossings, stretch=[], verification=report, solver=solver_info or {},
+    return OptimizeResult(name=m.name, source=Source.ANALYTIC_FALLBACK, status=Status.FALLBACK, reason=reason,
+                          arrays=arrays, crossings=crossings, stretch=[], verification=report,
+                          solver=solver_info if solver_info is not None else SolverStats(),
                           fine=fine)

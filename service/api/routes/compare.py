@@ -10,13 +10,14 @@ from pydantic import Field
 from ocp.errors import MissionError
 from service.api.deps import PoolDep, SettingsDep, TasksDep, check_mission_limits
 from service.api.problems import error_responses
+from service.core_models import ComparePublic
 from service.schemas import MissionRequest
 
 router = APIRouter(prefix="/v1", tags=["compare"])
 _ERRORS = error_responses(401, 413, 422, 503, 504)
 
 
-@router.post("/compare", response_model=dict[str, Any], responses=_ERRORS,
+@router.post("/compare", response_model=ComparePublic, responses=_ERRORS,
              summary="Compare the analytic family with the optimised reference (peaks, energy, regularity)")
 async def compare(mission: MissionRequest, settings: SettingsDep, pool: PoolDep, tasks: TasksDep,
                   qs: Annotated[list[Annotated[int, Field(ge=0, le=10)]] | None,
