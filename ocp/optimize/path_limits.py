@@ -19,12 +19,12 @@ stays as the safety net for what this model leaves out: effects, curvature of ``
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import casadi as ca
 import numpy as np
 
-from ocp.model.plant import DCMotorPlant, Plant
+from ocp.model.plant import DrivenPlant, Plant
 
 #: check points after an interval's start [multiples of tau_e = L/R] (capped at the interval's end)
 CHECK_TAU_E = (1.0, 2.0, 3.0, 4.5)
@@ -54,7 +54,8 @@ def applies(plant: Plant, chain: int) -> bool:
     (``chain >= 1``) has no jumps, hence no transients between the nodes; there the extra inequalities bought
     nothing and made IPOPT's path erratic (the continuous-voltage reversal took 34 to 271 iterations depending
     on bounds that never became active)."""
-    return isinstance(plant, DCMotorPlant) and not plant.effects and chain == 0
+    driven = cast(DrivenPlant, plant)  # the plant answers; no branch on its kind here
+    return chain == 0 and driven.voltage_driven and driven.is_nominal and driven.voltage_plant() is not None
 
 
 def current_terms(plant: Plant, nodes: np.ndarray, chain: int, npx: int, pts: ca.SX, uk: ca.SX, xs: ca.SX,
@@ -65,7 +66,9 @@ def current_terms(plant: Plant, nodes: np.ndarray, chain: int, npx: int, pts: ca
     current row 1, the input state row ``npx`` when ``chain >= 1``); ``uk`` the scaled control (the held
     voltage when ``chain == 0``); ``xs`` state scales, ``us`` control scale, ``hn`` the interval's length [s].
     """
-    p = plant.params  # type: ignore[attr-defined]  # applies(): a DC motor
+    dc = cast(DrivenPlant, plant).voltage_plant()
+    assert dc is not None, "current_terms needs a voltage-driven DC motor (see applies)"
+    p = dc.params
     tau_e = p.L / p.R
 
     def w_v(b: list[Any]) -> tuple[Any, Any]:
