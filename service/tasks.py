@@ -85,7 +85,9 @@ def optimize_mission(payload: Payload) -> Payload:
     left = time_left()  # IPOPT stops early enough to verify and answer before the worker would be killed
     context = SolveContext(deadline=math.inf if left is None else time.perf_counter() + left - SOLVE_MARGIN_S,
                            on_build=report_phase)
-    return module.optimize(untrusted_mission(payload), context=context).to_dict()
+    # warm=None: start from the worker's last solution of the same structure when it is plausibly close
+    # (repeated requests, batch items; ocp.optimize.warm), else cold
+    return module.optimize(untrusted_mission(payload), warm=None, context=context).to_dict()
 
 
 def fallback_mission(payload: Payload) -> Payload:

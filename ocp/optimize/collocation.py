@@ -35,6 +35,8 @@ import casadi as ca
 import numpy as np
 
 from ocp.model.plant import CASADI, Plant
+from ocp.optimize import path_limits
+from ocp.optimize import warm as warm_
 
 DEGREE = 3
 TAU = np.append(0.0, ca.collocation_points(DEGREE, "radau"))  # (DEGREE+1,) interval-local nodes
@@ -179,6 +181,7 @@ class Solved:
         objective: objective value [1]
         constraint_violation: largest |g| of the (scaled) collocation residuals
         solve_time_s: wall time of the run [s]
+        warm, warm_build_s: started from the program's last solution; time [s] spent building the warm solver
     """
 
     x: np.ndarray
@@ -188,11 +191,15 @@ class Solved:
     objective: float
     constraint_violation: float
     solve_time_s: float
+    warm: bool = False
+    warm_build_s: float = 0.0
 
 
 @dataclass
 class Program:
-    """A built NLP with its solver, layout, a warm-start memory, a lock and a wall-time stop."""
+    """A built NLP with its solvers (cold; warm, built on a warm start: :mod:`ocp.optimize.warm`), layout, a
+    warm-start memory, a lock and a wall-time stop. Constraints: the collocation residuals (``n_g``, equalities),
+    then the current inside each interval (``n_path``, :func:`ocp.optimize.path_limits.path_bounds`)."""
 
     structure: Structure
     nx: int
@@ -202,7 +209,12 @@ class Program:
     n_params: int
     n_g: int
     deadline: _Deadline = field(repr=False)
-    _last: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
+    n_path: int = 0
+    nlp: dict[str, ca.SX] = field(default_factory=dict, repr=False)  # for the warm solver's build
+    ipopt_options: dict[str, object] = field(default_factory=dict, repr=False)
+    build_s: float = 0.0  # time the cold solver took to build [s]
+    warm_solver: ca.Function | None = field(default=None, repr=False)
+    _last: warm_.Memory | None = field(default=None, repr=False)
     _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
 
     @cached_property
@@ -227,38 +239,58 @@ class Program:
     def last_solution(self) -> np.ndarray | None:
         """A copy of the decision vector of the last solve (scaled), None before the first (benchmarks)."""
         with self._lock:
-            return self._last["x"].copy() if "x" in self._last else None
+            return None if self._last is None else self._last.x.copy()
 
     def unpack(self, p: np.ndarray) -> dict[str, np.ndarray]:
         """The named parts of a parameter vector (views), the inverse of :meth:`pack`."""
         return {name: p[sl] for name, sl in self.param_slices.items()}
 
-    def solve(self, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray, warm: bool = False,
-              until: float = math.inf) -> Solved:
-        """One IPOPT run from ``x0`` (or, ``warm``, from this program's last solution and multipliers, clipped
-        into the bounds), stopped once ``perf_counter()`` passes ``until`` [s]. Thread-safe."""
-        args: dict[str, Any] = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": 0.0, "ubg": 0.0}
+    def _warm_solver(self, until: float) -> ca.Function:
+        """The warm solver, built on first use (under the lock) if the call's stop ``until`` leaves room for three
+        cold builds (``build_s``); else, until a roomier call builds it, the cold solver."""
+        if self.warm_solver is None and until - time.perf_counter() < 3.0 * self.build_s:
+            return self.solver
+        if self.warm_solver is None:
+            self.warm_solver = ca.nlpsol("collocation_warm", "ipopt", self.nlp,
+                                         {**self.ipopt_options, **warm_.WARM_OPTIONS,  # type: ignore[dict-item]
+                                          "iteration_callback": self.deadline})
+        return self.warm_solver
+
+    def solve(self, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray, warm: bool | None = False,
+              until: float = math.inf, path_bound: np.ndarray | None = None) -> Solved:
+        """One IPOPT run from ``x0``, or from this program's last solution and multipliers (clipped into the
+        bounds; the warm solver) when ``warm`` is True or, ``None``, when the last solve is plausibly close;
+        stopped once ``perf_counter()`` passes ``until`` [s]. ``path_bound``: bounds of the in-interval current
+        (|i| / limit, shape (n_path,); default 1). Thread-safe."""
+        bound = np.ones(self.n_path) if path_bound is None or not self.n_path else path_bound
+        lbg, ubg = np.concatenate([np.zeros(self.n_g), -bound]), np.concatenate([np.zeros(self.n_g), bound])
+        args: dict[str, Any] = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": lbg, "ubg": ubg}
         with self._lock:
-            if warm and "x" in self._last and self._last["x"].size == x0.size:
-                args["x0"] = np.clip(self._last["x"], lbx, ubx)
-                args["lam_x0"], args["lam_g0"] = self._last["lam_x"], self._last["lam_g"]
+            solver, t_lock = self.solver, time.perf_counter()
+            started_warm = warm_.start_from(self._last, warm, p, lbx, ubx, self.param_slices)
+            if started_warm and self._last is not None:
+                args["x0"] = np.clip(self._last.x, lbx, ubx)
+                args["lam_x0"], args["lam_g0"] = self._last.lam_x, self._last.lam_g
+                solver = self._warm_solver(until)  # built on first use: its time is reported apart
             t0 = time.perf_counter()
             self.deadline.until = until
             try:
-                sol = self.solver(**args)
+                sol = solver(**args)
             finally:
                 self.deadline.until = math.inf
             solve_time = time.perf_counter() - t0
-            stats = self.solver.stats()
+            stats = solver.stats()
             x = np.asarray(sol["x"]).ravel()
-            self._last = {"x": x, "lam_x": np.asarray(sol["lam_x"]).ravel(),
-                          "lam_g": np.asarray(sol["lam_g"]).ravel()}
+            self._last = warm_.Memory(x=x, lam_x=np.asarray(sol["lam_x"]).ravel(),
+                                      lam_g=np.asarray(sol["lam_g"]).ravel(), p=p.copy(), lbx=lbx.copy(),
+                                      ubx=ubx.copy())
         status = str(stats.get("return_status", "unknown"))
+        g = np.asarray(sol["g"]).ravel()[:self.n_g]
         return Solved(x=x, status=status,
                       success=bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level",
                       iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]),
-                      constraint_violation=float(np.max(np.abs(np.asarray(sol["g"])))) if self.n_g else 0.0,
-                      solve_time_s=solve_time)
+                      constraint_violation=float(np.max(np.abs(g))) if self.n_g else 0.0,
+                      solve_time_s=solve_time, warm=started_warm, warm_build_s=t0 - t_lock)
 
 
 def _param_slices(st: Structure, nx: int) -> dict[str, slice]:
@@ -282,6 +314,7 @@ def _param_slices(st: Structure, nx: int) -> dict[str, slice]:
 
 def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Program:
     """Build the NLP for ``plant`` with structure ``st`` (seconds at most; then cached)."""
+    started = time.perf_counter()
     npx = len(plant.state_names)
     nx = npx + st.chain
     P, N = st.n_phases, st.intervals
@@ -300,6 +333,8 @@ def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Prog
     u = [[ca.SX.sym(f"u_{j}_{k}", 1) for k in range(N)] for j in range(P)]
 
     g: list[ca.SX] = []
+    g_path: list[ca.SX] = []
+    path = path_limits.applies(plant, st.chain)
     u_all: list[ca.SX] = []
     f_track = ca.SX(0.0)
     total = ca.sum1(dur)
@@ -313,6 +348,8 @@ def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Prog
             u_all.append(uk)
             res, err2 = interval(pts, uk, sigma[j], xs, us, rho, h / N, fscale, fd[k * DEGREE:(k + 1) * DEGREE, j])
             g += ca.vertsplit(res, nx)
+            if path:  # the current between the nodes (issue 14 item 1)
+                g_path.append(path_limits.current_terms(plant, TAU, st.chain, npx, pts, uk, xs, us, h / N))
             f_track += dur[j] / (N * total) * err2
             x_start = xc[j][k][:, DEGREE - 1]
     u_vec = ca.vertcat(*u_all)
@@ -329,10 +366,13 @@ def build(plant: Plant, st: Structure, ipopt_options: dict[str, object]) -> Prog
             xs_list += [ca.vec(xc[j][k]), u[j][k]]
     xvec = ca.vertcat(*xs_list)
     deadline = _Deadline()
-    solver = ca.nlpsol("collocation", "ipopt", {"x": xvec, "f": obj, "g": ca.vertcat(*g), "p": par},
+    nlp = {"x": xvec, "f": obj, "g": ca.vertcat(*g, *g_path), "p": par}
+    solver = ca.nlpsol("collocation", "ipopt", nlp,
                        {**ipopt_options, "iteration_callback": deadline})  # type: ignore[dict-item]
     return Program(structure=st, nx=nx, n_plant_states=npx, solver=solver, layout=layout(P, N, nx),
-                   n_params=n_par, n_g=int(ca.vertcat(*g).numel()), deadline=deadline)
+                   n_params=n_par, n_g=int(ca.vertcat(*g).numel()), deadline=deadline,
+                   n_path=int(ca.vertcat(*g_path).numel()) if g_path else 0, nlp=nlp,
+                   ipopt_options=dict(ipopt_options), build_s=time.perf_counter() - started)
 
 
 def _interval_function(plant: Plant, st: Structure, nx: int, npx: int) -> ca.Function:

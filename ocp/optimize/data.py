@@ -18,6 +18,7 @@ from ocp.errors import MissionError
 from ocp.model.equilibrium import equilibrium, speed_for_thrust
 from ocp.model.plant import Plant
 from ocp.optimize import collocation as col
+from ocp.optimize import path_limits
 from ocp.optimize.guess import analytic_guess, initial_guess
 from ocp.optimize.problem import Problem, Scales, crossing_order, scales
 
@@ -42,6 +43,8 @@ class ProblemData:
         weights: (track, time, stretch, smooth, effort) objective weights
         lbx, ubx: variable bounds, shape (n,) (``Program.layout.n``)
         x0: initial guess, shape (n,)
+        path_bound: bound of |current| / limit at the program's in-interval check points
+            (:func:`ocp.optimize.path_limits.path_bounds`), shape (P*N*checks,)
     """
 
     fd: np.ndarray
@@ -53,6 +56,7 @@ class ProblemData:
     lbx: np.ndarray
     ubx: np.ndarray
     x0: np.ndarray
+    path_bound: np.ndarray
 
     def params(self) -> dict[str, Any]:
         """The named parameters for :meth:`ocp.optimize.collocation.Program.pack`."""
@@ -118,7 +122,8 @@ def problem_data(problem: Problem, backoff: float | np.ndarray = 1.0,
     """Parameter vector, bounds and initial guess for the cached program of ``problem``.
 
     ``backoff`` (<= 1; a number or one per interval, (P, N)) shrinks the current and voltage bounds relative
-    to the limits. The initial guess is the static inverse of the desired thrust at stretch 1, except for a
+    to the limits (at the nodes and, for the current, inside the intervals). The initial guess is the static
+    inverse of the desired thrust at stretch 1, except for a
     min-time mission with reversals and ``analytic_start``: then it is the fastest analytic reversal
     (:func:`ocp.optimize.guess.analytic_guess`).
     """
@@ -148,8 +153,10 @@ def problem_data(problem: Problem, backoff: float | np.ndarray = 1.0,
     x0 = initial_guess(problem, lay, x0, fd * sc.f, sc.x, sc.u, chain, lbx, ubx)
     if analytic_start and m.objective == "min-time" and P > 1:
         x0 = analytic_guess(problem, lay, x0, sc, lbx, ubx)
+    margin = 0.0 if m.objective == "min-time" else path_limits.PATH_MARGIN
+    path_bound = path_limits.path_bounds(np.broadcast_to(np.asarray(backoff, float), (P, N)), margin)
     return ProblemData(fd=fd, signs=problem.phases.signs, durations=dur, scales=sc, rho=rho,
-                       weights=WEIGHTS[m.objective], lbx=lbx, ubx=ubx, x0=x0)
+                       weights=WEIGHTS[m.objective], lbx=lbx, ubx=ubx, x0=x0, path_bound=path_bound)
 
 
 def _residual_scaling(plant: Plant, xscale: np.ndarray, u_nom: float, N: int, d_nom: float, npx: int,

@@ -111,6 +111,8 @@ class SolverStats(Record):
     backoff_rounds: int = field(default=0, metadata=info("1", "re-solves with limits backed off between nodes"))
     limit_backoff: float = field(default=1.0, metadata=info("1", "smallest bound / limit after the back-off"))
     backoff_intervals: int = field(default=0, metadata=info("1", "collocation intervals whose bounds were backed off"))
+    warm_start: bool = field(default=False, metadata=info("", "the first solve started from the program's last "
+                                                          "solution (ocp.optimize.warm)"))
 
 
 @dataclass(frozen=True)

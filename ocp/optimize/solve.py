@@ -35,8 +35,13 @@ MAX_REFINEMENTS = 3  # back-off rounds when the simulated response exceeds a lim
 NO_CONTEXT = SolveContext()
 
 
-def optimize(mission: Mission, warm: bool = False, context: SolveContext = NO_CONTEXT) -> OptimizeResult:
+def optimize(mission: Mission, warm: bool | None = False, context: SolveContext = NO_CONTEXT) -> OptimizeResult:
     """Optimised reference for ``mission`` (or the analytic fallback with the reason).
+
+    ``warm``: start from the cached program's last solution (primal and dual) never (``False``, the default:
+    cold, from the static inverse), when it is plausibly close (``None``: what the service's workers ask, so
+    batch items and repeated requests of one structure start warm, :mod:`ocp.optimize.warm`), or always when
+    its size fits (``True``).
 
     A min-time mission is solved on successively doubled meshes until its duration converges
     (:func:`ocp.optimize.min_time.refine`); any other mission on its own mesh (:func:`optimize_mesh`).
@@ -56,7 +61,7 @@ def _mesh_size(mission: Mission) -> int:
     return st.intervals * st.n_phases
 
 
-def optimize_mesh(mission: Mission, warm: bool = False, previous: OptimizeResult | None = None,
+def optimize_mesh(mission: Mission, warm: bool | None = False, previous: OptimizeResult | None = None,
                   context: SolveContext = NO_CONTEXT) -> OptimizeResult:
     """Optimised reference for ``mission`` on its own mesh (or the analytic fallback with the reason);
     ``previous``: a coarser answer of the same mission to start from (min-time refinement).
@@ -75,7 +80,7 @@ def optimize_mesh(mission: Mission, warm: bool = False, previous: OptimizeResult
     return result
 
 
-def _optimize_mesh(mission: Mission, warm: bool, previous: OptimizeResult | None, context: SolveContext,
+def _optimize_mesh(mission: Mission, warm: bool | None, previous: OptimizeResult | None, context: SolveContext,
                    started: float) -> OptimizeResult | Unsolved:
     problem = problem_for(mission)
     try:
@@ -87,7 +92,7 @@ def _optimize_mesh(mission: Mission, warm: bool, previous: OptimizeResult | None
     if previous is not None:  # min-time refinement: start from the coarser mesh's answer
         data = dataclasses.replace(data, x0=min_time.mesh_guess(problem, data, previous))
     setup = time.perf_counter() - started
-    result = solve_problem(problem, data, warm and previous is None, context=context)
+    result = solve_problem(problem, data, False if previous is not None else warm, context=context)
     first = result.solver
     backoff, rounds = np.ones((problem.structure.n_phases, problem.structure.intervals)), 0
     for _ in range(MAX_REFINEMENTS):
@@ -105,8 +110,9 @@ def _optimize_mesh(mission: Mission, warm: bool, previous: OptimizeResult | None
         left = max(mission.time_limit_s - first.solve_time_s, 1e-3)
         result = solve_problem(problem, data, warm=mission.objective != "min-time", time_limit=left, context=context)
         rounds += 1
-        # the report covers every round: times and iterations add up, the build happened in the first
+        # the report covers every round: times and iterations add up; the warm solver is built on its first use
         s = result.solver
+        first.build_time_s += s.build_time_s
         first.solve_time_s += s.solve_time_s
         first.verify_time_s += s.verify_time_s
         first.iterations += s.iterations
@@ -140,7 +146,7 @@ def _interval_excess(problem: Problem, result: OptimizeResult) -> np.ndarray:
     return np.maximum(np.maximum(padded[:-2], padded[1:-1]), padded[2:]).reshape(P, N)
 
 
-def solve_problem(problem: Problem, data: ProblemData, warm: bool, time_limit: float | None = None,
+def solve_problem(problem: Problem, data: ProblemData, warm: bool | None, time_limit: float | None = None,
                   context: SolveContext = NO_CONTEXT) -> OptimizeResult | Unsolved:
     """Solve the cached program; IPOPT stops after ``time_limit`` [s] of solving (default the mission's
     ``time_limit_s``; building the program is not counted, as with IPOPT's own ``max_wall_time``) or at the
@@ -151,11 +157,12 @@ def solve_problem(problem: Problem, data: ProblemData, warm: bool, time_limit: f
     build_time = time.perf_counter() - build_start
     budget = m.time_limit_s if time_limit is None else time_limit
     p = prog.pack(**data.params())
-    run = prog.solve(p, data.lbx, data.ubx, data.x0, warm, min(time.perf_counter() + budget, context.deadline))
+    run = prog.solve(p, data.lbx, data.ubx, data.x0, warm, min(time.perf_counter() + budget, context.deadline),
+                     data.path_bound)
     status = Status.parse(run.status)
     solver_info = SolverStats(status=status, iterations=run.iterations, solve_time_s=run.solve_time_s,
-                              build_time_s=build_time, objective=run.objective,
-                              constraint_violation=run.constraint_violation)
+                              build_time_s=build_time + run.warm_build_s, objective=run.objective,
+                              constraint_violation=run.constraint_violation, warm_start=run.warm)
     if not run.success:
         return Unsolved("solver time limit reached" if status.stopped_by_time else f"IPOPT: {run.status}", solver_info)
     t0 = time.perf_counter()

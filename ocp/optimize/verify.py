@@ -1,105 +1,37 @@
 """A-posteriori verification: the plant simulated under the returned input, its peaks checked against the limits.
 
-The simulation is fixed-step RK4 on a grid of at most ``SIM_STEP`` (shortened for a stiff plant, see
-:func:`sim_step`), an integrator independent of the collocation scheme; :func:`verification` reports the
+The simulation is the project's one zero-order-hold simulator (:mod:`ocp.simulate.zoh`: fixed-step RK4 on a
+grid of at most ``SIM_STEP``, shortened for a stiff plant by its stability rule, the step compiled to C where a
+compiler is available), an integrator independent of the collocation scheme; :func:`verification` reports the
 reproduction error and the peaks and margins of the simulated response on the integration grid.
 """
 
 from __future__ import annotations
 
-from collections.abc import Hashable
-from dataclasses import dataclass
-from functools import lru_cache
-from typing import Any, cast
-
-import casadi as ca
 import numpy as np
 
-from ocp.errors import MissionError
-from ocp.model.plant import CASADI, Plant
+from ocp.model.plant import Plant
 from ocp.optimize.mission import Mission
 from ocp.optimize.result import Verification
-from ocp.simulate.open_loop import rk4
+from ocp.simulate.zoh import MAX_SIM_STEPS, RK4_STIFFNESS, SIM_STEP, Response, simulate_held, step_limit
 
 PATH_TOLERANCE = 1e-3  # relative excess over a limit accepted as rounding
-SIM_STEP = 2.5e-4  # s, longest verification step (two RK4 sub-steps each)
-RK4_STIFFNESS = 0.32  # largest |h lambda| of an RK4 sub-step: RK4 is stable to 2.78, its error ~ (h lambda)^5 / 120
-MAX_SIM_STEPS = 2_000_000  # verification steps of one answer (about a second of computing)
 
-
-@lru_cache(maxsize=16)
-def _rk4_function(plant: Any) -> ca.Function:
-    """CasADi RK4 step ``(x, u, dt) -> x+`` with 2 sub-steps, built once per plant."""
-    nx = len(plant.state_names)
-    x, u, dt = ca.SX.sym("x", nx), ca.SX.sym("u"), ca.SX.sym("dt")
-    return ca.Function("rk4", [x, u, dt], [ca.vertcat(*rk4(plant, [x[i] for i in range(nx)], u, dt, 2, CASADI))])
-
-
-@lru_cache(maxsize=64)
-def _rk4_accumulator(plant: Any, steps: int) -> ca.Function:
-    """``steps`` RK4 steps chained (CasADi ``mapaccum``), cached per plant and length."""
-    return _rk4_function(plant).mapaccum("sim", steps)
-
-
-@lru_cache(maxsize=16)
-def _jacobian_function(plant: Any) -> ca.Function:
-    """``(x, u) -> d rhs / d x`` of ``plant``, built once per plant."""
-    nx = len(plant.state_names)
-    x, u = ca.SX.sym("x", nx), ca.SX.sym("u")
-    rhs = ca.vertcat(*plant.rhs([x[i] for i in range(nx)], u, CASADI))
-    return ca.Function("rhs_jacobian", [x, u], [ca.jacobian(rhs, x)])
+__all__ = ["MAX_SIM_STEPS", "PATH_TOLERANCE", "RK4_STIFFNESS", "SIM_STEP", "Response", "channels", "sim_step",
+           "simulate_response", "verification"]
 
 
 def sim_step(plant: Plant, x0: np.ndarray, u0: float) -> float:
-    """Verification step [s]: ``SIM_STEP``, shortened until each RK4 sub-step keeps ``|h lambda| <=
-    RK4_STIFFNESS`` for the fastest eigenvalue ``lambda`` [1/s] of the plant's Jacobian at ``x0`` and at
-    ``x0`` with the speed set to zero (for the DC motor it is about ``-R/L``: 2500 1/s for the paper rig;
-    a 20 uH winding makes it 100x faster, and a fixed step would make the simulation diverge)."""
-    jac = _jacobian_function(cast(Hashable, plant))
-    at_rest = np.array(x0, float)
-    at_rest[0] = 0.0
-    lam = max(float(np.max(np.abs(np.linalg.eigvals(np.asarray(jac(x, u0)))))) for x in (x0, at_rest))
-    return min(SIM_STEP, 2.0 * RK4_STIFFNESS / lam) if lam > 0 else SIM_STEP
-
-
-@dataclass(frozen=True)
-class Response:
-    """A simulated response. Attributes: ``at_out`` states (nx, M) at the requested times; ``t`` the
-    integration grid [s] (K,), ``x`` the states on it (nx, K), ``u`` the input held from each grid point
-    on (K,; the last one repeated)."""
-
-    at_out: np.ndarray
-    t: np.ndarray
-    x: np.ndarray
-    u: np.ndarray
+    """Verification step [s] (two RK4 sub-steps): :func:`ocp.simulate.zoh.step_limit` capped at ``SIM_STEP``."""
+    return step_limit(plant, x0, u0, SIM_STEP)
 
 
 def simulate_response(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarray, x0: np.ndarray,
                       t_out: np.ndarray) -> Response:
-    """Integrate ``plant`` from ``x0`` under the input held at ``u_of_interval[k]`` on
-    ``[t_knots[k], t_knots[k+1])``, on a grid through the knots and ``t_out`` (M,) with steps of at most
-    :func:`sim_step`.
-
-    Raises :class:`MissionError` (``params``) when the plant is too stiff to verify within ``MAX_SIM_STEPS``.
-    """
-    grid = np.union1d(t_knots, t_out)
-    step_max = sim_step(plant, x0, float(u_of_interval[0]))
-    n_sub = np.maximum(1, np.ceil(np.diff(grid) / step_max).astype(int))
-    if n_sub.sum() > MAX_SIM_STEPS:
-        raise MissionError("params", f"too stiff to verify: the plant's fastest mode needs steps of {step_max:.3g} s, "
-                                     f"{int(n_sub.sum())} of them over {grid[-1] - grid[0]:.3g} s "
-                                     f"(at most {MAX_SIM_STEPS})")
-    # every grid step split into n_sub equal sub-steps, vectorised
-    first = np.repeat(np.cumsum(n_sub) - n_sub, n_sub)
-    fine = np.append(np.repeat(grid[:-1], n_sub) + (np.arange(n_sub.sum()) - first) * np.repeat(np.diff(grid) / n_sub,
-                                                                                                  n_sub), grid[-1])
-    k = np.clip(np.searchsorted(t_knots, fine[:-1], side="right") - 1, 0, u_of_interval.size - 1)
-    u = u_of_interval[k]
-    step = _rk4_accumulator(cast(Hashable, plant), fine.size - 1)
-    xs = np.asarray(step(x0, u[None, :], np.diff(fine)[None, :]))
-    states = np.concatenate([np.asarray(x0, float)[:, None], xs], axis=1)
-    idx = np.clip(np.searchsorted(fine, t_out), 0, fine.size - 1)
-    return Response(at_out=states[:, idx], t=fine, x=states, u=np.append(u, u[-1]))
+    """The plant from ``x0`` (nx,) under ``u_of_interval[k]`` held on ``[t_knots[k], t_knots[k+1])``, on a grid
+    through the knots and ``t_out`` (M,) (:func:`ocp.simulate.zoh.simulate_held`; raises
+    :class:`~ocp.errors.MissionError` (``params``) for a plant too stiff to verify)."""
+    return simulate_held(plant, t_knots, u_of_interval, x0, t_out, SIM_STEP)
 
 
 def channels(m: Mission, resp: Response) -> dict[str, np.ndarray]:
