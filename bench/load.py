@@ -11,7 +11,11 @@ SIGKILLed every few seconds and the database locked by another process past the 
 It passes when no answer is a 5xx, every 200 is within its limits (``verification`` peaks), every 422
 is ``infeasible`` naming a limit, and every batch item finishes exactly once (none lost, none twice).
 
-    python bench/load.py [--workers 2] [--requests 40] [--json] [--faults [--fault-seconds 60] [--factor 2]]
+    python bench/load.py [--workers 2] [--requests 40] [--kinds analytic,optimize] [--before DIR] [--json]
+    python bench/load.py --faults [--fault-seconds 60] [--factor 2]
+
+``--before DIR`` runs the same rounds first against a server of the code in ``DIR`` (e.g. ``git archive
+<commit> | tar -x -C DIR``), for before/after rows in one table; the load average is printed beside each row.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ import contextlib
 import json
 import os
 import random
+import re
 import signal
 import socket
 import sqlite3
@@ -51,11 +56,12 @@ def _free_port() -> int:
         return int(s.getsockname()[1])
 
 
-def _start(workers: int, queue: int, db: Path, **extra: str) -> tuple[subprocess.Popen[bytes], str]:
+def _start(workers: int, queue: int, db: Path, code: Path = ROOT, **extra: str) -> tuple[subprocess.Popen[bytes], str]:
+    """``thrustshape serve`` of the code in ``code`` (default this tree)."""
     port = _free_port()
-    env = {**os.environ, "THRUSTSHAPE_QUEUE_SIZE": str(queue), **extra}
+    env = {**os.environ, "THRUSTSHAPE_QUEUE_SIZE": str(queue), "PYTHONPATH": str(code), **extra}
     proc = subprocess.Popen([sys.executable, "-m", "clients.cli", "serve", "--port", str(port), "--workers",
-                             str(workers), "--db", str(db), "--log-level", "warning"], cwd=ROOT, env=env)
+                             str(workers), "--db", str(db), "--log-level", "warning"], cwd=code, env=env)
     url = f"http://127.0.0.1:{port}"
     end = time.monotonic() + 120
     while time.monotonic() < end:
@@ -65,6 +71,16 @@ def _start(workers: int, queue: int, db: Path, **extra: str) -> tuple[subprocess
         time.sleep(0.2)
     proc.kill()
     raise SystemExit("server did not start")
+
+
+_SOURCE = re.compile(rb'"source":\s*"([a-z-]+)"')
+
+
+def _source(body: bytes) -> str | None:
+    """The answer's ``source`` from the head of its JSON (the client's CPU is the server's on a small machine:
+    no 200 kB decode per answer)."""
+    m = _SOURCE.search(body[:400])
+    return m.group(1).decode() if m else None
 
 
 async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, total: int) -> dict[str, Any]:
@@ -80,8 +96,8 @@ async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, to
             codes[r.status_code] += 1
             if r.status_code == 200:
                 latencies.append(time.perf_counter() - t0)
-                if "source" in r.json():
-                    sources[r.json()["source"]] += 1
+                if (source := _source(r.content)) is not None:
+                    sources[source] += 1
 
     limits = httpx.Limits(max_connections=concurrency + 2)
     t0 = time.perf_counter()
@@ -97,7 +113,7 @@ async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, to
 # ---------------------------------------------------------------------------------------------
 # 2x overload with faults (issue #12)
 
-LIMIT_TOL = 1.0 + 1e-3  # ocp.optimize.result.PATH_TOLERANCE
+LIMIT_TOL = 1.0 + 1e-3  # ocp.optimize.verify.PATH_TOLERANCE
 ADVERSARIAL = [
     {**OPTIMIZE, "name": "tiny-current", "limits": {"current": 0.05}},
     {**OPTIMIZE, "name": "60-reversals", "time_limit_s": 2.0,
@@ -241,6 +257,27 @@ def run_faults(workers: int, seconds: float, as_json: bool, factor: int = 2) -> 
     return 0 if ok else 1
 
 
+def _rounds(code: Path, label: str, workers: int, queue: int, requests: int,
+            kinds: list[tuple[str, str, dict[str, Any]]]) -> list[dict[str, Any]]:
+    """1x, 2x and overload rounds of each kind against a fresh server of the code in ``code``."""
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        proc, url = _start(workers, queue, Path(tmp) / "jobs.sqlite3", code)
+        try:
+            for kind, path, body in kinds:
+                asyncio.run(_round(url, path, body, workers, 2 * workers))  # warm every worker's cache
+                for mult in (1, 2, 4):
+                    n = requests if mult < 4 else 2 * requests
+                    row = asyncio.run(_round(url, path, body, mult * workers, n))
+                    rows.append({"code": label or "this", "kind": kind,
+                                 "load": f"{mult}x" if mult < 4 else "overload 4x",
+                                 "loadavg": " ".join(f"{x:.1f}" for x in os.getloadavg()), **row})
+        finally:
+            proc.terminate()
+            proc.wait(30)
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--workers", type=int, default=2)
@@ -249,34 +286,29 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--faults", action="store_true", help="only the 2x overload run with injected faults")
     ap.add_argument("--fault-seconds", type=float, default=60.0, help="length of the fault run [s]")
     ap.add_argument("--factor", type=int, default=2, help="fault run: concurrent clients per solver worker")
+    ap.add_argument("--kinds", default="analytic,optimize", help="request kinds to run (comma-separated)")
+    ap.add_argument("--before", type=Path, default=None,
+                    help="a checkout of older code: its server runs the same rounds first, for a side-by-side table")
     args = ap.parse_args(argv)
     if args.faults:
         return run_faults(args.workers, args.fault_seconds, args.json, args.factor)
     queue = args.workers  # capacity = 2x workers: the 2x round fits, the overload round does not
     rows: list[dict[str, Any]] = []
-    with tempfile.TemporaryDirectory() as tmp:
-        proc, url = _start(args.workers, queue, Path(tmp) / "jobs.sqlite3")
-        try:
-            for kind, path, body in (("analytic", "/v1/references/analytic", ANALYTIC),
-                                     ("optimize", "/v1/references/optimize", OPTIMIZE)):
-                asyncio.run(_round(url, path, body, 1, 2))  # warm the workers' caches
-                for mult in (1, 2, 4):
-                    n = args.requests if mult < 4 else 2 * args.requests
-                    row = asyncio.run(_round(url, path, body, mult * args.workers, n))
-                    rows.append({"kind": kind, "load": f"{mult}x" if mult < 4 else "overload 4x", **row})
-        finally:
-            proc.terminate()
-            proc.wait(30)
+    kinds = [k for k in (("analytic", "/v1/references/analytic", ANALYTIC),
+                         ("optimize", "/v1/references/optimize", OPTIMIZE)) if k[0] in args.kinds.split(",")]
+    for label, code in (("before", args.before), ("", ROOT)):
+        if code is not None:
+            rows += _rounds(code.resolve(), label, args.workers, queue, args.requests, kinds)
     bad = [r for r in rows if any(c >= 500 and c != 503 for c in r["codes"])
            or (not r["load"].startswith("overload") and set(r["codes"]) - {200})]
     if args.json:
         print(json.dumps({"workers": args.workers, "queue": queue, "rows": rows, "ok": not bad}, indent=1))
     else:
         print(f"workers={args.workers} queue={queue} cpus={os.cpu_count()}")
-        print(f"{'kind':<9} {'load':<12} {'req/s':>7} {'p50 ms':>8} {'p95 ms':>8}  codes")
+        print(f"{'code':<7} {'kind':<9} {'load':<12} {'req/s':>7} {'p50 ms':>8} {'p95 ms':>8}  codes; load average")
         for r in rows:
-            print(f"{r['kind']:<9} {r['load']:<12} {r['throughput_rps']:>7.1f} {r['p50_ms'] or 0:>8.1f} "
-                  f"{r['p95_ms']:>8.1f}  {r['codes']} {r['sources'] or ''}")
+            print(f"{r['code']:<7} {r['kind']:<9} {r['load']:<12} {r['throughput_rps']:>7.1f} {r['p50_ms'] or 0:>8.1f} "
+                  f"{r['p95_ms']:>8.1f}  {r['codes']} {r['sources'] or ''}; {r['loadavg']}")
     if bad:
         print("FAIL: unexpected status codes", file=sys.stderr)
     return 1 if bad else 0

@@ -3,10 +3,14 @@
 
 Usage::
 
-    python bench/optimizer.py [--quick] [--json out.json] [--repeats N]
+    python bench/optimizer.py [--quick] [--suite all|classic|user] [--json out.json] [--repeats N]
+
+``--suite user`` runs the user-like missions of issue 14 (``bench/user_missions.py``: a small brushed motor,
+profiles sampled at 200 Hz, binding current limits, ``bounded`` and ``continuous-voltage``) and checks the
+issue's targets; the default runs both suites side by side.
 
 For every mission of a suite, the same collocation program (states, scaling, Radau degree 3, weights
-``ocp.optimize.solve.WEIGHTS``, bounds, phases, initial guess: all taken from ``problem_for``/``problem_data``)
+``ocp.optimize.data.WEIGHTS``, bounds, phases, initial guess: all taken from ``problem_for``/``problem_data``)
 is solved three ways, interleaved so that machine noise hits all of them alike:
 
 * **thrustshape** -- ``optimize_mesh(mission)`` (one mesh; a min-time mission is not refined here): the
@@ -33,6 +37,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import statistics
 import subprocess
 import sys
@@ -47,17 +52,29 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.user_missions import USER, user_missions
 from ocp.model.plant import CASADI
 from ocp.optimize import collocation as col
+from ocp.optimize.collocation import ipopt_options, solver_options
+from ocp.optimize.data import ProblemData, problem_data
 from ocp.optimize.mission import Mission, mission_from_mapping
-from ocp.optimize.result import OptimizeResult, extract, simulate_response
-from ocp.optimize.solve import Problem, ipopt_options, optimize_mesh, problem_data, problem_for, solver_options
+from ocp.optimize.problem import Problem, problem_for
+from ocp.optimize.result import OptimizeResult
+from ocp.optimize.solution import extract
+from ocp.optimize.solve import optimize_mesh
+from ocp.optimize.verify import simulate_response
 
 # targets of issue 3 (2 s single-reversal mission for the absolute times; suite medians for ratios)
 TARGET_WARM_S = 0.030
 TARGET_COLD_S = 0.150
 TARGET_RATIO_ROCKIT = 20.0
 TARGET_RATIO_OPTI = 50.0
+# targets of issue 14 (user-like missions: cold mission to solution; the 2 s bounded reversal; suite ratios)
+TARGET_USER_MEDIAN_S = 0.030
+TARGET_USER_MAX_S = 0.060
+TARGET_REFERENCE_S = 0.005
+TARGET14_RATIO_OPTI = 150.0
+TARGET14_RATIO_ROCKIT = 100.0
 OBJ_RTOL, OBJ_ATOL = 1e-3, 1e-10  # "equal or better objective" tolerance
 PERTURB = 1.02  # thrust scaling of the warm-start predecessor
 REFERENCE = "reversal-2s"
@@ -99,6 +116,8 @@ SUITE: list[dict[str, Any]] = [
     _profile_mission(),
     {"name": "min-time", "limits": _LIMITS, "objective": "min-time", "segments": _reversal(0.2, "step")},
 ]
+CLASSIC = [s["name"] for s in SUITE]
+SUITE += user_missions()
 QUICK = [REFERENCE, "continuous-voltage", "min-time"]
 
 
@@ -133,14 +152,12 @@ class Unpacked:
     weights: np.ndarray
 
 
-def unpack(problem: Problem, data: dict[str, np.ndarray]) -> tuple[Unpacked, col.Layout]:
+def unpack(problem: Problem, data: ProblemData) -> tuple[Unpacked, col.Layout]:
     st = problem.structure
     nx = len(problem.plant.state_names) + st.chain
-    sl = col._param_slices(st, nx)
-    p = data["p"]
-    up = Unpacked(fd=p[sl["fd"]].reshape(st.n_phases, st.intervals * col.DEGREE), sigma=p[sl["sigma"]],
-                  dur=p[sl["dur"]], xs=p[sl["xscale"]], us=float(p[sl["uscale"]][0]), rho=p[sl["rho"]],
-                  fscale=float(p[sl["fscale"]][0]), weights=p[sl["weights"]])
+    sc = data.scales
+    up = Unpacked(fd=data.fd.reshape(st.n_phases, st.intervals * col.DEGREE), sigma=data.signs,
+                  dur=data.durations, xs=sc.x, us=sc.u, rho=data.rho, fscale=sc.f, weights=np.asarray(data.weights))
     return up, col.layout(st.n_phases, st.intervals, nx)
 
 
@@ -196,12 +213,12 @@ def _blocks_of(vec: Any, lay: col.Layout) -> tuple[Any, Any, list[list[Any]], li
 class Evaluator:
     """Objective and max constraint violation of a decision vector (thrustshape layout, scaled)."""
 
-    def __init__(self, problem: Problem, data: dict[str, np.ndarray]) -> None:
+    def __init__(self, problem: Problem, data: ProblemData) -> None:
         up, lay = unpack(problem, data)
         x = ca.SX.sym("x", lay.n)
         f, g = transcribe(problem, up, *_blocks_of(x, lay))
         self.fn = ca.Function("fg", [x], [f, g])
-        self.lbx, self.ubx = data["lbx"], data["ubx"]
+        self.lbx, self.ubx = data.lbx, data.ubx
 
     def __call__(self, x: np.ndarray) -> tuple[float, float]:
         f, g = self.fn(x)
@@ -211,7 +228,7 @@ class Evaluator:
         return float(f), viol
 
 
-def replay_peak(problem: Problem, prog: col.Program, data: dict[str, np.ndarray], x: np.ndarray) -> float:
+def replay_peak(problem: Problem, prog: col.Program, data: ProblemData, x: np.ndarray) -> float:
     """max |current| / current limit of the plant's response to the command of decision vector ``x`` on
     the integration grid, between the nodes (the same check thrustshape applies to its own answers)."""
     sol = extract(problem, prog, x, data)
@@ -266,7 +283,7 @@ def solve_opti(mission: Mission) -> Run:
     opti.subject_to(g == 0)
     xvec = ca.vertcat(stretch, x0, *[ca.vertcat(ca.vec(xc[j][k]), u[j][k]) for j in range(st.n_phases)
                                      for k in range(st.intervals)])
-    lb, ub = data["lbx"], data["ubx"]
+    lb, ub = data.lbx, data.ubx
     eq = np.flatnonzero(lb == ub)
     both = np.flatnonzero(np.isfinite(lb) & np.isfinite(ub) & (lb < ub))
     lo = np.flatnonzero(np.isfinite(lb) & ~np.isfinite(ub))
@@ -279,7 +296,7 @@ def solve_opti(mission: Mission) -> Run:
         opti.subject_to(xvec[lo.tolist()] >= lb[lo])
     if hi.size:
         opti.subject_to(xvec[hi.tolist()] <= ub[hi])
-    guess = data["x0"]
+    guess = data.x0
     opti.set_initial(stretch, guess[lay.stretch])
     opti.set_initial(x0, guess[lay.x0])
     for j in range(st.n_phases):
@@ -353,7 +370,7 @@ def solve_rockit(mission: Mission) -> Run:
     npx = len(plant.state_names)
     nx = npx + st.chain
     P, N, D = st.n_phases, st.intervals, col.DEGREE
-    lb, ub, guess = data["lbx"], data["ubx"], data["x0"]
+    lb, ub, guess = data.lbx, data.ubx, data.x0
     w_track, w_time, w_stretch, w_smooth, w_effort = (float(w) for w in up.weights)
     total = float(np.sum(up.dur))
     n_u = P * N
@@ -470,6 +487,8 @@ class MissionBench:
     iterations: dict[str, int]
     source: str
     replay: dict[str, float] = field(default_factory=dict)
+    #: back-off rounds of the last cold and warm solve (0: the limits held between nodes at once)
+    backoff: dict[str, int] = field(default_factory=dict)
 
 
 def solution_time(result: OptimizeResult) -> float:
@@ -490,6 +509,8 @@ def bench_mission(spec: dict[str, Any], repeats: int, log: Callable[[str], None]
     prog = col.solver_for(problem.plant, problem.structure, solver_options())  # the one-off build (optimize's key)
     build = time.perf_counter() - t_build
     optimize_mesh(mission)  # first solve (not timed)
+    optimize_mesh(predecessor, warm=False)  # and the first warm start: builds the warm solver (one-off, not timed)
+    optimize_mesh(mission, warm=True)
     times: dict[str, list[float]] = {k: [] for k in ("cold_ipopt", "cold_solution", "cold_total", "warm_ipopt",
                                                       "warm_solution", "warm_total", "opti_wall", "opti_ipopt",
                                                       "rockit_total", "rockit_build", "rockit_solve", "rockit_ipopt")}
@@ -500,7 +521,9 @@ def bench_mission(spec: dict[str, Any], repeats: int, log: Callable[[str], None]
     opti_run = rockit_run = None
     for _ in range(repeats):
         cold = optimize_mesh(mission, warm=False)
-        ts_x = prog.last["x"].copy()
+        last = prog.last_solution
+        assert last is not None
+        ts_x = last
         times["cold_ipopt"].append(cold.solve_time_s)
         times["cold_solution"].append(solution_time(cold))
         times["cold_total"].append(cold.total_time_s)
@@ -512,6 +535,7 @@ def bench_mission(spec: dict[str, Any], repeats: int, log: Callable[[str], None]
         sources |= {cold.source, warm.source}
         ts_status, ts_iter, warm_iter = cold.status, int(cold.solver.get("iterations", -1)), \
             int(warm.solver.get("iterations", -1))
+        backoff = {"cold": int(cold.solver.get("backoff_rounds", 0)), "warm": int(warm.solver.get("backoff_rounds", 0))}
         opti_run = solve_opti(mission)
         times["opti_wall"].append(opti_run.wall_s)
         times["opti_ipopt"].append(opti_run.solve_s)
@@ -543,7 +567,7 @@ def bench_mission(spec: dict[str, Any], repeats: int, log: Callable[[str], None]
         violation={"thrustshape": v_ts, "opti": v_opti, "rockit": v_rockit},
         iterations={"thrustshape_cold": ts_iter, "thrustshape_warm": warm_iter, "opti": opti_iter,
                     "rockit": rockit_iter},
-        source="/".join(sorted(sources)), replay=replay)
+        source="/".join(sorted(sources)), replay=replay, backoff=backoff)
     log(f"  {mission.name}: done ({sum(sum(v) for v in times.values()):.1f} s timed)")
     return out
 
@@ -666,22 +690,67 @@ def report(rows: list[MissionBench], expected: int, print_: Callable[[str], None
     print_("\nTargets (issue 3)")
     for label, ok, shown in checks:
         print_(f"  [{'PASS' if ok else 'FAIL'}] {label}: {shown}")
+    checks14 = report_issue14(rows, ratios)
     of_medians = summary["median_opti_wall_s"] / summary["median_cold_solution_s"]
     print_(f"  [info] ratio of the suite medians Opti / thrustshape cold sol: {of_medians:.1f}x")
     print_(f"  [info] suite median rockit solve() call alone / thrustshape cold sol: "
            f"{summary['median_ratio_rockit_solve']:.1f}x; rockit IPOPT / thrustshape IPOPT: "
            f"{summary['median_ratio_rockit_ipopt']:.1f}x")
-    return {"summary": summary, "checks": [{"target": c[0], "pass": c[1], "value": c[2]} for c in checks]}
+    return {"summary": summary, "checks": [{"target": c[0], "pass": c[1], "value": c[2]}
+                                           for c in [*checks, *checks14]]}
+
+
+def report_issue14(rows: list[MissionBench], ratios: dict[str, list[float]],
+                   print_: Callable[[str], None] = print) -> list[tuple[str, bool, str]]:
+    """Per-mission iterations and back-off rounds, and the targets of issue 14 with PASS/FAIL."""
+    print_("\nIterations and back-off rounds (cold / warm), cold mission to solution [ms]")
+    print_(f"{'mission':20s} {'it cold':>8s} {'it warm':>8s} {'bo cold':>8s} {'bo warm':>8s} {'cold sol':>8s}")
+    for r in rows:
+        print_(f"{r.name:20s} {r.iterations['thrustshape_cold']:8d} {r.iterations['thrustshape_warm']:8d} "
+               f"{r.backoff.get('cold', -1):8d} {r.backoff.get('warm', -1):8d} {_ms(r.ts['cold_solution'])}")
+    solves = [r.backoff.get(k, 0) for r in rows for k in ("cold", "warm")]
+    print_(f"  back-off rounds: {sum(solves)} over {len(solves)} solves; solves with at least one: "
+           f"{sum(1 for b in solves if b)}")
+    checks: list[tuple[str, bool, str]] = []
+    user = [r for r in rows if r.name in USER]
+    if user:
+        times = [r.ts["cold_solution"] for r in user]
+        worst = max(user, key=lambda r: r.ts["cold_solution"])
+        checks += [
+            (f"user-like missions: median cold mission to solution <= {TARGET_USER_MEDIAN_S * 1e3:.0f} ms",
+             _median(times) <= TARGET_USER_MEDIAN_S, f"{_median(times) * 1e3:.1f} ms over {len(user)}"),
+            (f"user-like missions: none over {TARGET_USER_MAX_S * 1e3:.0f} ms", max(times) <= TARGET_USER_MAX_S,
+             f"slowest {worst.name} {worst.ts['cold_solution'] * 1e3:.1f} ms"),
+            ("user-like missions: optimised (not fallback)", all(r.source == "optimized" for r in user),
+             ", ".join(f"{r.name}: {r.source}" for r in user if r.source != "optimized") or "all"),
+        ]
+    ref = next((r for r in rows if r.name == REFERENCE), None)
+    if ref is not None:
+        checks.append((f"{REFERENCE} (bounded): cold mission to solution <= {TARGET_REFERENCE_S * 1e3:.0f} ms",
+                       ref.ts["cold_solution"] <= TARGET_REFERENCE_S, f"{ref.ts['cold_solution'] * 1e3:.1f} ms"))
+    checks += [
+        (f"suite median Opti per call / thrustshape cold sol >= {TARGET14_RATIO_OPTI:.0f}x",
+         _median(ratios["opti"]) >= TARGET14_RATIO_OPTI, f"{_median(ratios['opti']):.1f}x"),
+        (f"suite median rockit (build+solve) / thrustshape cold sol >= {TARGET14_RATIO_ROCKIT:.0f}x",
+         _median(ratios["rockit"]) >= TARGET14_RATIO_ROCKIT, f"{_median(ratios['rockit']):.1f}x"),
+    ]
+    print_("\nTargets (issue 14)")
+    for label, ok, shown in checks:
+        print_(f"  [{'PASS' if ok else 'FAIL'}] {label}: {shown}")
+    return checks
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help=f"missions {', '.join(QUICK)} with 2 repeats")
+    ap.add_argument("--suite", choices=("all", "classic", "user"), default="all",
+                    help="classic missions, the user-like missions of issue 14, or both (default)")
     ap.add_argument("--json", type=Path, help="write all figures to this file")
     ap.add_argument("--repeats", type=int, help="repeats per measurement (default 5, quick 2)")
     args = ap.parse_args(argv)
     repeats = args.repeats or (2 if args.quick else 5)
-    suite = [s for s in SUITE if s["name"] in QUICK] if args.quick else SUITE
+    names = {"all": CLASSIC + USER, "classic": CLASSIC, "user": USER}[args.suite]
+    suite = [s for s in SUITE if s["name"] in (QUICK if args.quick else names)]
     from importlib.metadata import version
 
     print(f"thrustshape optimiser benchmark: {len(suite)} missions, {repeats} repeats, casadi {version('casadi')}, "
@@ -692,7 +761,8 @@ def main(argv: list[str] | None = None) -> int:
                          capture_output=True, text=True, check=False).stdout.strip()
     dirty = subprocess.run(["git", "status", "--porcelain", "ocp"], cwd=Path(__file__).resolve().parent,
                            capture_output=True, text=True, check=False).stdout.strip()
-    print(f"code: HEAD {rev or '?'}{' + uncommitted changes in ocp/' if dirty else ''}")
+    print(f"code: HEAD {rev or '?'}{' + uncommitted changes in ocp/' if dirty else ''}; load (uptime): "
+          f"{os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
     started = time.perf_counter()
     rows = []
     for spec in suite:
@@ -701,7 +771,8 @@ def main(argv: list[str] | None = None) -> int:
         except Exception as exc:  # a broken mission must not hide the others' figures
             print(f"  {spec['name']}: FAILED {type(exc).__name__}: {exc}", flush=True)
     out = report(rows, len(suite))
-    print(f"\nwall time of the benchmark: {time.perf_counter() - started:.0f} s")
+    print(f"\nwall time of the benchmark: {time.perf_counter() - started:.0f} s; load (uptime) at the end: "
+          f"{os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
     if args.json:
         out["missions"] = [r.__dict__ for r in rows]
         out["repeats"] = repeats

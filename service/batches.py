@@ -1,18 +1,23 @@
-"""Background runner that drains the job store: claims queued items, runs them, stores the outcome.
+"""Background runner that drains the job store: claims queued items, runs them, stores the outcomes in groups.
 
-Runs as one asyncio task in the app lifespan. At most ``concurrency`` items are in flight; each runs
-on the :class:`~service.workers.Runner` (local worker processes or Dask) with a hard timeout. A
-core error (bad mission, infeasible problem) fails the item at once; a timeout or a crashed worker
-is retried up to ``attempts`` times (a worker that died before reaching the item costs no attempt).
-Outcomes are written by :class:`~service.jobs.JobStore`, whose
-state guard makes each result land exactly once.
+Runs as one asyncio task in the app lifespan. It claims up to ``concurrency + lookahead`` items: ``concurrency``
+run on the :class:`~service.workers.Runner` (local worker processes or Dask) with a hard timeout, the lookahead
+waits in the pool so that a worker coming free can pick the item whose *structure* it already built (each item's
+affinity key, e.g. :func:`service.tasks.structure_key`, is computed here from the mission, validated with the
+untrusted rule: a bad mission fails at once, naming the field, without taking a worker). A core error (bad
+mission, infeasible problem) fails the item at once; a timeout or a crashed worker is retried up to ``attempts``
+times (a worker that died before reaching the item costs no attempt).
+
+Outcomes are written in groups: every outcome computed while the previous write ran, or within ``group_s`` of
+the oldest unwritten one, lands in ONE transaction (:meth:`JobStore.record`, all or nothing); the store's state
+guard makes each result land exactly once. An outcome not yet written when the server dies leaves its item
+``running`` in the store; it runs again after the restart (:meth:`JobStore.recover`): a result is never lost,
+only recomputed.
 
 The store may fail for a while (locked by another process past its busy timeout, disk full, file
-gone): the runner then keeps every computed outcome in memory and retries writing it, oldest first,
+gone): the runner then keeps every computed outcome in memory and retries writing them, oldest first,
 with exponential backoff (``backoff_s`` to ``max_backoff_s``), and claims nothing new until the
-backlog is written. An item whose outcome is never written stays ``running`` in the store and runs
-again after a restart (:meth:`JobStore.recover`): nothing is lost, nothing lands twice. :meth:`health`
-says what the runner is doing for ``/healthz``.
+backlog is written. :meth:`health` says what the runner is doing for ``/healthz``.
 """
 
 from __future__ import annotations
@@ -20,14 +25,18 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import logging
+import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Hashable
 from dataclasses import dataclass
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from ocp.errors import ThrustshapeError
-from service.jobs import Item, JobStore
+from service.jobs import Item, JobStore, Outcome
 from service.workers import Runner, TaskFailed, TaskFn, TaskTimeout
+
+if TYPE_CHECKING:
+    from service.tasks import KeyFn
 
 log = logging.getLogger("thrustshape.batches")
 
@@ -47,16 +56,24 @@ class RunnerHealth:
 
 class BatchRunner:
     def __init__(self, store: JobStore, runner: Runner, task: TaskFn, *, concurrency: int, timeout: float,
-                 attempts: int, backoff_s: float = 0.05, max_backoff_s: float = 5.0) -> None:
-        self._store, self._runner, self._task = store, runner, task
+                 attempts: int, key: KeyFn | None = None, lookahead: int | None = None, group_s: float = 0.05,
+                 backoff_s: float = 0.05, max_backoff_s: float = 5.0) -> None:
+        """``key``: an item's affinity key from its mission (raising a ThrustshapeError fails the item);
+        ``lookahead``: items claimed beyond ``concurrency`` so that a free worker has a choice (used with a
+        ``key`` only; default ``concurrency``); ``group_s`` [s]: how long a finished outcome may wait for others
+        to share its transaction while items are still running."""
+        self._store, self._runner, self._task, self._key = store, runner, task, key
         self._concurrency, self._timeout, self._attempts = concurrency, timeout, attempts
+        self._window = concurrency + (0 if key is None else concurrency if lookahead is None else lookahead)
+        self._group_s = group_s
         self._backoff = (backoff_s, max_backoff_s)
         self._wake = asyncio.Event()
         self._inflight: set[asyncio.Task[None]] = set()
-        self._unsaved: deque[tuple[str, Callable[[], Any]]] = deque()  # (what, store write) in order
+        self._unsaved: deque[tuple[float, Outcome]] = deque()  # (when computed, outcome), oldest first
         self._loop_task: asyncio.Task[None] | None = None
         self._closing = False
         self._last_error: str | None = None
+        self.groups = 0  # transactions that stored outcomes (for tests and benchmarks)
 
     def start(self) -> None:
         self._loop_task = asyncio.create_task(self._loop(), name="thrustshape-batches")
@@ -81,7 +98,7 @@ class BatchRunner:
                 await t
         if self._unsaved:  # one last try; what still fails runs again after the restart
             with contextlib.suppress(Exception):
-                await asyncio.to_thread(self._flush_sync)
+                await self._write_group()
             if self._unsaved:
                 log.error("%d batch outcomes could not be stored; their items run again after a restart",
                           len(self._unsaved))
@@ -97,8 +114,8 @@ class BatchRunner:
         while True:
             self._wake.clear()
             try:
-                await asyncio.to_thread(self._flush_sync)
-                free = self._concurrency - len(self._inflight)
+                await self._write_group()
+                free = self._window - len(self._inflight)
                 items = await asyncio.to_thread(self._store.claim, free) if free > 0 else []
             except Exception as exc:  # the store failed: keep everything, try again later
                 self._store_failed(exc)
@@ -106,13 +123,33 @@ class BatchRunner:
                 delay = min(2.0 * delay, self._backoff[1])
                 continue
             delay, self._last_error = self._backoff[0], None
-            for item in items:
-                t = asyncio.create_task(self._run_item(item))
+            # keys in claim order, so the items reach the pool in that order
+            keys = await asyncio.to_thread(self._keys, items)
+            for item, key in zip(items, keys, strict=True):
+                t = asyncio.create_task(self._run_item(item, key))
                 self._inflight.add(t)
                 t.add_done_callback(self._done)
-            if not items or len(self._inflight) >= self._concurrency:
+            if not items or len(self._inflight) >= self._window:
                 with contextlib.suppress(TimeoutError):
                     await asyncio.wait_for(self._wake.wait(), timeout=1.0)
+                await self._linger()
+
+    async def _linger(self) -> None:
+        """Let the oldest unwritten outcome wait up to ``group_s`` for others while items still run."""
+        if self._unsaved and self._inflight:
+            await asyncio.sleep(max(self._unsaved[0][0] + self._group_s - time.monotonic(), 0.0))
+
+    async def _write_group(self) -> None:
+        """Write every kept outcome in one transaction (raising, all kept, when it fails)."""
+        if not self._unsaved:
+            return
+        group = [o for _, o in self._unsaved]
+        await asyncio.to_thread(self._store.record, group)
+        for _ in group:
+            self._unsaved.popleft()  # outcomes computed meanwhile were appended behind the group
+        self.groups += 1
+        if self._last_error is not None:
+            log.info("stored %d kept outcomes", len(group))
 
     def _store_failed(self, exc: BaseException) -> None:
         msg = f"{type(exc).__name__}: {exc}"
@@ -121,49 +158,45 @@ class BatchRunner:
                       len(self._unsaved))
         self._last_error = msg
 
-    def _flush_sync(self) -> None:
-        """Write kept outcomes oldest first; stop (raising) at the first that fails."""
-        while self._unsaved:
-            what, write = self._unsaved[0]
-            write()
-            self._unsaved.popleft()
-            log.info("stored the kept outcome of %s", what)
-
     def _done(self, t: asyncio.Task[None]) -> None:
         self._inflight.discard(t)
         self._wake.set()
 
-    async def _run_item(self, item: Item) -> None:
+    def _keys(self, items: list[Item]) -> list[Hashable | ThrustshapeError | None]:
+        """Each item's affinity key, or the error that refuses its mission (runs in a thread)."""
+        return [self._keyed(item) for item in items]
+
+    def _keyed(self, item: Item) -> Hashable | ThrustshapeError | None:
+        if self._key is None or item.mission is None:
+            return None
+        try:
+            return self._key(item.mission)
+        except ThrustshapeError as exc:
+            return exc
+        except Exception as exc:  # no affinity then; the worker reports what is wrong with the item
+            log.warning("batch %s item %d: no affinity key (%s)", item.batch_id, item.index, exc)
+            return None
+
+    async def _run_item(self, item: Item, key: Hashable | ThrustshapeError | None) -> None:
         if item.mission is None:  # claim() always loads it; a row without one cannot run
             missing: dict[str, Any] = {"type": "StoreError", "field": None, "reason": "mission missing"}
-            write = self._failer(item, missing, False)
+            outcome = Outcome(item.batch_id, item.index, error=missing)
         else:
-            write = await self._outcome(item, item.mission)
-        what = f"batch {item.batch_id} item {item.index}"
-        if self._unsaved:  # keep the order: an older outcome is still waiting
-            self._unsaved.append((what, write))
-            return
-        try:
-            await asyncio.to_thread(write)
-        except Exception as exc:
-            self._unsaved.append((what, write))
-            self._store_failed(exc)
-            self._wake.set()
+            outcome = await self._outcome(item, item.mission, key)
+        self._unsaved.append((time.monotonic(), outcome))
 
-    async def _outcome(self, item: Item, mission: dict[str, Any]) -> Callable[[], Any]:
-        """Run the item; the store write that records its outcome."""
-        error: dict[str, Any]
+    async def _outcome(self, item: Item, mission: dict[str, Any], key: Hashable | ThrustshapeError | None) -> Outcome:
+        """Run the item (on the worker its affinity key prefers); what to store."""
         try:
-            result = await self._runner.run(self._task, mission, self._timeout, wait=True)
+            if isinstance(key, ThrustshapeError):
+                raise key
+            result = await self._runner.run(self._task, mission, self._timeout, wait=True, affinity=key)
         except ThrustshapeError as exc:
-            error = {"type": type(exc).__name__, "field": exc.field, "reason": exc.reason}
-            return self._failer(item, error, False)
+            error: dict[str, Any] = {"type": type(exc).__name__, "field": exc.field, "reason": exc.reason}
+            return Outcome(item.batch_id, item.index, error=error)
         except (TaskTimeout, TaskFailed) as exc:
             error = {"type": type(exc).__name__, "field": None, "reason": str(exc)}
             log.warning("batch %s item %d attempt %d: %s", item.batch_id, item.index, item.attempts, exc)
             blameless = isinstance(exc, TaskFailed) and exc.startup  # a worker died before reaching the item
-            return self._failer(item, error, blameless or item.attempts < self._attempts)
-        return lambda: self._store.finish(item.batch_id, item.index, result)
-
-    def _failer(self, item: Item, error: dict[str, Any], retry: bool) -> Callable[[], Any]:
-        return lambda: self._store.fail(item.batch_id, item.index, error, retry)
+            return Outcome(item.batch_id, item.index, error=error, retry=blameless or item.attempts < self._attempts)
+        return Outcome(item.batch_id, item.index, result=result)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+from collections.abc import Hashable
 from typing import Any
 
 from service.workers import Payload, TaskFn, TaskTimeout, execute, unwrap
@@ -29,7 +30,9 @@ class DaskRunner:
         return cls(client)
 
     async def run(self, fn: TaskFn, payload: Payload, timeout: float, *, wait: bool = False,
-                  deadline: float | None = None) -> Payload:
+                  deadline: float | None = None, affinity: Hashable | None = None) -> Payload:
+        """``wait``, ``deadline`` and ``affinity`` are accepted for the :class:`~service.workers.Runner` protocol;
+        Dask's scheduler places the task (no structure affinity: each Dask worker builds what it is given)."""
         fut = self._client.submit(execute, fn, payload, pure=False)
         try:
             outcome = await asyncio.wait_for(fut, timeout)

@@ -2,8 +2,9 @@
 
 One row per batch, one row per item. An item moves ``queued -> running -> done | failed``; the move
 to ``done`` is a single ``UPDATE ... WHERE state = 'running'`` that stores the result in the same
-statement, so a result is written once or not at all. After a crash, :meth:`JobStore.recover` puts
-``running`` items back to ``queued``: they run again, finished ones are never touched.
+statement, so a result is written once or not at all; the outcomes of a group of finished items are written
+in one transaction (:meth:`JobStore.record`: one fsync per group, all or nothing). After a crash,
+:meth:`JobStore.recover` puts ``running`` items back to ``queued``: they run again, finished ones are never touched.
 
 A batch submitted with an idempotency key is stored under that key (unique); resubmitting the same
 body returns the stored batch, a different body under the same key is refused.
@@ -32,6 +33,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any, Literal
 
+from service.errors import IdempotencyConflict, StoreUnavailable
+
 ItemState = Literal["queued", "running", "done", "failed"]
 BatchState = Literal["queued", "running", "done", "failed"]
 
@@ -59,10 +62,6 @@ CREATE INDEX IF NOT EXISTS items_by_state ON items (state, batch_id, idx);
 """
 
 
-class StoreUnavailable(Exception):
-    """The job store cannot be used right now (file vanished, disk error, locked past the busy timeout)."""
-
-
 class StoreLocked(RuntimeError):
     """Another server holds the database's lock file."""
 
@@ -86,14 +85,6 @@ def lock_store(db_path: Path) -> IO[str]:
     fh.write(str(os.getpid()))
     fh.flush()
     return fh
-
-
-class IdempotencyConflict(Exception):
-    """The idempotency key is already bound to a batch with a different body."""
-
-    def __init__(self, key: str, batch_id: str) -> None:
-        self.key, self.batch_id = key, batch_id
-        super().__init__(f"idempotency key {key!r} was used for batch {batch_id} with a different body")
 
 
 @dataclass(frozen=True)
@@ -136,6 +127,17 @@ class Item:
     mission: dict[str, Any] | None  # loaded by claim() only (the runner needs it; status reads do not)
     result: dict[str, Any] | None
     error: dict[str, Any] | None
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What running one item gave: its ``result``, or its ``error`` and whether to ``retry`` it."""
+
+    batch_id: str
+    index: int
+    result: dict[str, Any] | None = None
+    error: dict[str, Any] | None = None
+    retry: bool = False
 
 
 def body_digest(missions: Sequence[dict[str, Any]]) -> str:
@@ -258,24 +260,32 @@ class JobStore:
                            [(r[0], r[1]) for r in rows])
         return [_item((r[0], r[1], r[2], "running", r[4] + 1, r[5], None, None)) for r in rows]
 
+    def record(self, outcomes: Sequence[Outcome]) -> list[ItemState | None]:
+        """Store the outcomes of running items in ONE transaction (one fsync for the group): a result moves its
+        item to ``done``; an error to ``queued`` (``retry``) or ``failed``. All land or none does (a failure rolls
+        the group back: the caller keeps it and tries again). Per outcome, the state written, or None when the
+        item was not running (nothing written: each outcome lands once)."""
+        now = time.time()
+        written: list[ItemState | None] = []
+        with self._tx() as db:
+            for o in outcomes:
+                state: ItemState = "done" if o.result is not None else "queued" if o.retry else "failed"
+                cur = db.execute(
+                    "UPDATE items SET state = ?, result = ?, error = ?, finished_at = ? "
+                    "WHERE batch_id = ? AND idx = ? AND state = 'running'",
+                    (state, None if o.result is None else json.dumps(o.result, allow_nan=False),
+                     None if o.error is None else json.dumps(o.error, allow_nan=False),
+                     None if state == "queued" else now, o.batch_id, o.index))
+                written.append(state if cur.rowcount == 1 else None)
+        return written
+
     def finish(self, batch_id: str, index: int, result: dict[str, Any]) -> bool:
         """Store a running item's result; False (and nothing written) when it is not running."""
-        text = json.dumps(result, allow_nan=False)
-        with self._tx() as db:
-            cur = db.execute("UPDATE items SET state = 'done', result = ?, error = NULL, finished_at = ? "
-                             "WHERE batch_id = ? AND idx = ? AND state = 'running'",
-                             (text, time.time(), batch_id, index))
-        return cur.rowcount == 1
+        return self.record([Outcome(batch_id, index, result=result)])[0] == "done"
 
     def fail(self, batch_id: str, index: int, error: dict[str, Any], retry: bool) -> ItemState | None:
         """A running item failed: back to ``queued`` when ``retry``, else ``failed``; None if it was not running."""
-        state: ItemState = "queued" if retry else "failed"
-        with self._tx() as db:
-            cur = db.execute("UPDATE items SET state = ?, error = ?, finished_at = ? "
-                             "WHERE batch_id = ? AND idx = ? AND state = 'running'",
-                             (state, json.dumps(error, allow_nan=False), None if retry else time.time(),
-                              batch_id, index))
-        return state if cur.rowcount == 1 else None
+        return self.record([Outcome(batch_id, index, error=error, retry=retry)])[0]
 
     def recover(self) -> int:
         """After a restart: items left ``running`` by a dead server go back to ``queued``; returns how many."""

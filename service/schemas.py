@@ -16,6 +16,7 @@ from ocp.errors import ParameterError
 from ocp.model.params import PRESETS, load_params
 from ocp.optimize.mission import MAX_SPAN_S, MAX_THRUST, Limits, Mission
 from ocp.theory.reversal import ReversalRegularity
+from service.core_models import OptimizePublic  # noqa: F401  (generated from the core's result types)
 
 # strict numbers: "12" and true are not numbers
 Finite = Annotated[float, Field(strict=True, allow_inf_nan=False)]
@@ -166,23 +167,6 @@ class ReferencePublic(_Open):
     unbounded: dict[str, bool]
     crossings: list[CrossingPublic]
     design: DesignPublic | None = None
-
-
-class Verification(_Open):
-    thrust_rms_error: float | None = None
-    max_abs_current: float | None = None
-    max_abs_voltage: float | None = None
-
-
-class OptimizePublic(_Open):
-    """:meth:`ocp.optimize.solve.OptimizeResult.to_dict`; ``source`` says whether the solver or the fallback
-    answered."""
-
-    source: Literal["optimized", "analytic-fallback"]
-    status: str
-    reason: str | None = None
-    solve_time_s: float | None = None
-    verification: Verification | None = None
 
 
 class CheckPublic(_Open):

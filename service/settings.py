@@ -69,6 +69,11 @@ class Settings(BaseSettings):
     #: hard timeout of one batch item [s]; the item is retried up to ``batch_attempts`` times
     batch_item_timeout_s: Annotated[float, Field(gt=0, le=3600)] = 300.0
     batch_attempts: Annotated[int, Field(ge=1, le=10)] = 2
+    #: batch items claimed beyond ``workers``: they wait in the pool so that a worker coming free can take one of
+    #: the solver structure it already built (claimed items count as ``running``)
+    batch_lookahead: Annotated[int, Field(ge=0, le=10_000)] = 4
+    #: how long a finished batch item's outcome may wait for others to share its SQLite transaction [s]
+    batch_write_group_s: Annotated[float, Field(ge=0, le=10)] = 0.05
     #: Retry-After [s] sent with 503 when the queue is full
     retry_after_s: Annotated[int, Field(ge=1, le=3600)] = 1
 

@@ -1,6 +1,7 @@
 """Task functions: what runs inside a worker process (or on a Dask worker).
 
-Each takes and returns a JSON-ready dict, re-validates its input (it may come from the job store),
+Each takes and returns a JSON-ready dict, re-validates its input (it may come from the job store or a Dask
+queue) with the untrusted rule (:func:`untrusted_mission`: ``params`` a preset or a mapping, never a file),
 imports the core lazily (the server process never builds a solver) and returns JSON-safe output
 (no NaN: non-finite floats become "inf" / "-inf" / null).
 
@@ -10,21 +11,36 @@ a route whose backend is missing is not registered.
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import importlib.util
 import math
 import time
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import TypeAdapter
 
-from ocp.errors import MissionError
+from ocp.errors import MissionError, ThrustshapeError
 from service.workers import TaskFn
 
+if TYPE_CHECKING:
+    from ocp.optimize.mission import Mission
+
 Payload = dict[str, Any]
+KeyFn = Callable[[Payload], Hashable | None]
 #: kept between IPOPT's stop and the worker's deadline, for verifying the result (or the in-worker fallback) [s]
 SOLVE_MARGIN_S = 1.0
+
+
+def untrusted_mission(data: Any) -> Mission:
+    """A mission from a request, the job store or a queue, validated as untrusted input: ``params`` may name a
+    preset or be a mapping, never a file on this machine; errors are :class:`~ocp.errors.MissionError` naming
+    the field (``params``) and the reason."""
+    from ocp.optimize.mission import mission_from_mapping
+
+    return mission_from_mapping(data, allow_files=False)
 
 
 def analytic_reference(payload: Payload) -> Payload:
@@ -60,42 +76,55 @@ def analytic_reference(payload: Payload) -> Payload:
 
 
 def optimize_mission(payload: Payload) -> Payload:
-    """Mission -> :meth:`ocp.optimize.solve.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
+    """Mission -> :meth:`ocp.optimize.result.OptimizeResult.to_dict` (the solver bounds its own CPU time). A solver
     build is reported to the worker's parent (:func:`service.workers.report_phase`): it survives the deadline."""
-    from ocp.optimize import collocation
-    from ocp.optimize.mission import Mission
+    from ocp.optimize.collocation import SolveContext
     from service.workers import report_phase, time_left
 
-    if report_phase not in collocation.BUILD_OBSERVERS:
-        collocation.BUILD_OBSERVERS.append(report_phase)
     module = importlib.import_module("ocp.optimize.solve")
     left = time_left()  # IPOPT stops early enough to verify and answer before the worker would be killed
-    module.SOLVE_DEADLINE[0] = math.inf if left is None else time.perf_counter() + left - SOLVE_MARGIN_S
-    try:
-        return module.optimize(Mission.model_validate(payload)).to_dict()
-    finally:
-        module.SOLVE_DEADLINE[0] = math.inf  # no later task (a compare) inherits this call's deadline
+    context = SolveContext(deadline=math.inf if left is None else time.perf_counter() + left - SOLVE_MARGIN_S,
+                           on_build=report_phase)
+    # warm=None: start from the worker's last solution of the same structure when it is plausibly close
+    # (repeated requests, batch items; ocp.optimize.warm), else cold
+    return module.optimize(untrusted_mission(payload), warm=None, context=context).to_dict()
 
 
 def fallback_mission(payload: Payload) -> Payload:
     """``{"mission": ..., "reason": ...}`` -> the analytic fallback answer (cheap, no IPOPT; within the limits or
     :class:`~ocp.errors.InfeasibleError`)."""
-    from ocp.optimize.mission import Mission
-
-    analytic_fallback = importlib.import_module("ocp.optimize.result").analytic_fallback
-    mission = Mission.model_validate(payload["mission"])
+    analytic_fallback = importlib.import_module("ocp.reference.fallback_answer").analytic_fallback
+    mission = untrusted_mission(payload["mission"])
     return analytic_fallback(mission, str(payload["reason"])).to_dict()
 
 
 def compare_mission(payload: Payload) -> Payload:
     """``{"mission": Mission, "qs": [q, ...] | None}`` -> :meth:`ocp.optimize.compare.CompareResult.to_dict`."""
-    from ocp.optimize.mission import Mission
-
     compare = importlib.import_module("ocp.optimize.compare").compare
     qs = payload.get("qs")
-    mission = Mission.model_validate(payload["mission"])
+    mission = untrusted_mission(payload["mission"])
     result = compare(mission) if not qs else compare(mission, tuple(int(q) for q in qs))
     return result.to_dict()
+
+
+def structure_key(payload: Payload) -> str | None:
+    """Affinity key of a mission, computed in the parent before it is sent to a worker (about a millisecond, no
+    solver built): the collocation structure it is solved with (phases, intervals per phase, input chain, plant
+    constants and effects; :class:`ocp.optimize.collocation.Structure`, the key of a worker's program cache).
+    Missions with one key are solved by one cached program. Validates with the untrusted rule, so a bad mission
+    is refused (:class:`~ocp.errors.MissionError` naming the field) before it takes a worker; ``None`` when the
+    structure cannot be told here (the worker then decides)."""
+    from ocp.optimize.problem import problem_for
+
+    mission = untrusted_mission(payload)
+    try:
+        st = problem_for(mission).structure
+    except ThrustshapeError:
+        raise
+    except Exception:  # the worker reports what is wrong, with its own error handling
+        return None
+    plant = hashlib.sha256(st.plant_key.encode()).hexdigest()[:16]
+    return f"{st.n_phases}x{st.intervals}/chain{st.chain}/{plant}"
 
 
 def _has(module: str, *names: str) -> bool:
@@ -120,13 +149,15 @@ class TaskSet:
     fallback: TaskFn | None = None
     compare: TaskFn | None = None
     batch_item: TaskFn | None = None
+    #: a batch item's affinity key (e.g. :func:`structure_key`), computed in the parent; ``None``: no affinity
+    batch_key: KeyFn | None = None
     model_check: TaskFn | None = None
     extra_preload: tuple[str, ...] = field(default=())
 
 
 def available_tasks() -> TaskSet:
     """Tasks whose core modules exist in this install (checked when the app is created)."""
-    has_opt = _has("ocp.optimize.solve", "optimize", "analytic_fallback")
+    has_opt = _has("ocp.optimize.solve", "optimize") and _has("ocp.reference.fallback_answer", "analytic_fallback")
     has_cmp = _has("ocp.optimize.compare", "compare")
     has_mc = _has("ocp.identify", "check", "diagnose", "fit")
     from service.modelcheck import model_check
@@ -136,6 +167,7 @@ def available_tasks() -> TaskSet:
         fallback=fallback_mission if has_opt else None,
         compare=compare_mission if has_cmp else None,
         batch_item=optimize_mission if has_opt else None,
+        batch_key=structure_key if has_opt else None,
         model_check=model_check if has_mc else None,
         extra_preload=tuple(m for m, ok in (("ocp.optimize.solve", has_opt), ("ocp.optimize.compare", has_cmp),
                                             ("ocp.identify", has_mc)) if ok),

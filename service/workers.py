@@ -7,7 +7,9 @@ timeout: when it expires the process is killed and replaced, so a runaway solve 
 never the server. A task may report an expensive one-off build (:func:`report_phase`): a deadline that runs
 out during it is answered at once, but the process finishes the build (up to the pool's ``build_limit``) and
 keeps it. Calls beyond ``workers + queue_size`` are refused at once with :class:`QueueFull` (the API answers
-503 + Retry-After).
+503 + Retry-After). Which free worker takes which waiting call is decided by :class:`service.dispatch.Dispatcher`:
+calls with a deadline first, then a call's *affinity* (e.g. its solver structure) to the worker that already
+built it; each worker counts the builds its tasks report (:meth:`WorkerPool.builds`).
 
 Errors cross the process boundary as data, not as pickled exceptions: a
 :class:`~ocp.errors.ThrustshapeError` raised by a task comes back as the same class with its
@@ -28,12 +30,14 @@ import multiprocessing as mp
 import os
 import signal
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from multiprocessing.connection import Connection
 from typing import Any, Literal, Protocol, cast
 
 import ocp.errors as errors
+from service.dispatch import Dispatcher
+from service.errors import QueueFull, TaskFailed, TaskTimeout
 
 Payload = dict[str, Any]
 TaskFn = Callable[[Payload], Payload]
@@ -44,9 +48,9 @@ _STARTUP_TIMEOUT_S = 120.0
 _WARM_UP_TIMEOUT_S = 30.0
 _ABORT_GRACE_S = 5.0  # an abandoned task, told to stop after its build, must answer within this [s]
 #: what a task was waiting for when its deadline ran out
-PHASES: dict[str, str] = {"queue": "waiting for a free worker", "start-up": "waiting for a worker process to start",
-                          "build": "building the solver", "run": "computing"}
+PHASES: dict[str, str] = TaskTimeout.PHASES
 log = logging.getLogger("thrustshape.workers")
+_REPLACED = object()  # a released worker whose process was replaced: it holds nothing
 _PARENT: list[Connection] = []  # inside a worker process: its end of the pipe (empty elsewhere)
 _UNTIL: list[float] = []  # inside a worker process: monotonic time at which the current call is killed
 
@@ -73,33 +77,6 @@ def report_phase(stage: str) -> None:
     _PARENT[0].send(("phase", stage))
     if stage == "built" and _PARENT[0].recv() != "go":
         raise TaskAbandoned("the caller's deadline ran out during the build; the build is kept")
-
-
-class QueueFull(Exception):
-    """Every worker is busy and the wait queue is full; retry after ``retry_after`` seconds."""
-
-    def __init__(self, retry_after: int) -> None:
-        self.retry_after = retry_after
-        super().__init__(f"all workers busy and queue full; retry after {retry_after} s")
-
-
-class TaskTimeout(Exception):
-    """A task ran out of time; ``phase`` says where: waiting for a free worker (``queue``), waiting for a
-    new worker process to start (``start-up``, e.g. after a respawn) or computing (``run``: its process was
-    killed, or on Dask the task abandoned)."""
-
-    def __init__(self, timeout: float, phase: Phase = "run") -> None:
-        self.timeout, self.phase = timeout, phase
-        super().__init__(f"the {timeout:.3g} s deadline ran out while {PHASES[phase]} ({phase})")
-
-
-class TaskFailed(Exception):
-    """A task raised an unexpected exception or its process died; ``detail`` says what happened;
-    ``startup``: the process died before the task reached it (the task is not to blame)."""
-
-    def __init__(self, detail: str, startup: bool = False) -> None:
-        self.detail, self.startup = detail, startup
-        super().__init__(detail)
 
 
 def execute(fn: TaskFn, payload: Payload) -> Outcome:
@@ -156,6 +133,7 @@ class _Worker:
     def __init__(self, ctx: Any, preload: Sequence[str], niceness: int = 0) -> None:
         self._ctx, self._preload, self._niceness = ctx, tuple(preload), niceness
         self._ready = False
+        self.builds = 0  # solver builds this worker reported (its processes' lifetimes added up)
         self.conn: Connection
         self.proc: Any
         self._spawn()
@@ -237,6 +215,7 @@ class _Worker:
                 return cast(Outcome, msg)
             if msg[1] == "build":
                 build_start = time.monotonic()
+                self.builds += 1
                 continue
             log.info("worker %s: %s built its solver in %.3g s", self.proc.pid, name,
                      time.monotonic() - (build_start or time.monotonic()))
@@ -272,11 +251,12 @@ class WorkerPool:
 
     def __init__(self, workers: int, queue_size: int, retry_after: int,
                  preload: Sequence[str] = ("ocp.reference.analytic", "ocp.reference.fallback", "ocp.optimize.mission"),
-                 build_limit: float = 0.0, niceness: int = 0) -> None:
+                 build_limit: float = 0.0, niceness: int = 0, affinity_slots: int = 8) -> None:
         """``build_limit`` [s]: how long a worker whose caller's deadline ran out during a reported build
         (:func:`report_phase`) may go on building before it is killed (0: killed at the deadline).
         ``niceness``: added to the processes' nice value (a pool of long solves yields the CPU to a pool of
-        short, deadline-bound fallbacks)."""
+        short, deadline-bound fallbacks). ``affinity_slots``: affinity keys remembered per worker (as many as
+        a worker process caches programs, :data:`ocp.optimize.collocation.CACHE_SIZE`)."""
         self.size = workers
         self.build_limit = build_limit
         self.capacity = workers + queue_size
@@ -284,11 +264,9 @@ class WorkerPool:
         self._ctx = mp.get_context("spawn")
         self._workers = [_Worker(self._ctx, preload, niceness) for _ in range(workers)]
         self._threads = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="thrustshape-call")
-        self._idle: asyncio.Queue[_Worker] = asyncio.Queue()
-        for w in self._workers:
-            self._idle.put_nowait(w)
+        self._dispatch: Dispatcher[_Worker] = Dispatcher(self._workers, slots=affinity_slots)
         self._pending = 0
-        self._urgent = 0  # deadline-bound calls waiting for a worker (background calls yield to them)
+        self._background = 0  # background calls (``wait=True``) waiting for a worker: not counted against capacity
 
     @property
     def pending(self) -> int:
@@ -296,65 +274,61 @@ class WorkerPool:
         return self._pending
 
     async def run(self, fn: TaskFn, payload: Payload, timeout: float, *, wait: bool = False,
-                  deadline: float | None = None, min_run: float = 0.0) -> Payload:
+                  deadline: float | None = None, min_run: float = 0.0, affinity: Hashable | None = None) -> Payload:
         """Run ``fn(payload)`` in a worker with a hard ``timeout`` [s].
 
-        ``wait=True`` waits for a free worker instead of raising :class:`QueueFull`; ``deadline`` (event
-        loop time; default ``timeout`` from now unless ``wait``) also counts the wait for a worker and the
-        start-up of a respawned one: the task gets what is left of it. When less than ``min_run`` [s] is left
-        once a worker is free, the task is not started (:class:`TaskTimeout` ``queue``): starting it would only
-        get its process killed and respawned, which costs the next calls a start-up.
+        ``wait=True`` (a background call, e.g. a batch item) waits for a free worker, behind every call with a
+        deadline, instead of raising :class:`QueueFull`; while waiting it does not count against the capacity.
+        ``deadline`` (event loop time; default ``timeout`` from now unless ``wait``) also counts the wait for a
+        worker and the start-up of a respawned one: the task gets what is left of it. When less than ``min_run``
+        [s] is left once a worker is free, the task is not started (:class:`TaskTimeout` ``queue``): starting it
+        would only get its process killed and respawned, which costs the next calls a start-up. ``affinity``:
+        what the call leaves built in its worker (e.g. a solver structure); a worker that holds it is preferred
+        (:class:`service.dispatch.Dispatcher`).
         """
-        if not wait and self._pending >= self.capacity:
+        if not wait and self._pending - self._background >= self.capacity:
             raise QueueFull(self.retry_after)
         self._pending += 1
         loop = asyncio.get_running_loop()
-        if deadline is None and not wait:
-            deadline = loop.time() + timeout
         try:
             if wait:
-                worker = await self._yielding_get()
-            elif deadline is None:
-                worker = await self._idle.get()
+                worker = await self._background_get(affinity)
             else:
-                self._urgent += 1
+                deadline = loop.time() + timeout if deadline is None else deadline
                 try:
-                    worker = await asyncio.wait_for(self._idle.get(), max(deadline - loop.time(), 0.0))
+                    worker = await asyncio.wait_for(self._dispatch.get(affinity, urgent=True),
+                                                    max(deadline - loop.time(), 0.0))
                 except TimeoutError:
                     log.warning("%s: deadline ran out after waiting %.3g s for a free worker",
                                 getattr(fn, "__name__", fn), timeout)
                     raise TaskTimeout(timeout, "queue") from None
-                finally:
-                    self._urgent -= 1
                 timeout = deadline - loop.time()
                 if timeout <= max(min_run, 0.0):
-                    self._idle.put_nowait(worker)
+                    self._dispatch.put(worker)
                     raise TaskTimeout(max(timeout, 0.0), "queue")
             # the call's thread runs in this request's context: its kill/respawn lines carry the request id;
             # ``answer`` may be settled before the thread ends (a deadline during a build that the worker finishes)
             answer: asyncio.Future[Outcome] = loop.create_future()
             loop.run_in_executor(self._threads, contextvars.copy_context().run, self._call_and_release, loop,
-                                 worker, fn, payload, timeout, answer)
+                                 worker, fn, payload, timeout, answer, affinity)
             return unwrap(await answer)
         finally:
             self._pending -= 1
 
-    async def _yielding_get(self) -> _Worker:
-        """A free worker for a background call (``wait=True``, e.g. a batch item), after every request with a
-        deadline that is waiting for one: a batch never makes an interactive request miss its deadline."""
-        while True:
-            worker = await self._idle.get()
-            if not self._urgent:
-                return worker
-            self._idle.put_nowait(worker)  # a deadline-bound getter waits behind this one: hand it over
-            await asyncio.sleep(0.02)
+    async def _background_get(self, affinity: Hashable | None) -> _Worker:
+        self._background += 1
+        try:
+            return await self._dispatch.get(affinity)
+        finally:
+            self._background -= 1
 
     def _call_and_release(self, loop: asyncio.AbstractEventLoop, worker: _Worker, fn: TaskFn, payload: Payload,
-                          timeout: float, answer: asyncio.Future[Outcome]) -> None:
+                          timeout: float, answer: asyncio.Future[Outcome], affinity: Hashable | None) -> None:
         def settle(outcome: Outcome | None, exc: BaseException | None) -> None:
             if not loop.is_closed():
                 loop.call_soon_threadsafe(_settle, answer, outcome, exc)
 
+        pid = worker.proc.pid
         try:
             settle(worker.call(fn, payload, timeout, lambda exc: settle(None, exc), self.build_limit), None)
         except BaseException as exc:  # handed to the awaiting request (a TaskTimeout, TaskFailed, ...)
@@ -364,7 +338,15 @@ class WorkerPool:
             with contextlib.suppress(TaskFailed, TaskTimeout, OSError, EOFError):
                 worker._await_ready()
             if not loop.is_closed():
-                loop.call_soon_threadsafe(self._idle.put_nowait, worker)
+                loop.call_soon_threadsafe(self._release, worker, affinity if worker.proc.pid == pid else _REPLACED)
+
+    def _release(self, worker: _Worker, held: Hashable | None) -> None:
+        """Back in the pool (event loop): it now holds ``held``, or nothing if its process was replaced."""
+        if held is _REPLACED:
+            self._dispatch.forget(worker)
+        else:
+            self._dispatch.remember(worker, held)
+        self._dispatch.put(worker)
 
     async def warm(self, task: TaskFn | None = None, payload: Payload | None = None) -> None:
         """Wait for every process to finish starting (one at a time, each taken off the idle queue meanwhile,
@@ -372,7 +354,7 @@ class WorkerPool:
         ``payload`` so its first real call finds its imports and caches ready."""
         loop = asyncio.get_running_loop()
         for _ in range(self.size):
-            worker = await self._idle.get()
+            worker = await self._dispatch.get(urgent=True)
             try:
                 await loop.run_in_executor(self._threads, worker._await_ready)
                 if task is not None:
@@ -380,11 +362,15 @@ class WorkerPool:
             except (TaskFailed, TaskTimeout) as exc:
                 log.error("worker did not start: %s", exc)
             finally:
-                self._idle.put_nowait(worker)
+                self._dispatch.put(worker)
 
     def ready(self) -> int:
         """Worker processes that finished starting (imports done, answering)."""
         return sum(1 for w in self._workers if w.ready)
+
+    def builds(self) -> list[int]:
+        """Solver builds each worker reported (:func:`report_phase`), in worker order."""
+        return [w.builds for w in self._workers]
 
     def pids(self) -> list[int]:
         return [w.proc.pid for w in self._workers]
@@ -413,4 +399,4 @@ class Runner(Protocol):
     """Where batch items run: the local :class:`WorkerPool` or a :class:`~service.dask_runner.DaskRunner`."""
 
     async def run(self, fn: TaskFn, payload: Payload, timeout: float, *, wait: bool = False,
-                  deadline: float | None = None) -> Payload: ...
+                  deadline: float | None = None, affinity: Hashable | None = None) -> Payload: ...

@@ -1,7 +1,7 @@
 """Service commands: ``serve`` (run the HTTP service) and ``batch`` (optimise many missions).
 
 ``thrustshape batch`` talks to a server over HTTP (``--server URL``, through :class:`clients.Client`)
-or runs the core locally (default, ``--local``) on worker processes or a Dask cluster. Either way it
+or runs the core locally (default, ``--local``) on the service's worker pool or a Dask cluster. Either way it
 shows a progress bar on stderr, prints a summary table and, with ``--out DIR``, writes one JSON
 result per mission plus ``summary.csv``.
 """
@@ -9,6 +9,7 @@ result per mission plus ``summary.csv``.
 from __future__ import annotations
 
 import argparse
+import asyncio
 import csv
 import json
 import os
@@ -17,7 +18,7 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
 from clients.cli.help import STDIO, add_command, require_extra
 from clients.cli.io import print_json
@@ -26,6 +27,8 @@ from ocp.errors import MissionError, ThrustshapeError
 if TYPE_CHECKING:
     from ocp.optimize.mission import Mission
 
+#: what the local worker processes import once at start-up
+LOCAL_PRELOAD = ("ocp.optimize.mission", "ocp.optimize.solve", "service.tasks")
 SUMMARY_COLUMNS = ("index", "name", "status", "source", "solve_time_s", "thrust_rms_error", "max_abs_current",
                    "max_abs_voltage", "error")
 
@@ -137,17 +140,6 @@ def load_missions(path: str | Path) -> list[Mission]:
     return out
 
 
-def optimize_one(mission: dict[str, Any]) -> dict[str, Any]:
-    """Local batch item (runs in a worker process or on Dask): result dict, or ``{"error": ...}``."""
-    from ocp.optimize.mission import Mission
-    from ocp.optimize.solve import optimize
-
-    try:
-        return {"result": optimize(Mission.model_validate(mission)).to_dict()}
-    except ThrustshapeError as exc:
-        return {"error": {"type": type(exc).__name__, "field": exc.field, "reason": exc.reason}}
-
-
 class Progress:
     """Progress on stderr: on a terminal ``[#####-----] 5/10 done=5 failed=0 2.10/s ETA 2 s`` redrawn in
     place; elsewhere (a log file, CI) one plain line each time an item finishes, never a carriage return."""
@@ -186,31 +178,66 @@ class Progress:
 
 def _run_local(missions: list[Mission], workers: int, dask: str | None,
                progress: Callable[[int, int], None]) -> list[dict[str, Any]]:
-    payloads = [m.model_dump(mode="json") for m in missions]
-    outcomes: list[dict[str, Any] | None] = [None] * len(payloads)
+    """Run the missions on the service's worker pool (:class:`service.workers.WorkerPool`, items of one solver
+    structure on the worker that built it) or, with ``dask``, on a Dask cluster (:class:`DaskRunner`); the task
+    is the service's batch item (:func:`service.tasks.optimize_mission`). A local parameter file is read here and
+    sent as its mapping, as to a server."""
+    from clients.cli.remote import params_for_server
+
+    payloads = [{**m.model_dump(mode="json"), "params": params_for_server(m.params)} for m in missions]
     if dask:
         require_extra("distributed", "dask", "--dask")
-        from distributed import Client as DaskClient
-        from distributed import as_completed
-
-        with DaskClient(dask, timeout="10s") as dc:
-            futs = {dc.submit(optimize_one, p, pure=False): i for i, p in enumerate(payloads)}
-            for fut in as_completed(futs):
-                outcomes[futs[fut]] = fut.result()
-                progress(*_tally(outcomes))
-    else:
-        from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
-
-        with ProcessPoolExecutor(max_workers=workers) as pool:
-            pending: dict[Future[dict[str, Any]], int] = {pool.submit(optimize_one, p): i
-                                                          for i, p in enumerate(payloads)}
-            while pending:
-                finished, _ = wait(pending, return_when=FIRST_COMPLETED)
-                for fut in finished:
-                    outcomes[pending.pop(fut)] = fut.result()
-                progress(*_tally(outcomes))
+    outcomes = asyncio.run(_run_items(payloads, workers, dask, progress))
     return [_item(i, m.name, o or {"error": {"type": "Missing", "reason": "no outcome"}})
             for i, (m, o) in enumerate(zip(missions, outcomes, strict=True))]
+
+
+async def _run_items(payloads: list[dict[str, Any]], workers: int, dask: str | None,
+                     progress: Callable[[int, int], None]) -> list[dict[str, Any] | None]:
+    from service.dask_runner import DaskRunner
+    from service.tasks import optimize_mission, structure_key
+    from service.workers import Runner, WorkerPool
+
+    pool = None if dask else WorkerPool(workers, 0, 1, preload=LOCAL_PRELOAD)
+    runner: Runner = pool if pool is not None else await DaskRunner.connect(str(dask))
+    outcomes: list[dict[str, Any] | None] = [None] * len(payloads)
+    try:
+        keys = [_key(structure_key, p) for p in payloads] if pool is not None else [None] * len(payloads)
+        # the worker processes import the core meanwhile
+
+        async def one(i: int) -> None:
+            outcomes[i] = await _outcome(runner, optimize_mission, payloads[i], keys[i])
+            progress(*_tally(outcomes))
+
+        await asyncio.gather(*(one(i) for i in range(len(payloads))))
+    finally:
+        if pool is not None:
+            pool.close()
+        else:
+            await cast(DaskRunner, runner).close()
+    return outcomes
+
+
+def _key(key: Callable[[dict[str, Any]], Any], payload: dict[str, Any]) -> Any:
+    try:
+        return key(payload)
+    except ThrustshapeError:  # validated already; the worker reports it with the item
+        return None
+
+
+async def _outcome(runner: Any, task: Callable[[dict[str, Any]], dict[str, Any]], payload: dict[str, Any],
+                   key: Any) -> dict[str, Any]:
+    """``{"result": ...}`` or ``{"error": {type, field, reason}}`` of one item (never raises for the item)."""
+    from service.errors import TaskFailed, TaskTimeout
+    from service.settings import Settings
+
+    timeout = float(Settings.model_fields["batch_item_timeout_s"].default)  # as the service's batch items
+    try:
+        return {"result": await runner.run(task, payload, timeout, wait=True, affinity=key)}
+    except ThrustshapeError as exc:
+        return {"error": {"type": type(exc).__name__, "field": exc.field, "reason": exc.reason}}
+    except (TaskTimeout, TaskFailed) as exc:
+        return {"error": {"type": type(exc).__name__, "field": None, "reason": str(exc)}}
 
 
 def _tally(outcomes: list[dict[str, Any] | None]) -> tuple[int, int]:

@@ -13,13 +13,13 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ocp.encoding import jsonable
 from ocp.errors import MissionError
 from ocp.gallery import figures as figs
 from ocp.gallery.experiment import METRIC_COLUMNS, CaseRun, ExperimentSetup, run_experiment, table_rows
 from ocp.gallery.interaction import InteractionSetup, Law, interaction_reference
 from ocp.gallery.section5 import TREND_KEYS, equal_period_trend, fit_electrical, fitted_table, paper_trend
 from ocp.model.params import MotorParams, load_params
-from ocp.optimize.result import json_ready
 from ocp.theory.reversal import table_one
 
 #: the normal-form figures use the interaction example's k and these input bounds (paper: 0 < u_low < u_high)
@@ -88,7 +88,7 @@ def build_gallery(out: Path | str, interaction: InteractionSetup | None = None,
     _write_table(out, table)
     extra = section_v(params, exp, paper_rows)
     for name, data in extra.items():
-        (out / f"{name}.json").write_text(json.dumps(json_ready(data), indent=1, allow_nan=False), encoding="utf-8")
+        (out / f"{name}.json").write_text(json.dumps(jsonable(data), indent=1, allow_nan=False), encoding="utf-8")
     result = GalleryOutput(out=out, figures=files, table=table, optimised_note="" if opt_rows and not note else note,
                            **extra)
     (out / "index.html").write_text(_index_html(result, exp), encoding="utf-8")

@@ -17,9 +17,9 @@ from matplotlib.figure import Figure
 from ocp.gallery.experiment import CaseRun
 from ocp.gallery.interaction import InteractionReference
 from ocp.model.params import MotorParams
-from ocp.model.plant import normal_form_drift, normal_form_gain
 from ocp.reference.analytic import LocalReversal, SinProfile, reference
 from ocp.reference.trajectory import Reference
+from ocp.theory.normal_form import normal_form_drift, normal_form_gain
 from ocp.theory.reversal import crossing_class, feasibility_bounds, regularity_label
 
 COLORS = ("tab:blue", "tab:red", "tab:olive", "tab:green", "tab:purple", "tab:brown")

@@ -302,6 +302,7 @@ def _score(exc_: Excitation, params: dict[str, Any], c_f: float, voltage: float,
            detect: bool) -> tuple[Candidate, dict[str, Any], Any]:
     """Optimise one candidate within the limits; its raw separations (no refit) when it runs within them."""
     from ocp.optimize.mission import Mission
+    from ocp.optimize.result import Source
     from ocp.optimize.solve import optimize
 
     mission = mission_for(exc_, params, c_f, voltage, current, opt.time_limit_s)
@@ -310,7 +311,7 @@ def _score(exc_: Excitation, params: dict[str, Any], c_f: float, voltage: float,
     except ThrustshapeError as exc:  # nothing within the limits (the fallback too): this candidate cannot run
         return Candidate(exc_.name, exc_.description, False, f"not run: {exc.field}: {exc.reason}"), mission, None
     i_max, v_max = float(np.max(np.abs(res.arrays["current"]))), float(np.max(np.abs(res.arrays["voltage"])))
-    ok = res.source == "optimized" and i_max <= current * (1 + 1e-6) and v_max <= voltage * (1 + 1e-6)
+    ok = res.source is Source.OPTIMIZED and i_max <= current * (1 + 1e-6) and v_max <= voltage * (1 + 1e-6)
     note = (f"optimised within the limits (peak {i_max:.3g} A, {v_max:.3g} V)" if ok else
             f"not run: {res.source} ({res.reason or 'limits exceeded'}; peak {i_max:.3g} A, {v_max:.3g} V)")
     if not ok:

@@ -5,8 +5,9 @@ Two ways to confront a plant with a time-series log (all arrays (N,) SI unless s
 * **free run** -- the plant integrated under the measured voltage (zero-order held, as a digital
   drive applies it), restarted from the measured state at the start of every segment of
   ``segment_s`` seconds (so a slow drift of the rotor angle cannot hide angle-periodic effects);
-  compared with the measured speed, current and thrust. Integrated by CasADi (``mapaccum``), the
-  same ``plant.rhs`` the optimiser uses, with RK4 sub-steps at most half the fastest time constant.
+  compared with the measured speed, current and thrust. Integrated by the project's one zero-order-hold
+  simulator (:mod:`ocp.simulate.zoh`: CasADi ``mapaccum`` of the same ``plant.rhs`` the optimiser uses, RK4
+  steps under its stability rule from the plant's fastest eigenvalue).
 * **one-step residuals** -- from the measured state at sample k, one sample of integration under
   ``V[k]``; the mismatch at k+1 is written in equation units: torque [N m] for eq. dc_mechanical
   (``J dw / dt``), voltage [V] for eq. dc_electrical (``R di / (1 - exp(-R dt/L))``), thrust [N]
@@ -22,16 +23,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 
 from ocp.errors import LogError, SolverError
 from ocp.logs import Log, LogKind
-from ocp.model.effects import measured_current, stateful, time_scale
-from ocp.model.plant import CASADI, NUMPY, DCMotorPlant
-from ocp.simulate.open_loop import rk4
+from ocp.model.effects import measured_current, stateful
+from ocp.model.plant import NUMPY, DCMotorPlant
+from ocp.simulate.zoh import SUBSTEPS, rk4, segment_simulator, steps_per_sample
 
 CHANNELS: tuple[str, ...] = ("omega", "current", "thrust")
 EQUATIONS: tuple[str, ...] = ("mechanical", "electrical", "thrust")
@@ -74,9 +73,11 @@ class Residuals:
         return {"mechanical": self.mechanical, "electrical": self.electrical, "thrust": self.thrust}[name]
 
 
-def substeps(plant: DCMotorPlant, dt: float) -> int:
-    """RK4 sub-steps per sample so that the step is at most half the fastest time constant."""
-    return max(1, math.ceil(dt / (0.5 * time_scale(plant))))
+def substeps(plant: DCMotorPlant, dt: float, x_ref: np.ndarray | None = None) -> int:
+    """RK4 sub-steps per sample of ``dt`` [s]: the simulator's stability rule (:func:`ocp.simulate.zoh.step_limit`)
+    at the state ``x_ref`` (n_states,; default at rest), ``SUBSTEPS`` per step."""
+    x = np.zeros(len(plant.state_names)) if x_ref is None else x_ref
+    return SUBSTEPS * steps_per_sample(plant, dt, x, 0.0)
 
 
 def current_offset(plant: DCMotorPlant) -> float:
@@ -105,17 +106,6 @@ def segments(log: Log, segment_s: float) -> np.ndarray:
     return np.arange(0, log.n - length + 1, length)
 
 
-@lru_cache(maxsize=8)
-def _segment_simulator(plant: DCMotorPlant, dt: float, length: int, n_segments: int) -> ca.Function:
-    """``(x0 (nx, B), u (1, B*(length-1))) -> states`` of ``n_segments`` free runs of ``length`` samples,
-    built once per plant and shape (a check, its report and a fit's final plants are simulated again)."""
-    nx = len(plant.state_names)
-    x, u = ca.SX.sym("x", nx), ca.SX.sym("u")
-    step = ca.Function("step", [x, u], [ca.vertcat(*rk4(plant, [x[m] for m in range(nx)], u, dt,
-                                                          substeps(plant, dt), CASADI))])
-    return step.mapaccum(length - 1).map(n_segments)
-
-
 def free_run(plant: DCMotorPlant, log: Log, segment_s: float = 0.5) -> FreeRun:
     """Free-run prediction of a time-series log (see module doc); steady-state sweeps: equilibria."""
     if log.kind is LogKind.STEADY_STATE:
@@ -123,10 +113,11 @@ def free_run(plant: DCMotorPlant, log: Log, segment_s: float = 0.5) -> FreeRun:
     starts = segments(log, segment_s)
     length = max(2, round(segment_s / log.dt))
     nx = len(plant.state_names)
-    sim = _segment_simulator(plant, log.dt, length, starts.size)
     x_obs = observed_states(plant, log)
+    per_sample = substeps(plant, log.dt, x_obs[:, 0]) // SUBSTEPS
+    sim = segment_simulator(plant, per_sample, length, starts.size)  # built once per plant and shape
     u_blocks = np.concatenate([log.voltage[s:s + length - 1] for s in starts])
-    traj = np.asarray(sim(x_obs[:, starts], u_blocks.reshape(1, -1)))
+    traj = np.asarray(sim(x_obs[:, starts], u_blocks.reshape(1, -1), log.dt / per_sample))
     traj = traj.reshape(nx, starts.size, length - 1)
     full = np.concatenate([x_obs[:, starts].reshape(nx, starts.size, 1), traj], axis=2).reshape(nx, -1)
     idx = (starts[:, None] + np.arange(length)[None, :]).ravel()
@@ -146,7 +137,7 @@ def one_step(plant: DCMotorPlant, log: Log) -> Residuals:
         return Residuals(np.arange(log.n), -p.J * d[0], -p.L * d[1], f)
     dt = log.dt
     xk = [row[:-1] for row in x]
-    pred = rk4(plant, xk, log.voltage[:-1], dt, substeps(plant, dt), NUMPY)
+    pred = rk4(plant, xk, log.voltage[:-1], dt, substeps(plant, dt, x[:, 0]), NUMPY)
     a = math.exp(-p.R * dt / p.L)
     mech = p.J * (log.omega[1:] - pred[0]) / dt
     elec = p.R / (1.0 - a) * (log.current[1:] - measured_current(plant, pred[1]))

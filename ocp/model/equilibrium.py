@@ -13,29 +13,27 @@ import numpy as np
 from scipy.optimize import brentq, root
 
 from ocp.errors import SolverError
-from ocp.model.plant import DCMotorPlant, Plant, TorquePlant, speed_from_thrust
+from ocp.model.plant import DrivenPlant, Plant, speed_from_thrust
 
 
 def _angle_states(plant: Plant) -> list[int]:
     return [k for k, name in enumerate(plant.state_names) if name.endswith(".theta")]
 
 
-def equilibrium(plant: Plant, omega: float) -> tuple[np.ndarray, float]:
+def equilibrium(plant: DrivenPlant, omega: float) -> tuple[np.ndarray, float]:
     """(state (n_states,), input [V or rad/s^2]) holding ``omega`` [rad/s] constant."""
-    if isinstance(plant, TorquePlant):
-        return np.array([omega]), plant.k * omega * abs(omega)
-    if isinstance(plant, DCMotorPlant) and not plant.effects:
-        i, v = plant.steady_state(omega)
-        return np.array([omega, i]), v
+    nominal, u = plant.static_inverse(omega)
+    if plant.is_nominal:  # the closed form is exact
+        return np.array([float(s) for s in nominal]), float(u)
     n = len(plant.state_names)
     angles = _angle_states(plant)
     free = [k for k in range(1, n) if k not in angles]  # current and effect states (speed is fixed)
     x = np.zeros(n)
     x[0] = omega
     guess = np.zeros(len(free) + 1)
-    if isinstance(plant, DCMotorPlant):
-        i0, v0 = plant.steady_state(omega)
-        guess[free.index(1)], guess[-1] = i0, v0
+    for k, value in enumerate(nominal[1:], start=1):  # start from the nominal plant's equilibrium
+        guess[free.index(k)] = float(value)
+    guess[-1] = float(u)
 
     def raw(y: np.ndarray) -> np.ndarray:
         xx = x.copy()
@@ -63,10 +61,10 @@ def equilibrium(plant: Plant, omega: float) -> tuple[np.ndarray, float]:
     return x, float(sol.x[-1])
 
 
-def speed_for_thrust(plant: Plant, thrust: float, c_f: float) -> float:
+def speed_for_thrust(plant: DrivenPlant, thrust: float, c_f: float) -> float:
     """Steady speed [rad/s] at which ``plant`` produces ``thrust`` [N] (static inverse if nominal)."""
     w_ideal = float(speed_from_thrust(thrust, c_f))
-    if isinstance(plant, TorquePlant) or (isinstance(plant, DCMotorPlant) and not plant.effects):
+    if plant.is_nominal:
         return w_ideal
 
     def gap(w: float) -> float:

@@ -7,6 +7,11 @@ Two plants share one interface (:class:`Plant`):
 * :class:`TorquePlant` -- the normalised torque-input channel, state ``x = (omega,)``, input
   ``u = tau_m / J [rad/s^2]`` (paper eq. omega_dyn), for drives that control torque/current.
 
+Besides its dynamics a plant answers what its callers would otherwise branch on: its nominal static
+inverse, its input limit and bounded states under a mission's :class:`DriveBounds`, the limit ratios of a
+response, the channels an answer reports (for the torque channel with the DC motor's equivalent current
+and voltage). Which plant a mission gets is decided in one place, :func:`ocp.model.factory.make_plant`.
+
 The right-hand sides are written once and evaluated on numpy arrays (simulation, fitting) or on
 CasADi symbols (collocation) through an :class:`Ops` backend. Inside an optimiser phase the sign
 of ``omega`` is fixed; passing ``sign=+1/-1`` replaces ``w|w|`` by the smooth ``sign*w^2``.
@@ -14,9 +19,9 @@ of ``omega`` is fixed; passing ``sign=+1/-1`` replaces ``w|w|`` by the smooth ``
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, ClassVar, Protocol
 
 import casadi as ca
 import numpy as np
@@ -132,6 +137,98 @@ class Plant(Protocol):
 
 
 @dataclass(frozen=True)
+class DriveBounds:
+    """A mission's actuator limits, resolved (magnitudes, SI).
+
+    Attributes:
+        voltage: armature voltage [V]; current: armature current [A]
+        torque: torque of the torque channel [N m] (resolved: the mission's or its default)
+        speed: rotor speed [rad/s], None = unconstrained
+    """
+
+    voltage: float
+    current: float
+    torque: float
+    speed: float | None = None
+
+
+class ReferenceLike(Protocol):
+    """What :meth:`DrivenPlant.feedforward` reads of a closed-form reference
+    (:class:`ocp.reference.trajectory.Reference`): arrays (M,) of speed [rad/s], its derivative [rad/s^2],
+    current [A] and voltage [V] of the nominal motor."""
+
+    @property
+    def omega(self) -> np.ndarray: ...
+
+    @property
+    def omega_dot(self) -> np.ndarray: ...
+
+    @property
+    def current(self) -> np.ndarray: ...
+
+    @property
+    def voltage(self) -> np.ndarray: ...
+
+
+class DrivenPlant(Plant, Protocol):
+    """A plant the optimiser, the fallback and the verification drive under a mission's limits."""
+
+    #: thrust exponent g imposed at a reversal when the input must be continuous (6: current and voltage both
+    #: vanish there, omega ~ s^3; the torque channel has no current state to make vanish: 2)
+    smooth_reversal_order: ClassVar[int]
+
+    @property
+    def voltage_driven(self) -> bool:
+        """Whether the input is the armature voltage (the analytic designs and the Section V loop need it)."""
+        ...
+
+    @property
+    def is_nominal(self) -> bool:
+        """No effects: :meth:`static_inverse` is the exact equilibrium."""
+        ...
+
+    def voltage_plant(self) -> DCMotorPlant | None:
+        """This plant as a voltage-input DC motor (what a voltage loop such as Section V's drives), or None."""
+        ...
+
+    def static_inverse(self, omega: Any) -> tuple[list[np.ndarray], np.ndarray]:
+        """Nominal states (omega and, for the DC motor, the current) and input holding ``omega`` [rad/s]
+        constant (effects left out), each shaped like ``omega``."""
+        ...
+
+    def feedforward(self, ref: ReferenceLike) -> tuple[list[np.ndarray], np.ndarray]:
+        """Nominal states and input along a closed-form reference (exact for the nominal plant), shapes (M,)."""
+        ...
+
+    def input_limit(self, bounds: DriveBounds) -> float:
+        """Largest |input| [V or rad/s^2]."""
+        ...
+
+    def state_limits(self, bounds: DriveBounds) -> dict[int, float]:
+        """Largest |state| [SI] by state index, for the states the limits bound (the speed apart)."""
+        ...
+
+    def torque_limit(self, bounds: DriveBounds) -> float | None:
+        """Torque bound [N m] the analytic designs must respect; None when current and voltage bound the plant."""
+        ...
+
+    def channels(self, x: np.ndarray, u: np.ndarray) -> dict[str, np.ndarray]:
+        """Reported drive channels of states ``x`` (n_states, K) under input ``u`` (K,): current [A] and
+        voltage [V] (for the torque channel first its normalised torque [rad/s^2], then the DC equivalents)."""
+        ...
+
+    def limit_ratios(self, channels: Mapping[str, Any], bounds: DriveBounds) -> dict[str, Any]:
+        """|channel| / limit for each limit of the drive (``limits.<name>`` keys) from :meth:`channels`' values."""
+        ...
+
+    def peak_report(self, peak: Callable[[str], float], bounds: DriveBounds,
+                    tolerance: float) -> tuple[dict[str, Any], bool]:
+        """Extra peak fields [SI] of a verification from ``peak(channel)`` (the largest |value|), and whether the
+        drive limits hold within ``tolerance`` (relative, e.g. 1.001)."""
+        ...
+
+
+@dataclass(frozen=True)
 class DCMotorPlant:
     """Brushed DC motor driving a bidirectional propeller; input V.
 
@@ -202,8 +299,51 @@ class DCMotorPlant:
     def steady_state(self, omega: float) -> tuple[float, float]:
         """(current [A], voltage [V]) that hold ``omega`` [rad/s] constant (no effects)."""
         p = self.params
+        # eq:dc_mechanical at rest  k_t i = B w + c_tau w|w|
         i = (p.B * omega + p.c_tau * omega * abs(omega)) / p.k_t
+        # eq:dc_electrical at rest  V = R i + k_e w
         return i, p.R * i + p.k_e * omega
+
+    smooth_reversal_order: ClassVar[int] = 6
+
+    @property
+    def voltage_driven(self) -> bool:
+        return True
+
+    @property
+    def is_nominal(self) -> bool:
+        return not self.effects
+
+    def voltage_plant(self) -> DCMotorPlant | None:
+        return self
+
+    def static_inverse(self, omega: Any) -> tuple[list[np.ndarray], np.ndarray]:
+        w = np.asarray(omega, float)
+        i, v = self.steady_state(w)  # type: ignore[arg-type]  # vectorised: abs() of an array
+        return [w, np.asarray(i)], np.asarray(v)
+
+    def feedforward(self, ref: ReferenceLike) -> tuple[list[np.ndarray], np.ndarray]:
+        return [ref.omega, ref.current], ref.voltage
+
+    def input_limit(self, bounds: DriveBounds) -> float:
+        return bounds.voltage
+
+    def state_limits(self, bounds: DriveBounds) -> dict[int, float]:
+        return {1: bounds.current}
+
+    def torque_limit(self, bounds: DriveBounds) -> float | None:
+        return None
+
+    def channels(self, x: np.ndarray, u: np.ndarray) -> dict[str, np.ndarray]:
+        return {"current": x[1], "voltage": u}
+
+    def limit_ratios(self, channels: Mapping[str, Any], bounds: DriveBounds) -> dict[str, Any]:
+        return {"limits.current": np.abs(channels["current"]) / bounds.current,
+                "limits.voltage": np.abs(channels["voltage"]) / bounds.voltage}
+
+    def peak_report(self, peak: Callable[[str], float], bounds: DriveBounds,
+                    tolerance: float) -> tuple[dict[str, Any], bool]:
+        return {}, peak("current") <= bounds.current * tolerance and peak("voltage") <= bounds.voltage * tolerance
 
 
 @dataclass(frozen=True)
@@ -213,16 +353,74 @@ class TorquePlant:
     Attributes:
         k: normalised drag c_tau/J [1/rad]
         c_f: thrust coefficient [N s^2/rad^2] used by :meth:`thrust`
+        params: the motor behind the channel (its J turns the torque limit into the input limit, its R, k_e,
+            k_t give the DC-equivalent current and voltage); not part of the dynamics' identity
     """
 
     k: float
     c_f: float = 1.0
     state_names: tuple[str, ...] = ("omega",)
     input_name: str = "torque"
+    params: MotorParams | None = field(default=None, repr=False, compare=False)
+    smooth_reversal_order: ClassVar[int] = 2
 
     @classmethod
     def from_params(cls, params: MotorParams) -> TorquePlant:
-        return cls(k=params.k, c_f=params.c_f)
+        return cls(k=params.k, c_f=params.c_f, params=params)
+
+    def _motor(self) -> MotorParams:
+        if self.params is None:
+            raise ValueError("this torque channel has no motor parameters (build it with TorquePlant.from_params)")
+        return self.params
+
+    @property
+    def voltage_driven(self) -> bool:
+        return False
+
+    @property
+    def is_nominal(self) -> bool:
+        return True
+
+    def voltage_plant(self) -> DCMotorPlant | None:
+        return None
+
+    def static_inverse(self, omega: Any) -> tuple[list[np.ndarray], np.ndarray]:
+        w = np.asarray(omega, float)
+        # eq:omega_dyn at rest  u = k w|w|
+        return [w], self.k * w * np.abs(w)
+
+    def feedforward(self, ref: ReferenceLike) -> tuple[list[np.ndarray], np.ndarray]:
+        # eq:omega_dyn  u = w' + k w|w|
+        return [ref.omega], ref.omega_dot + self.k * ref.omega * np.abs(ref.omega)
+
+    def input_limit(self, bounds: DriveBounds) -> float:
+        return bounds.torque / self._motor().J
+
+    def state_limits(self, bounds: DriveBounds) -> dict[int, float]:
+        return {}
+
+    def torque_limit(self, bounds: DriveBounds) -> float | None:
+        return bounds.torque
+
+    def dc_equivalent(self, w: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Current [A] and voltage [V] a DC motor would need for speed ``w`` under the normalised torque ``u``
+        (tau = J u covers inertia and drag; the viscous B w adds)."""
+        p = self._motor()
+        i = p.J * u / p.k_t + p.B * w / p.k_t
+        return i, p.R * i + p.k_e * w
+
+    def channels(self, x: np.ndarray, u: np.ndarray) -> dict[str, np.ndarray]:
+        i, v = self.dc_equivalent(x[0], u)
+        return {"torque": u, "current": i, "voltage": v}
+
+    def limit_ratios(self, channels: Mapping[str, Any], bounds: DriveBounds) -> dict[str, Any]:
+        return {"limits.torque": np.abs(channels["torque"]) * self._motor().J / bounds.torque}
+
+    def peak_report(self, peak: Callable[[str], float], bounds: DriveBounds,
+                    tolerance: float) -> tuple[dict[str, Any], bool]:
+        tau_max = peak("torque") * self._motor().J  # the drive owns i and V (reported as the DC equivalent)
+        return {"max_abs_torque": tau_max, "torque_margin": bounds.torque - tau_max}, \
+            tau_max <= bounds.torque * tolerance
 
     def rhs(self, x: Sequence[Expr], u: Expr, ops: Ops = NUMPY, sign: Expr | None = None) -> list[Expr]:
         w = x[0]
@@ -231,30 +429,3 @@ class TorquePlant:
 
     def thrust(self, x: Sequence[Expr], ops: Ops = NUMPY, sign: Expr | None = None) -> Expr:
         return thrust_from_speed(x[0], self.c_f, ops, sign)
-
-
-# eq:sys2  x2' = -2k sign(x2)|x2|^(3/2) + 2 sqrt|x2| u
-def normal_form_rhs(x2: np.ndarray | float, u: np.ndarray | float, k: float) -> np.ndarray:
-    """Normalised-thrust dynamics of eq. sys2; ``x2 = w|w|`` [rad^2/s^2], ``u`` [rad/s^2]."""
-    x2 = np.asarray(x2, dtype=float)
-    return -2.0 * k * np.sign(x2) * np.abs(x2) ** 1.5 + 2.0 * np.sqrt(np.abs(x2)) * u
-
-
-def normal_form_drift(x2: np.ndarray | float, k: float) -> np.ndarray:
-    """Drift ``f2(x2) = -2k sign(x2)|x2|^(3/2)`` of eq. sys2 (Fig. f2_map)."""
-    return normal_form_rhs(x2, 0.0, k)
-
-
-def normal_form_gain(x2: np.ndarray | float) -> np.ndarray:
-    """Input gain ``g2(x2) = 2 sqrt|x2|`` of eq. sys2; vanishes at thrust reversal (Fig. f2_map)."""
-    return 2.0 * np.sqrt(np.abs(np.asarray(x2, dtype=float)))
-
-
-# eq:inv_u  u = y'' / (2 sqrt|y'|) + k y'
-def inverse_input(ydot: np.ndarray | float, yddot: np.ndarray | float, k: float) -> np.ndarray:
-    """Unique input reproducing ``(y', y'')`` away from reversal; +-inf where ``y' = 0, y'' != 0``."""
-    yd = np.asarray(ydot, dtype=float)
-    ydd = np.asarray(yddot, dtype=float)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        u = ydd / (2.0 * np.sqrt(np.abs(yd))) + k * yd
-    return np.where((yd == 0) & (ydd == 0), 0.0, u)

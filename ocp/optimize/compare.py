@@ -13,7 +13,6 @@ voltage as feedforward.
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -21,11 +20,12 @@ from typing import Any
 import numpy as np
 from scipy.integrate import trapezoid
 
+from ocp.encoding import jsonable
 from ocp.errors import MissionError
-from ocp.model.plant import DCMotorPlant
 from ocp.optimize.mission import Mission
-from ocp.optimize.result import OptimizeResult, json_ready
-from ocp.optimize.solve import make_plant, optimize
+from ocp.optimize.result import COMPARE_CURVES as CURVES
+from ocp.optimize.result import OptimizeResult, Source
+from ocp.optimize.solve import optimize
 from ocp.reference.analytic import PiecewiseProfile, SinReversal, reference
 from ocp.simulate.closed_loop import track
 from ocp.theory.crossings import sign_change_times
@@ -55,31 +55,38 @@ class CompareResult:
         return [{"label": c.label, **c.figures} for c in self.candidates]
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: the table and every candidate's arrays (unbounded samples are ``null``)."""
-        curves = [{"label": c.label, **{k: np.asarray(getattr(c, k), float).tolist()
-                                         for k in ("t", "thrust", "omega", "current", "voltage")}}
+        """JSON-ready (:func:`ocp.encoding.jsonable`): the table (an unbounded shape's peaks and energy are ``null``)
+        and every candidate's arrays (an unbounded sample has no value: NaN, ``null``; a plot leaves a gap)."""
+        curves = [{"label": c.label, **{k: _finite_or_nan(getattr(c, k)) for k in CURVES}}
                   for c in self.candidates]
-        return {"mission": self.mission, "table": json_ready(self.table()), "candidates": json_ready(curves),
-                "optimized_source": self.optimized.source, "optimized_reason": self.optimized.reason}
+        return dict(jsonable({"mission": self.mission, "table": self.table(), "candidates": curves,
+                              "optimized_source": self.optimized.source, "optimized_reason": self.optimized.reason}))
+
+
+def _finite_or_nan(a: np.ndarray) -> np.ndarray:
+    a = np.asarray(a, float)
+    return np.where(np.isfinite(a), a, np.nan)
 
 
 def _figures(m: Mission, c: Candidate, t_des: np.ndarray, f_des: np.ndarray, exponents: list[float],
              unbounded: bool) -> dict[str, Any]:
-    plant = make_plant(m)
-    energy = math.inf if unbounded else float(trapezoid(c.voltage * c.current, c.t))
+    plant = m.drive_plant()
+    # an unbounded ideal command has no peak and no energy: None (JSON null)
+    energy = None if unbounded else float(trapezoid(c.voltage * c.current, c.t))
     figures: dict[str, Any] = {
         "duration_s": float(c.t[-1] - c.t[0]),
-        "peak_current_a": math.inf if unbounded else float(np.max(np.abs(c.current))),
-        "peak_voltage_v": math.inf if unbounded else float(np.max(np.abs(c.voltage))),
+        "peak_current_a": None if unbounded else float(np.max(np.abs(c.current))),
+        "peak_voltage_v": None if unbounded else float(np.max(np.abs(c.voltage))),
         "energy_j": energy,
         "thrust_rms_error_n": float(np.sqrt(np.mean((c.thrust - np.interp(c.t, t_des, f_des)) ** 2))),
         "crossing_exponents": exponents,
         "within_limits": (not unbounded) and float(np.max(np.abs(c.current))) <= m.limits.current * 1.001
         and float(np.max(np.abs(c.voltage))) <= m.limits.voltage * 1.001,
     }
-    if isinstance(plant, DCMotorPlant):
+    voltage_plant = plant.voltage_plant()  # the Section V loop commands a voltage
+    if voltage_plant is not None:
         theta = np.concatenate([[0.0], np.cumsum(0.5 * (c.omega[1:] + c.omega[:-1]) * np.diff(c.t))])
-        loop = track(plant, c.t, c.thrust, c.omega, theta, feedforward=c.voltage)
+        loop = track(voltage_plant, c.t, c.thrust, c.omega, theta, feedforward=c.voltage)
         lm = loop.metrics
         figures.update({"loop_thrust_rms_n": lm.thrust_rms, "loop_speed_rms_rad_s": lm.speed_rms,
                         "loop_local_speed_error_rad_s": lm.local_speed_error,
@@ -135,12 +142,12 @@ def compare(m: Mission, qs: tuple[int, ...] = (0, 1, 2, 3)) -> CompareResult:
     t_des = t_des - t_des[0]
     opt = optimize(m)
     a = opt.arrays
-    cands = [Candidate("optimized" if opt.source == "optimized" else "fallback", a["t"], a["thrust"], a["omega"],
+    cands = [Candidate("optimized" if opt.source is Source.OPTIMIZED else "fallback", a["t"], a["thrust"], a["omega"],
                        a["current"], a["voltage"])]
-    cands[0].figures = _figures(m, cands[0], a["t"], a["thrust_desired"], [c["exponent"] for c in opt.crossings],
+    cands[0].figures = _figures(m, cands[0], a["t"], a["thrust_desired"], [c.exponent for c in opt.crossings],
                                 False)
     windows = mission_reversals(t_des, f_des)
-    q_min = min_sin_q(m.regularity, m.plant == "dc-motor")
+    q_min = min_sin_q(m.regularity, m.drive_plant().voltage_driven)
     t = np.linspace(0.0, float(t_des[-1]), max(2, round(float(t_des[-1]) * 1000) + 1))
     for q in qs:
         prof = PiecewiseProfile(tuple(SinReversal(w.t_s, q, w.before, w.after, w.fall, w.rise) for w in windows),

@@ -1,7 +1,7 @@
 """Minimum-time answers that converge with the mesh: solve, double the intervals, warm-start, repeat.
 
 A min-time solve (``objective: "min-time"``) minimises the duration: no effort term, and a smoothness
-term of weight :data:`ocp.optimize.solve.MIN_TIME_SMOOTHING` = 1e-10 that only conditions IPOPT (it moves the
+term of weight :data:`ocp.optimize.data.MIN_TIME_SMOOTHING` = 1e-10 that only conditions IPOPT (it moves the
 duration by less than 1e-5 of it, within IPOPT's own precision, tested against the same solve without it),
 so the optimum is the discretised minimum time. That value still depends on the mesh: a jump of the
 optimal voltage (at the start, onto and off the current limit, at a reversal) takes about one collocation
@@ -25,16 +25,15 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from ocp.optimize import collocation as col
+from ocp.optimize.data import ProblemData
 from ocp.optimize.mission import MAX_INTERVALS, Collocation, Mission
-from ocp.optimize.result import OptimizeResult
-
-if TYPE_CHECKING:
-    from ocp.optimize.solve import Problem
+from ocp.optimize.problem import Problem
+from ocp.optimize.result import MeshStep, OptimizeResult, Source
 
 #: stop refining when one doubling changes the minimum time by less than this share of it
 RTOL = 5e-3
@@ -61,7 +60,7 @@ def refine(mission: Mission, solve: MeshSolve, analytic_min_time: float | None,
     history = [(mesh_size(mission), _duration(result))]
     note = ""
     last_cost = time.perf_counter() - started
-    while result.source == "optimized":
+    while result.source is Source.OPTIMIZED:
         if len(history) >= 2 and abs(history[-1][1] - history[-2][1]) <= RTOL * history[-1][1]:
             break
         intervals = 2 * history[-1][0]
@@ -76,12 +75,13 @@ def refine(mission: Mission, solve: MeshSolve, analytic_min_time: float | None,
         t0 = time.perf_counter()
         finer = solve(mission.model_copy(update={"collocation": Collocation(intervals=intervals)}), result)
         last_cost = time.perf_counter() - t0
-        if finer.source != "optimized":
+        if finer.source is not Source.OPTIMIZED:
             note = f"refinement stopped: the {intervals}-interval solve fell back ({finer.reason})"
             break
         result = finer
         history.append((intervals, _duration(result)))
-    result.verification.update(summary(result, history, note, analytic_min_time))
+    for name, value in summary(result, history, note, analytic_min_time).items():
+        setattr(result.verification, name, value)
     result.total_time_s = time.perf_counter() - started  # every mesh
     return result
 
@@ -100,7 +100,7 @@ def summary(result: OptimizeResult, history: list[tuple[int, float]], note: str,
     solved, ``[{"intervals", "min_time_s"}]``; ``min_time_note``: why it is not a converged minimum ("" when
     it is); ``analytic_min_time_s``: the fastest analytic reversal within the same limits.
     """
-    optimised = result.source == "optimized"
+    optimised = result.source is Source.OPTIMIZED
     bound = abs(history[-1][1] - history[-2][1]) if optimised and len(history) >= 2 else None
     converged = bound is not None and bound <= RTOL * history[-1][1]
     if not optimised:
@@ -109,20 +109,20 @@ def summary(result: OptimizeResult, history: list[tuple[int, float]], note: str,
         note = "one mesh only: no error bound"
     return {"min_time_s": history[-1][1] if optimised else None,
             "min_time_error_bound_s": bound, "min_time_converged": converged,
-            "min_time_mesh": [{"intervals": n, "min_time_s": t} for n, t in history] if optimised else [],
+            "min_time_mesh": [MeshStep(intervals=n, min_time_s=t) for n, t in history] if optimised else [],
             "min_time_note": note, "analytic_min_time_s": analytic_min_time}
 
 
-def mesh_guess(problem: Problem, data: dict[str, np.ndarray], previous: OptimizeResult) -> np.ndarray:
+def mesh_guess(problem: Problem, data: ProblemData, previous: OptimizeResult) -> np.ndarray:
     """Initial guess for ``problem``'s program from a coarser answer ``previous`` (scaled, clipped into the
     bounds): its phase stretches, and its simulated speed, current and input (``previous.fine``)
     interpolated at the new collocation points at the same share of each phase; states it does not
-    carry (effect states) keep ``data["x0"]``'s guess."""
-    st, lay = problem.structure, col.layout(problem.structure.n_phases, problem.structure.intervals,
-                                            data["xscale"].size)
-    P, N, chain, xs = st.n_phases, st.intervals, st.chain, data["xscale"]
+    carry (effect states) keep ``data.x0``'s guess."""
+    xs = data.scales.x
+    st, lay = problem.structure, col.layout(problem.structure.n_phases, problem.structure.intervals, xs.size)
+    P, N, chain = st.n_phases, st.intervals, st.chain
     npx = len(problem.plant.state_names)
-    guess = data["x0"].copy()
+    guess = data.x0.copy()
     stretch = np.asarray(previous.stretch, float)
     if stretch.size != P:
         return guess
@@ -132,17 +132,14 @@ def mesh_guess(problem: Problem, data: dict[str, np.ndarray], previous: Optimize
     t = (edges[:-1, None] + taus[None, :] * h[:, None]).reshape(P, N, col.DEGREE)
     fine = previous.fine
     guess[lay.stretch] = stretch
-    guess[lay.xc[:, :, :, 0]] = np.interp(t, fine["t"], fine["omega"]) / xs[0]
-    if "torque" in fine:
-        command = fine["torque"]
-    else:
-        command = fine["voltage"]
-        guess[lay.xc[:, :, :, 1]] = np.interp(t, fine["t"], fine["current"]) / xs[1]
-    chain_values = [command]
+    for k, name in enumerate(problem.plant.state_names):  # speed, current: what the answer carries
+        if name in fine:
+            guess[lay.xc[:, :, :, k]] = np.interp(t, fine["t"], fine[name]) / xs[k]
+    chain_values = [fine[problem.plant.input_name]]
     for _ in range(chain):
         chain_values.append(np.gradient(chain_values[-1], fine["t"]))
     for c in range(chain):
         guess[lay.xc[:, :, :, npx + c]] = np.interp(t, fine["t"], chain_values[c]) / xs[npx + c]
     mid = (edges[:-1, None] + (np.arange(N)[None, :] + 0.5) / N * h[:, None])  # (P, N) interval middles
-    guess[lay.u[:, :, 0]] = np.interp(mid, fine["t"], chain_values[chain]) / float(data["uscale"][0])
-    return np.clip(guess, data["lbx"], data["ubx"])
+    guess[lay.u[:, :, 0]] = np.interp(mid, fine["t"], chain_values[chain]) / data.scales.u
+    return np.clip(guess, data.lbx, data.ubx)

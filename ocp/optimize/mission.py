@@ -52,8 +52,9 @@ from pydantic import (
 
 from ocp.errors import MissionError, ParameterError, validation_location
 from ocp.model.effects import load_plant
+from ocp.model.factory import PlantKind, make_plant
 from ocp.model.params import PRESETS, MotorParams, load_params
-from ocp.model.plant import DCMotorPlant
+from ocp.model.plant import DriveBounds, DrivenPlant
 from ocp.theory.reversal import ReversalRegularity
 
 MAX_PROFILE_SAMPLES = 100_000
@@ -192,8 +193,8 @@ class Mission(_Strict):
     params: str | dict[str, Any] = Field(default="paper-rig", examples=["paper-rig"], description=(
         "motor constants: a preset name or a mapping {J [kg m^2], B [N m s/rad], c_tau [N m s^2/rad^2], "
         "c_f [N s^2/rad^2], k_t [N m/A], k_e [V s/rad], R [ohm], L [H], effects?}"))
-    plant: Literal["dc-motor", "torque"] = Field(default="dc-motor", description="voltage-driven DC motor or "
-                                                 "torque-controlled channel")
+    plant: PlantKind = Field(default=PlantKind.DC_MOTOR, description="voltage-driven DC motor or "
+                             "torque-controlled channel")
     limits: Limits = Field(default=Limits(), description="actuator limits (V, A, V/s, rad/s, N m)")
     regularity: ReversalRegularity = Field(default=ReversalRegularity.BOUNDED,
                                            description="smoothness of the command through a reversal")
@@ -212,7 +213,7 @@ class Mission(_Strict):
     #: whether ``params`` may name a parameter file; a validation context ``{"allow_files": ...}`` overrides
     allow_files: ClassVar[bool] = True
     _motor: tuple[object, MotorParams] | None = PrivateAttr(default=None)
-    _plant: tuple[object, DCMotorPlant] | None = PrivateAttr(default=None)
+    _plant: tuple[object, PlantKind, DrivenPlant] | None = PrivateAttr(default=None)
     _desired: tuple[object, np.ndarray, np.ndarray] | None = PrivateAttr(default=None)
 
     @field_validator("min_crossing_order")
@@ -266,11 +267,17 @@ class Mission(_Strict):
         p = self.motor()
         return 4.0 * p.c_tau * max(float(np.max(np.abs(self.desired()[1]))), 1e-6) / p.c_f
 
-    def dc_plant(self) -> DCMotorPlant:
-        """The DC-motor plant of ``params`` with its effects (:func:`ocp.model.effects.load_plant`), built once."""
-        if self._plant is None or self._plant[0] is not self.params:
-            self._plant = (self.params, load_plant(self.params))
-        return self._plant[1]
+    def drive_plant(self) -> DrivenPlant:
+        """The mission's plant (:func:`ocp.model.factory.make_plant`: the DC motor with the effects of ``params``,
+        or the torque channel), built once."""
+        if self._plant is None or self._plant[0] is not self.params or self._plant[1] is not self.plant:
+            self._plant = (self.params, self.plant, make_plant(self.plant, self.params, self.motor()))
+        return self._plant[2]
+
+    def bounds(self) -> DriveBounds:
+        """The actuator limits resolved (:meth:`torque_limit` filled in)."""
+        lim = self.limits
+        return DriveBounds(voltage=lim.voltage, current=lim.current, torque=self.torque_limit(), speed=lim.speed)
 
     def desired(self) -> tuple[np.ndarray, np.ndarray]:
         """Desired thrust samples ``(t [s], thrust [N])``, shapes (N,), t[0] = 0 for segments (sampled once;
@@ -284,6 +291,15 @@ class Mission(_Strict):
             t.flags.writeable = f.flags.writeable = False
             self._desired = (source, t, f)
         return self._desired[1], self._desired[2]
+
+
+def output_grid(total: float) -> np.ndarray:
+    """Output times [s] at OUTPUT_RATE over ``total``; a horizon over MAX_OUTPUT_S (a min-time solve's
+    free horizon) is refused rather than sampled."""
+    if not total <= MAX_OUTPUT_S:
+        raise MissionError("retiming", f"the reference would last {total:.4g} s; at most {MAX_OUTPUT_S:g} s")
+    n = max(2, math.ceil(total * OUTPUT_RATE) + 1)
+    return np.linspace(0.0, total, n)
 
 
 def segment_samples(segments: list[Segment], rate: float = SEGMENT_RATE) -> int:

@@ -15,6 +15,8 @@ from typing import Any
 
 import numpy as np
 
+from ocp.encoding import jsonable
+
 CSV_COLUMNS: tuple[str, ...] = ("t", "thrust", "omega", "theta", "current", "voltage")
 CHANNELS: tuple[str, ...] = ("thrust", "omega", "omega_dot", "omega_ddot", "theta", "current", "voltage")
 
@@ -58,15 +60,12 @@ class Reference:
         return buf.getvalue()
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict; +-inf samples become the strings "inf" / "-inf"."""
-        out: dict[str, Any] = {"t": _json_floats(self.t)}
+        """JSON-ready dict (:func:`ocp.encoding.jsonable`: +-inf samples become the strings "inf" / "-inf")."""
+        out: dict[str, Any] = {"t": jsonable(np.asarray(self.t, float))}
         for c in CHANNELS:
-            out[c] = _json_floats(getattr(self, c))
+            out[c] = jsonable(np.asarray(getattr(self, c), float))
         out["unbounded"] = dict(self.unbounded)
         out["crossings"] = [{"t": float(ts), "p": p} for ts, p in zip(self.crossing_times, self.crossing_orders,
                                                                        strict=True)]
         return out
 
-
-def _json_floats(a: np.ndarray) -> list[float | str]:
-    return [float(v) if math.isfinite(v) else ("inf" if v > 0 else "-inf") for v in np.asarray(a, float)]

@@ -5,21 +5,24 @@ Two integrators:
 
 * :func:`simulate` -- adaptive (scipy ``solve_ivp``, Radau: the electrical pole makes the DC
   plant stiff) for an input given as a callable or as samples interpolated linearly;
-* :func:`simulate_zoh` -- a zero-order-held input (a sampled digital command), integrated exactly
-  per sample interval with fixed RK4 sub-steps; also the building block of closed-loop loops.
+* :func:`simulate_zoh` -- a zero-order-held input (a sampled digital command): the project's one
+  zero-order-hold simulator (:mod:`ocp.simulate.zoh`, fixed RK4 steps under its stability rule).
+
+:func:`rk4` (the one RK4) lives in :mod:`ocp.simulate.zoh`; :func:`rk4_step` is its numpy form for one state,
+the building block of closed-loop loops (:mod:`ocp.simulate.closed_loop`).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 from scipy.integrate import cumulative_trapezoid, solve_ivp
 
 from ocp.errors import MissionError, SolverError
-from ocp.model.plant import NUMPY, Ops, Plant
+from ocp.model.plant import Plant
+from ocp.simulate.zoh import SUBSTEPS, rk4, simulate_held
 
 InputSignal = Callable[[float], float] | np.ndarray
 
@@ -96,19 +99,6 @@ def simulate(
     return _finish(plant, t, u_samples, sol.y)
 
 
-def rk4(plant: Plant, x: list[Any], u: Any, dt: Any, n: int, ops: Ops = NUMPY) -> list[Any]:
-    """``n`` classic RK4 sub-steps of ``dt / n`` [s] under the held input ``u``: the one RK4 of the
-    project, for numbers (``NUMPY``, arrays broadcast) and for CasADi expressions (``CASADI``)."""
-    h = dt / n
-    for _ in range(n):
-        k1 = plant.rhs(x, u, ops)
-        k2 = plant.rhs([a + 0.5 * h * b for a, b in zip(x, k1, strict=True)], u, ops)
-        k3 = plant.rhs([a + 0.5 * h * b for a, b in zip(x, k2, strict=True)], u, ops)
-        k4 = plant.rhs([a + h * b for a, b in zip(x, k3, strict=True)], u, ops)
-        x = [a + h / 6.0 * (b1 + 2 * b2 + 2 * b3 + b4) for a, b1, b2, b3, b4 in zip(x, k1, k2, k3, k4, strict=True)]
-    return x
-
-
 def rk4_step(plant: Plant, x: np.ndarray, u: float, dt: float, substeps: int) -> np.ndarray:
     """Advance state ``x`` (n_states,) by ``dt`` [s] under constant input ``u`` with RK4 sub-steps."""
     return np.array(rk4(plant, list(x), u, dt, substeps), dtype=float)
@@ -118,8 +108,9 @@ def simulate_zoh(
     plant: Plant, t: np.ndarray, u: np.ndarray, x0: Sequence[float], max_substep: float = 1e-4
 ) -> Trajectory:
     """Integrate under the zero-order hold of samples ``u`` (N,) on ``t`` (N,): ``u[k]`` acts on
-    ``[t[k], t[k+1])``. Sub-steps are at most ``max_substep`` [s] (the DC plant's electrical time
-    constant L/R is ~0.4 ms for the paper rig)."""
+    ``[t[k], t[k+1])``. RK4 sub-steps are at most ``max_substep`` [s] and within the simulator's stability
+    rule (:func:`ocp.simulate.zoh.step_limit`: the DC plant's electrical time constant L/R is ~0.4 ms for the
+    paper rig)."""
     t = np.asarray(t, dtype=float)
     u = np.asarray(u, dtype=float)
     _check_time(t)
@@ -127,9 +118,8 @@ def simulate_zoh(
         raise MissionError("u", f"shape {u.shape} does not match t {t.shape}")
     if not np.all(np.isfinite(u)):
         raise MissionError("u", "contains NaN or inf")
-    x = np.zeros((len(plant.state_names), t.size))
-    x[:, 0] = x0
-    for k in range(t.size - 1):
-        dt = t[k + 1] - t[k]
-        x[:, k + 1] = rk4_step(plant, x[:, k], float(u[k]), dt, max(1, int(np.ceil(dt / max_substep))))
-    return _finish(plant, t, u, x)
+    x_start = np.asarray(x0, dtype=float)
+    if x_start.shape != (len(plant.state_names),) or not np.all(np.isfinite(x_start)):
+        raise MissionError("x0", f"needs {len(plant.state_names)} finite values ({', '.join(plant.state_names)})")
+    resp = simulate_held(plant, t, u[:-1], x_start, t, max_step=SUBSTEPS * max_substep)
+    return _finish(plant, t, u, resp.at_out)

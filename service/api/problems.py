@@ -1,4 +1,8 @@
-"""One place that turns every error into ``application/problem+json`` (RFC 9457) naming field and reason."""
+"""One place that turns every error into ``application/problem+json`` (RFC 9457) naming field and reason.
+
+Four trees, one handler each: request validation (422), the core's :class:`~ocp.errors.ThrustshapeError`
+(422, naming the field), the service's own :class:`~service.errors.ServiceError` (its ``status`` and
+``title``), and Starlette's HTTP errors (404, 405, ...)."""
 
 from __future__ import annotations
 
@@ -10,8 +14,7 @@ from fastapi.responses import JSONResponse
 from starlette.exceptions import HTTPException
 
 from ocp.errors import SEGMENT_TAGS, InfeasibleError, SolverError, ThrustshapeError, validation_location
-from service.jobs import IdempotencyConflict, StoreUnavailable
-from service.workers import QueueFull, TaskFailed, TaskTimeout
+from service.errors import ServiceError, TooLarge
 
 PROBLEM = "application/problem+json"
 
@@ -35,20 +38,15 @@ def problem(status: int, title: str, detail: str, field: str | None = None, reas
     return JSONResponse(body, status_code=status, media_type=PROBLEM, headers=headers)
 
 
-class BodyTooLarge(HTTPException):
-    """Request body over ``max_body_bytes`` (an HTTPException so FastAPI's body parsing passes it through)."""
+class BodyTooLarge(TooLarge, HTTPException):
+    """Request body over ``max_body_bytes`` (413; also an HTTPException so FastAPI's body parsing passes it
+    through instead of answering 400)."""
 
     def __init__(self, limit: int, field: str = "body") -> None:
-        self.field = field
-        super().__init__(413, f"request body larger than {limit} bytes")
-
-
-class TooLarge(Exception):
-    """A request within the body limit asks for more than a configured cap (413)."""
-
-    def __init__(self, field: str, reason: str) -> None:
-        self.field, self.reason = field, reason
-        super().__init__(f"{field}: {reason}")
+        reason = f"request body larger than {limit} bytes"
+        TooLarge.__init__(self, field, reason)
+        HTTPException.__init__(self, 413, reason)
+        self.args = (reason,)
 
 
 #: union tags of the request models (analytic sin/design requests, mission segments)
@@ -90,45 +88,21 @@ async def _http(request: Request, exc: Exception) -> JSONResponse:
     if not isinstance(exc, HTTPException):
         raise exc
     headers = dict(exc.headers or {})
-    field = getattr(exc, "field", "body") if exc.status_code == 413 else None
-    return problem(exc.status_code, _TITLES.get(exc.status_code, "Error"), str(exc.detail), field,
-                   str(exc.detail) if field else None, headers=headers or None)
+    return problem(exc.status_code, _TITLES.get(exc.status_code, "Error"), str(exc.detail), headers=headers or None)
 
 
-async def _too_large(request: Request, exc: Exception) -> JSONResponse:
-    if not isinstance(exc, TooLarge):
+async def _service(request: Request, exc: Exception) -> JSONResponse:
+    """The one handler of the service's own errors (:mod:`service.errors`): each carries its answer."""
+    if not isinstance(exc, ServiceError):
         raise exc
-    return problem(413, "Request too large", str(exc), exc.field, exc.reason)
-
-
-async def _queue_full(request: Request, exc: Exception) -> JSONResponse:
-    if not isinstance(exc, QueueFull):
-        raise exc
-    return problem(503, "Server busy", str(exc), headers={"Retry-After": str(exc.retry_after)})
-
-
-async def _store(request: Request, exc: Exception) -> JSONResponse:
-    return problem(503, "Store unavailable", str(exc), headers={"Retry-After": "5"})
-
-
-async def _timeout(request: Request, exc: Exception) -> JSONResponse:
-    return problem(504, "Computation timed out", str(exc))
-
-
-async def _failed(request: Request, exc: Exception) -> JSONResponse:
-    return problem(500, "Computation failed", str(exc))
-
-
-async def _conflict(request: Request, exc: Exception) -> JSONResponse:
-    if not isinstance(exc, IdempotencyConflict):
-        raise exc
-    return problem(422, "Idempotency key reused", str(exc), "Idempotency-Key",
-                   "already used for a different request body", batch_id=exc.batch_id)
+    return problem(exc.status, exc.title, str(exc), exc.field, exc.reason, headers=exc.http_headers(),
+                   error_type=type(exc).__name__, **exc.extra())
 
 
 _TITLES = {400: "Bad request", 401: "Unauthorized", 403: "Forbidden", 404: "Not found", 405: "Method not allowed",
            406: "Not acceptable", 413: "Request too large", 415: "Unsupported media type", 422: "Invalid input",
-           500: "Computation failed", 503: "Server busy", 504: "Computation timed out"}
+           500: "Computation failed", 501: "Not available on this server", 503: "Server busy",
+           504: "Computation timed out"}
 
 
 def install(app: FastAPI) -> None:
@@ -136,9 +110,4 @@ def install(app: FastAPI) -> None:
     app.add_exception_handler(RequestValidationError, _validation)
     app.add_exception_handler(ThrustshapeError, _core)
     app.add_exception_handler(HTTPException, _http)
-    app.add_exception_handler(TooLarge, _too_large)
-    app.add_exception_handler(QueueFull, _queue_full)
-    app.add_exception_handler(TaskTimeout, _timeout)
-    app.add_exception_handler(StoreUnavailable, _store)
-    app.add_exception_handler(TaskFailed, _failed)
-    app.add_exception_handler(IdempotencyConflict, _conflict)
+    app.add_exception_handler(ServiceError, _service)

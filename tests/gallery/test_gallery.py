@@ -27,10 +27,11 @@ from ocp.gallery.experiment import (
 from ocp.gallery.figures import case_profile, crossing_markers, reference_case
 from ocp.gallery.interaction import InteractionReference, InteractionSetup, Law, interaction_reference
 from ocp.gallery.section5 import equal_period_trend, fit_electrical
-from ocp.model.plant import DCMotorPlant, inverse_input
+from ocp.model.plant import DCMotorPlant
 from ocp.reference.analytic import SinProfile, reference, time_grid
 from ocp.simulate.closed_loop import track
 from ocp.theory.crossings import ORDER_TOLERANCE, estimate_crossings
+from ocp.theory.normal_form import inverse_input
 from ocp.theory.reversal import feasibility_bounds, in_feasibility_set
 
 

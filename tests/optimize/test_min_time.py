@@ -21,7 +21,9 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
+from ocp.optimize import data as opt_data
 from ocp.optimize import min_time
+from ocp.optimize import problem as opt_problem
 from ocp.optimize import solve as opt
 from ocp.optimize.mission import mission_from_mapping
 from ocp.optimize.solve import optimize
@@ -111,13 +113,13 @@ def test_min_time_smoothing_term_does_not_move_the_optimum(regularity: str, monk
     duration to 1e-5 (IPOPT's own precision here: "acceptable" stops at tol 1e-4 on the scaled NLP)."""
     m = mission_from_mapping({**EXAMPLE, "objective": "min-time", "regularity": regularity,
                               "collocation": {"intervals": 60}, "time_limit_s": 60.0})
-    problem = opt.problem_for(m)
-    r = opt.solve_problem(problem, opt.problem_data(problem), warm=False)
+    problem = opt_problem.problem_for(m)
+    r = opt.solve_problem(problem, opt_data.problem_data(problem), warm=False)
     assert r.source == "optimized", r.reason
     duration = r.arrays["t"][-1]
     assert 0.0 <= r.solver["objective"] - duration / 2.0 <= 1e-6 * duration / 2.0
-    monkeypatch.setitem(opt.WEIGHTS, "min-time", (0.0, 1.0, 0.0, 0.0, 0.0))
-    bare = opt.solve_problem(problem, opt.problem_data(problem), warm=False)
+    monkeypatch.setitem(opt_data.WEIGHTS, "min-time", (0.0, 1.0, 0.0, 0.0, 0.0))
+    bare = opt.solve_problem(problem, opt_data.problem_data(problem), warm=False)
     assert bare.source == "optimized", bare.reason
     assert bare.solver["objective"] == pytest.approx(bare.arrays["t"][-1] / 2.0, rel=1e-12)
     assert duration == pytest.approx(bare.arrays["t"][-1], rel=1e-5)

@@ -1,4 +1,4 @@
-"""The a-posteriori verification simulation (ocp.optimize.result.simulate_response) against scipy's stiff solver."""
+"""The a-posteriori verification simulation (ocp.optimize.verify.simulate_response) against scipy's stiff solver."""
 
 import json
 import math
@@ -11,8 +11,8 @@ from scipy.integrate import solve_ivp
 from ocp.errors import MissionError
 from ocp.model.plant import DCMotorPlant
 from ocp.optimize.mission import mission_from_mapping
-from ocp.optimize.result import sim_step, simulate_response
 from ocp.optimize.solve import optimize
+from ocp.optimize.verify import sim_step, simulate_response
 
 EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
 

@@ -1,7 +1,7 @@
 """The analytic fallback never answers over its limits (issue #12, finding 2).
 
 Adversarial missions -- hundreds of reversals, long fast sines, tiny current limits, a friction the
-closed forms leave out, the torque channel -- go through :func:`ocp.optimize.result.analytic_fallback`. Each
+closed forms leave out, the torque channel -- go through :func:`ocp.reference.fallback_answer.analytic_fallback`. Each
 answer is either an :class:`~ocp.errors.InfeasibleError` naming a limit, or a reference whose simulated
 response stays within every limit on the integration grid. The peaks are recomputed here from the raw
 arrays, not read from ``verification``; one answer is re-simulated with scipy's Radau (an integrator
@@ -19,7 +19,8 @@ from scipy.integrate import solve_ivp
 from ocp.errors import InfeasibleError
 from ocp.model.params import MotorParams
 from ocp.optimize.mission import mission_from_mapping
-from ocp.optimize.result import PATH_TOLERANCE, analytic_fallback
+from ocp.optimize.verify import PATH_TOLERANCE
+from ocp.reference.fallback_answer import analytic_fallback
 
 TOL = 1.0 + PATH_TOLERANCE
 REV = [{"kind": "hold", "duration": 0.2, "thrust": 0.4}, {"kind": "reversal", "duration": 0.3, "to": -0.4},

@@ -9,8 +9,10 @@ import time
 from pathlib import Path
 
 from ocp.optimize import collocation as col
+from ocp.optimize.collocation import solver_options
 from ocp.optimize.mission import mission_from_mapping
-from ocp.optimize.solve import optimize, problem_for, solver_options
+from ocp.optimize.problem import problem_for
+from ocp.optimize.solve import optimize
 
 EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
 

@@ -81,7 +81,7 @@ def test_a_reversal_through_an_exact_zero_sample_is_found_everywhere(rig):
     comparison all see the one reversal at 0.6 s (the last two once looked for opposite-sign neighbours only)."""
     from ocp.optimize.compare import mission_reversals
     from ocp.optimize.mission import mission_from_mapping
-    from ocp.optimize.solve import split_phases
+    from ocp.optimize.problem import split_phases
     from ocp.reference.fallback import design_reversals
     from ocp.theory.reversal import ReversalRegularity
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import sympy
 
-from ocp.model.plant import inverse_input
+from ocp.theory.normal_form import inverse_input
 from ocp.theory.reversal import (
     BOUNDED_DISCONTINUOUS,
     CONTINUOUS,

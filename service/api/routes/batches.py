@@ -15,7 +15,8 @@ from fastapi import APIRouter, Header, Path, Query, Response
 from starlette.exceptions import HTTPException
 
 from service.api.deps import BatchesDep, SettingsDep, StoreDep, check_mission_limits
-from service.api.problems import TooLarge, error_responses
+from service.api.problems import error_responses
+from service.errors import TooLarge
 from service.jobs import BatchCounts, Item, JobStore
 from service.schemas import (
     BatchAccepted,

@@ -25,10 +25,11 @@ from fastapi import APIRouter, Depends, File, Form, Path, Query, Request, Respon
 from fastapi.responses import HTMLResponse
 from starlette.exceptions import HTTPException
 
-from ocp.errors import MissionError, ParameterError, ThrustshapeError
+from ocp.errors import ParameterError, ThrustshapeError
 from service.api.deps import PoolDep, SettingsDep, TasksDep
 from service.api.problems import TooLarge, error_responses, problem
 from service.checkjobs import CheckJob, CheckJobRunner
+from service.errors import FeatureUnavailable
 from service.modelcheck import (
     PARAMS_HELP,
     READ_FIELDS,
@@ -54,7 +55,7 @@ from service.workers import WorkerPool
 
 PREFIX = "/v1/model-check"
 router = APIRouter(prefix=PREFIX, tags=["model check"])
-_ERRORS = error_responses(401, 413, 422, 503, 504)
+_ERRORS = error_responses(401, 413, 422, 501, 503, 504)
 
 LogFile = Annotated[UploadFile, File(description="measurement log: CSV (header row) or Parquet; columns t, voltage, "
                                                  "current, omega and/or theta, thrust (SI) or as `columns` maps them")]
@@ -128,7 +129,7 @@ async def _run(op: Op, log: UploadFile, params: str, columns: str | None, steady
 async def _checked(op: Op, log: UploadFile, params: str, columns: str | None, steady_state: bool | None,
                    settings: Settings, pool: WorkerPool, tasks: TaskSet, **extra: Any) -> dict[str, Any]:
     if tasks.model_check is None:  # the routes are only registered when the backend exists
-        raise MissionError("route", "model checks are not available on this server")
+        raise FeatureUnavailable("model checks", "ocp.identify")
     payload = await _payload(op, log, params, columns, steady_state, settings, **extra)
     return await pool.run(tasks.model_check, payload, settings.task_timeout_s)
 
@@ -203,7 +204,7 @@ JobId = Annotated[str, Path(min_length=1, max_length=64, description="job id fro
 def _job_runner(request: Request) -> CheckJobRunner:
     runner = getattr(request.app.state, "check_jobs", None)
     if runner is None:
-        raise MissionError("route", "model-check jobs are not available on this server")
+        raise FeatureUnavailable("model-check jobs", "ocp.identify")
     return cast(CheckJobRunner, runner)
 
 

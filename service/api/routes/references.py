@@ -8,13 +8,16 @@ from typing import Any, cast
 from fastapi import APIRouter, Request
 
 from ocp.errors import MissionError
+from service.api.answers import json_answer
 from service.api.deps import PoolDep, SettingsDep, TasksDep, check_mission_limits
 from service.api.logging import TaskLog
 from service.api.problems import error_responses
+from service.errors import DeadlineExceeded, FeatureUnavailable, TaskFailed, TaskTimeout
 from service.schemas import AnalyticRequest, DesignRequest, MissionRequest, OptimizePublic, ReferencePublic
-from service.workers import PHASES, TaskFailed, TaskTimeout, WorkerPool
+from service.workers import PHASES, WorkerPool
 
 _ERRORS = error_responses(401, 413, 422, 503, 504)
+_OPTIMIZE_ERRORS = error_responses(401, 413, 422, 501, 503, 504)
 
 analytic_router = APIRouter(prefix="/v1/references", tags=["references"])
 optimize_router = APIRouter(prefix="/v1/references", tags=["references"])
@@ -35,15 +38,6 @@ async def analytic(req: AnalyticRequest, settings: SettingsDep, pool: PoolDep, t
     return await pool.run(tasks.analytic, payload, settings.task_timeout_s)
 
 
-class DeadlineExceeded(TaskTimeout):
-    """Neither the solver nor the fallback answered within the request's deadline (504); ``detail`` says
-    which part ran out of time where."""
-
-    def __init__(self, total: float, detail: str) -> None:
-        super().__init__(total)
-        self.args = (f"the {total:.3g} s deadline ran out: {detail}",)
-
-
 _SOLVER_OUT = {"queue": "no solver worker was free within {:.3g} s (queue)",
                "start-up": "the solver worker process was still starting after {:.3g} s (start-up)",
                "build": "the solver for this mission's structure was still being built after {:.3g} s (build; "
@@ -51,7 +45,7 @@ _SOLVER_OUT = {"queue": "no solver worker was free within {:.3g} s (queue)",
                "run": "the solver did not finish within {:.3g} s (run)"}
 
 
-@optimize_router.post("/optimize", response_model=OptimizePublic, responses=_ERRORS,
+@optimize_router.post("/optimize", response_model=OptimizePublic, responses=_OPTIMIZE_ERRORS,
                       summary="Optimal reference for a mission, or the analytic fallback when the deadline is near")
 async def optimize(mission: MissionRequest, request: Request, settings: SettingsDep, pool: PoolDep,
                    tasks: TasksDep) -> Any:
@@ -62,15 +56,16 @@ async def optimize(mission: MissionRequest, request: Request, settings: Settings
     which part ran out. A mission nothing within the limits reproduces is a 422 ``InfeasibleError``."""
     check_mission_limits(mission, settings)
     if tasks.optimize is None or tasks.fallback is None:  # routes are only registered with both
-        raise MissionError("route", "optimisation is not available on this server")
+        raise FeatureUnavailable("optimisation", "ocp.optimize.solve")
     loop = asyncio.get_running_loop()
     total = min(settings.optimize_deadline_s, mission.time_limit_s + settings.optimize_grace_s)
     start = loop.time()
     solve_budget = max(total - settings.fallback_reserve_s, 0.0)
     payload = mission.model_dump(mode="json")
     try:
-        return await pool.run(tasks.optimize, payload, solve_budget, deadline=start + solve_budget,
-                              min_run=min(1.0, 0.5 * solve_budget))
+        return json_answer(OptimizePublic, await pool.run(tasks.optimize, payload, solve_budget,
+                                                          deadline=start + solve_budget,
+                                                          min_run=min(1.0, 0.5 * solve_budget)))
     except TaskTimeout as exc:
         reason = "deadline: " + _SOLVER_OUT[exc.phase].format(solve_budget)
     except TaskFailed as exc:
@@ -79,8 +74,9 @@ async def optimize(mission: MissionRequest, request: Request, settings: Settings
     detail = ""
     for _ in range(2):  # a fallback process that dies (killed, out of memory) gets one more try
         try:
-            return await fallbacks.run(tasks.fallback, {"mission": payload, "reason": reason}, total,
-                                       deadline=start + total)
+            return json_answer(OptimizePublic, await fallbacks.run(tasks.fallback, {"mission": payload,
+                                                                                   "reason": reason},
+                                                                   total, deadline=start + total))
         except TaskTimeout as exc:
             raise DeadlineExceeded(total, f"{reason}; then the fallback ran out while "
                                           f"{PHASES[exc.phase]} ({exc.phase})") from None

@@ -1,0 +1,175 @@
+"""The one zero-order-hold simulator: a plant under a held input, fixed-step RK4, in CasADi.
+
+Used by the optimiser's verification (:mod:`ocp.optimize.result`), identification's free run
+(:mod:`ocp.identify.predict`) and ``thrustshape simulate --hold zoh`` (:func:`ocp.simulate.open_loop.simulate_zoh`).
+
+* **One stability rule** (:func:`step_limit`): a step of ``SUBSTEPS`` RK4 sub-steps lasts at most
+  ``SUBSTEPS * RK4_STIFFNESS / |lambda|`` [s], ``lambda`` [1/s] the fastest eigenvalue of the plant's Jacobian
+  at the start state and at that state with the speed set to zero (for the DC motor about ``-R/L``), and at
+  most ``max_step`` [s] (accuracy of the slow modes; verification uses ``SIM_STEP``).
+* **Built once per plant and shape**: the step ``(x, u, dt) -> x+`` once per plant, its ``mapaccum`` over K
+  steps once per (plant, K) (:func:`accumulator`).
+* **Optionally compiled** (:mod:`ocp.simulate.compiled`): the step as C, built by the C compiler found at run
+  time and cached on disk; where there is none the CasADi virtual machine evaluates the same expression graph.
+
+Array layout: states (nx, K+1) on the integration grid (K+1,), inputs (K,) held from each grid point on.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable, Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any, cast
+
+import casadi as ca
+import numpy as np
+
+from ocp.errors import MissionError
+from ocp.model.plant import CASADI, NUMPY, Ops, Plant
+from ocp.simulate import compiled
+
+SIM_STEP = 2.5e-4  # s, longest step (SUBSTEPS RK4 sub-steps each) of the optimiser's verification
+RK4_STIFFNESS = 0.32  # largest |h lambda| of an RK4 sub-step: RK4 is stable to 2.78, its error ~ (h lambda)^5 / 120
+SUBSTEPS = 2  # RK4 sub-steps per step
+MAX_SIM_STEPS = 2_000_000  # steps of one simulation (about a second of computing)
+
+
+def rk4(plant: Plant, x: list[Any], u: Any, dt: Any, n: int, ops: Ops = NUMPY) -> list[Any]:
+    """``n`` classic RK4 sub-steps of ``dt / n`` [s] under the held input ``u``: the one RK4 of the
+    project, for numbers (``NUMPY``, arrays broadcast) and for CasADi expressions (``CASADI``)."""
+    h = dt / n
+    for _ in range(n):
+        k1 = plant.rhs(x, u, ops)
+        k2 = plant.rhs([a + 0.5 * h * b for a, b in zip(x, k1, strict=True)], u, ops)
+        k3 = plant.rhs([a + 0.5 * h * b for a, b in zip(x, k2, strict=True)], u, ops)
+        k4 = plant.rhs([a + h * b for a, b in zip(x, k3, strict=True)], u, ops)
+        x = [a + h / 6.0 * (b1 + 2 * b2 + 2 * b3 + b4) for a, b1, b2, b3, b4 in zip(x, k1, k2, k3, k4, strict=True)]
+    return x
+
+
+@lru_cache(maxsize=16)
+def _jacobian_function(plant: Any) -> ca.Function:
+    """``(x, u) -> d rhs / d x`` of ``plant``, built once per plant."""
+    nx = len(plant.state_names)
+    x, u = ca.SX.sym("x", nx), ca.SX.sym("u")
+    rhs = ca.vertcat(*plant.rhs([x[i] for i in range(nx)], u, CASADI))
+    return ca.Function("rhs_jacobian", [x, u], [ca.jacobian(rhs, x)])
+
+
+def fastest_rate(plant: Plant, x0: Sequence[float] | np.ndarray, u0: float) -> float:
+    """Largest |eigenvalue| [1/s] of the plant's Jacobian at ``x0`` (nx,) and at ``x0`` with the speed zero."""
+    jac = _jacobian_function(cast(Hashable, plant))
+    at_rest = np.array(x0, float)
+    at_rest[0] = 0.0
+    return max(float(np.max(np.abs(np.linalg.eigvals(np.asarray(jac(x, u0)))))) for x in (np.asarray(x0, float),
+                                                                                          at_rest))
+
+
+def step_limit(plant: Plant, x0: Sequence[float] | np.ndarray, u0: float, max_step: float = SIM_STEP) -> float:
+    """Longest step [s] (``SUBSTEPS`` RK4 sub-steps): each sub-step keeps ``|h lambda| <= RK4_STIFFNESS`` for the
+    fastest eigenvalue (:func:`fastest_rate`; 2500 1/s for the paper rig's winding, a 20 uH winding makes it
+    100x faster and a fixed step would diverge), and the step is at most ``max_step`` [s]."""
+    lam = fastest_rate(plant, x0, u0)
+    return min(max_step, SUBSTEPS * RK4_STIFFNESS / lam) if lam > 0 else max_step
+
+
+@lru_cache(maxsize=16)
+def step_function(plant: Any) -> ca.Function:
+    """CasADi step ``(x (nx,), u, dt [s]) -> x+`` of ``SUBSTEPS`` RK4 sub-steps, built once per plant."""
+    nx = len(plant.state_names)
+    x, u, dt = ca.SX.sym("x", nx), ca.SX.sym("u"), ca.SX.sym("dt")
+    return ca.Function("zoh_step", [x, u, dt], [ca.vertcat(*rk4(plant, [x[i] for i in range(nx)], u, dt,
+                                                                    SUBSTEPS, CASADI))])
+
+
+@lru_cache(maxsize=16)
+def _compiled(plant: Any) -> compiled.CompiledStep:
+    return compiled.CompiledStep(step_function(plant))
+
+
+@lru_cache(maxsize=64)
+def _accumulator(plant: Any, steps: int) -> ca.Function:
+    return step_function(plant).mapaccum("zoh", steps)
+
+
+def accumulator(plant: Plant, steps: int, compile_step: bool = True) -> compiled.Driver:
+    """``(x0 (nx,), u (steps,), dt (steps,)) -> states (nx, steps)`` after each step. ``compile_step``: the step
+    compiled to C with a C loop over the steps (:class:`ocp.simulate.compiled.CompiledStep`; the first uses of
+    a new plant start its build and run uncompiled meanwhile); else, or without a C compiler, the CasADi
+    virtual machine (``mapaccum``, built once per plant and length). Both give the same numbers."""
+    key = cast(Hashable, plant)
+    if compile_step and compiled.enabled():
+        fast = _compiled(key).get()
+        if fast is not None:
+            return fast
+    acc = _accumulator(key, int(steps))
+    return lambda x0, u, dt: np.asarray(acc(x0, np.reshape(u, (1, -1)), np.reshape(dt, (1, -1))))
+
+
+def fine_grid(grid: np.ndarray, step_max: float) -> np.ndarray:
+    """Every interval of ``grid`` (G,) split into ``ceil(length / step_max)`` equal steps: shape (K+1,)."""
+    n_sub = np.maximum(1, np.ceil(np.diff(grid) / step_max).astype(int))
+    first = np.repeat(np.cumsum(n_sub) - n_sub, n_sub)
+    return np.append(np.repeat(grid[:-1], n_sub) + (np.arange(n_sub.sum()) - first) * np.repeat(np.diff(grid) / n_sub,
+                                                                                                 n_sub), grid[-1])
+
+
+@dataclass(frozen=True)
+class Response:
+    """A simulated response. Attributes: ``at_out`` states (nx, M) at the requested times; ``t`` the
+    integration grid [s] (K,), ``x`` the states on it (nx, K), ``u`` the input held from each grid point
+    on (K,; the last one repeated)."""
+
+    at_out: np.ndarray
+    t: np.ndarray
+    x: np.ndarray
+    u: np.ndarray
+
+
+def simulate_held(plant: Plant, t_knots: np.ndarray, u_of_interval: np.ndarray, x0: np.ndarray,
+                  t_out: np.ndarray, max_step: float = SIM_STEP, compile_step: bool = True) -> Response:
+    """Integrate ``plant`` from ``x0`` (nx,) under the input held at ``u_of_interval[k]`` on
+    ``[t_knots[k], t_knots[k+1])``, on a grid through the knots and ``t_out`` (M,) with steps of at most
+    :func:`step_limit` (evaluated at ``x0`` and the first input).
+
+    Raises :class:`MissionError` (``params``) when the plant is too stiff for ``MAX_SIM_STEPS`` steps.
+    """
+    grid = np.union1d(t_knots, t_out)
+    step_max = step_limit(plant, x0, float(u_of_interval[0]), max_step)
+    n_steps = int(np.sum(np.maximum(1, np.ceil(np.diff(grid) / step_max))))
+    if n_steps > MAX_SIM_STEPS:
+        raise MissionError("params", f"too stiff to verify: the plant's fastest mode needs steps of {step_max:.3g} s, "
+                                     f"{n_steps} of them over {grid[-1] - grid[0]:.3g} s (at most {MAX_SIM_STEPS})")
+    fine = fine_grid(grid, step_max)
+    k = np.clip(np.searchsorted(t_knots, fine[:-1], side="right") - 1, 0, u_of_interval.size - 1)
+    u = u_of_interval[k]
+    xs = accumulator(plant, fine.size - 1, compile_step)(np.asarray(x0, float), u, np.diff(fine))
+    states = np.concatenate([np.asarray(x0, float)[:, None], xs], axis=1)
+    idx = np.clip(np.searchsorted(fine, t_out), 0, fine.size - 1)
+    return Response(at_out=states[:, idx], t=fine, x=states, u=np.append(u, u[-1]))
+
+
+def steps_per_sample(plant: Plant, dt: float, x0: Sequence[float] | np.ndarray, u0: float,
+                     max_step: float = np.inf) -> int:
+    """Steps of :func:`step_limit` per held sample of ``dt`` [s] (uniform samples)."""
+    return max(1, int(np.ceil(dt / step_limit(plant, x0, u0, max_step))))
+
+
+@lru_cache(maxsize=8)
+def _segments(plant: Any, per_sample: int, length: int, n_segments: int) -> ca.Function:
+    step = step_function(plant)
+    x, u, dt = ca.SX.sym("x", len(plant.state_names)), ca.SX.sym("u"), ca.SX.sym("dt")
+    xk = x
+    for _ in range(per_sample):
+        xk = step(xk, u, dt)  # an SX call inlines the step's expression
+    sample = ca.Function("zoh_sample", [x, u, dt], [xk])
+    return sample.mapaccum(length - 1).map(n_segments)
+
+
+def segment_simulator(plant: Plant, per_sample: int, length: int, n_segments: int) -> ca.Function:
+    """``(x0 (nx, B), u (1, B*(length-1)), dt) -> states (nx, B*(length-1))``: ``n_segments`` runs of
+    ``length`` uniform samples, each sample ``per_sample`` steps of ``dt`` [s] (the sample period / per_sample)
+    under its held input; built once per plant and shape, in the CasADi virtual machine (a fit simulates many
+    candidate plants once each, where building C would cost more than it saves)."""
+    return _segments(cast(Hashable, plant), int(per_sample), int(length), int(n_segments))

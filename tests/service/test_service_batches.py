@@ -1,0 +1,222 @@
+"""Batches by structure: items of one collocation structure run on the worker that built it (real worker
+processes, real IPOPT solves, builds counted by the workers' own reports), outcomes are written to a real
+SQLite file in groups, a crash loses no stored result, and a mission naming a file is refused wherever it
+comes from (the runner and the worker both validate with the untrusted rule)."""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import sqlite3
+import time
+from collections import Counter
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+
+from ocp.errors import MissionError
+from service.batches import BatchRunner
+from service.dispatch import Dispatcher
+from service.jobs import JobStore
+from service.schemas import MissionRequest
+from service.tasks import available_tasks, optimize_mission, structure_key
+from service.workers import WorkerPool
+from tests.service.test_service_support import ROOT, digest, mission, slow_item, start_server
+
+needs_optimize = pytest.mark.skipif(available_tasks().optimize is None, reason="ocp.optimize.solve is not installed")
+PARAMS_FILE = str(ROOT / "examples" / "params.yaml")  # a real file on this machine: never to be read
+
+
+def _payload(name: str, intervals: int) -> dict[str, Any]:
+    return MissionRequest.model_validate(mission(name, collocation={"intervals": intervals})).model_dump(mode="json")
+
+
+# -- the dispatcher alone (no processes) -----------------------------------------------------------------------
+
+
+async def _settled() -> None:
+    for _ in range(3):
+        await asyncio.sleep(0)
+
+
+def test_dispatcher_pairs_by_affinity_serves_urgent_calls_first_and_builds_twice_only_for_a_crowd() -> None:
+    async def main() -> None:
+        d: Dispatcher[str] = Dispatcher(["w1", "w2"], slots=2, patience=4, crowd=2)
+        assert await d.get("A") == "w1" and await d.get("B") == "w2"
+        d.remember("w1", "A")
+        d.remember("w2", "B")
+        calls = [asyncio.ensure_future(d.get(k)) for k in ("B", "A", "C")]
+        await _settled()
+        d.put("w1")  # w1 holds A: it takes the A call although the B call waited longer
+        await _settled()
+        assert calls[1].done() and calls[1].result() == "w1" and not calls[0].done()
+        d.put("w1")  # B is w2's; C is nobody's: a build nobody else does
+        await _settled()
+        assert calls[2].result() == "w1" and not calls[0].done()
+        urgent = asyncio.ensure_future(d.get(urgent=True))
+        await _settled()
+        d.put("w2")  # a deadline-bound call first, even before the B call w2 holds
+        await _settled()
+        assert urgent.result() == "w2" and not calls[0].done()
+        d.remember("w1", "C")
+        d.put("w1")  # idle, but the B call waits for w2, which holds B: no duplicate build for one call
+        await _settled()
+        assert not calls[0].done()
+        more = [asyncio.ensure_future(d.get("B")) for _ in range(2)]
+        await _settled()  # three B calls for one holder (crowd 2): w1 builds B too, for the oldest
+        assert calls[0].result() == "w1" and not any(m.done() for m in more)
+        d.forget("w1")
+        assert d.holds("w1") == () and d.holds("w2") == ("B",)
+        for m in more:
+            m.cancel()
+        await _settled()
+        d.put("w2")  # cancelled calls take no worker
+        assert await d.get() == "w2"
+
+    asyncio.run(main())
+
+
+def test_dispatcher_lets_no_call_starve_behind_better_matches() -> None:
+    async def main() -> None:
+        d: Dispatcher[str] = Dispatcher(["w1", "w2"], patience=2, crowd=100)
+        assert await d.get("A") == "w1" and await d.get("B") == "w2"
+        d.remember("w1", "A")
+        d.remember("w2", "B")
+        old = asyncio.ensure_future(d.get("B"))  # waits for w2, which stays busy
+        for _ in range(2):  # two newer A calls pass it ...
+            a = asyncio.ensure_future(d.get("A"))
+            await _settled()
+            d.put("w1")
+            await _settled()
+            assert a.result() == "w1" and not old.done()
+        late = asyncio.ensure_future(d.get("A"))
+        await _settled()
+        d.put("w1")  # ... then its patience is used up: served by w1 although w1 holds A and an A call waits
+        await _settled()
+        assert old.result() == "w1" and not late.done()
+        late.cancel()
+        await _settled()
+
+    asyncio.run(main())
+
+
+# -- real worker processes, real solves --------------------------------------------------------------------
+
+
+@needs_optimize
+@pytest.mark.slow
+def test_a_structure_is_built_once_per_batch_not_per_item() -> None:
+    """N same-structure items on 2 workers build at most 2 programs; a second structure mixed in is built by one
+    worker only (without affinity both would build it); and the worker's own validation refuses a file."""
+
+    async def main() -> tuple[int, int, list[dict[str, Any]], MissionError]:
+        pool = WorkerPool(2, 0, 1, preload=("ocp.optimize.solve", "service.tasks"))
+        try:
+            same = [_payload(f"a{i}", 40) for i in range(6)]
+            assert len({structure_key(p) for p in same}) == 1
+            await asyncio.gather(*(pool.run(optimize_mission, p, 300, wait=True, affinity=structure_key(p))
+                                   for p in same))
+            first = sum(pool.builds())
+            mixed = [_payload(f"{'ab'[i % 2]}{i}", 40 if i % 2 == 0 else 60) for i in range(8)]
+            assert len({structure_key(p) for p in mixed}) == 2
+            out = await asyncio.gather(*(pool.run(optimize_mission, p, 300, wait=True, affinity=structure_key(p))
+                                         for p in mixed))
+            with pytest.raises(MissionError) as refused:  # sent past the parent's check: the worker refuses
+                await pool.run(optimize_mission, {**same[0], "params": PARAMS_FILE}, 60)
+            return first, sum(pool.builds()) - first, out, refused.value
+        finally:
+            pool.close()
+
+    first, second, out, refused = asyncio.run(main())
+    assert 1 <= first <= 2
+    assert second == 1
+    assert all(r["source"] == "optimized" and r["verification"]["max_abs_voltage"] <= 12.0 + 1e-6 for r in out)
+    assert refused.field == "params" and "files are not read" in refused.reason
+
+
+def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path: Path,
+                                                                        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A real JobStore file and real worker processes (a CPU-bound test task that reports its pid): the items of
+    each structure all run in one process, outcomes land in fewer transactions than items, and a mission naming
+    a file fails at once, naming ``params``, without reaching a worker."""
+    monkeypatch.setenv("TS_TEST_ITEM_SECONDS", "0.3")
+    missions = [mission(f"{'ab'[i % 2]}{i}", collocation={"intervals": 40 if i % 2 == 0 else 60}) for i in range(8)]
+    missions.append(mission("file", params=PARAMS_FILE))
+
+    async def main() -> tuple[str, JobStore, int]:
+        store = JobStore(tmp_path / "jobs.sqlite3")
+        batch_id, _ = store.create_batch(missions, None)
+        pool = WorkerPool(2, 0, 1, preload=("tests.service.test_service_support",))
+        # every item claimed at once (lookahead): each free worker has the whole choice
+        runner = BatchRunner(store, pool, slow_item, concurrency=2, timeout=60, attempts=1, key=structure_key,
+                             lookahead=len(missions), group_s=1.0)
+        runner.start()
+        try:
+            end = time.monotonic() + 120
+            while (c := store.counts(batch_id)) is not None and c.finished < len(missions):
+                assert time.monotonic() < end, "batch did not finish"
+                await asyncio.sleep(0.05)
+        finally:
+            await runner.close()
+            pool.close()
+        return batch_id, store, runner.groups
+
+    batch_id, store, groups = asyncio.run(main())
+    items = store.items(batch_id)
+    refused = items[-1]
+    assert refused.state == "failed" and refused.error is not None and refused.result is None
+    assert refused.error["field"] == "params" and "files are not read" in refused.error["reason"]
+    done = items[:-1]
+    assert all(it.state == "done" and it.result is not None for it in done)
+    pids = {k: {it.result["pid"] for it in done if it.name[0] == k and it.result} for k in "ab"}
+    assert len(pids["a"]) == 1 and len(pids["b"]) == 1 and pids["a"] != pids["b"], pids
+    assert groups < len(missions)
+    with sqlite3.connect(store.path) as con:  # one transaction stamps one time on its group
+        stamps = Counter(t for (t,) in con.execute("SELECT finished_at FROM items WHERE batch_id = ?", (batch_id,)))
+    assert len(stamps) == groups and max(stamps.values()) >= 2
+    store.close()
+
+
+@pytest.mark.integration
+@pytest.mark.slow
+def test_grouped_writes_lose_no_result_when_the_server_is_killed(tmp_path: Path) -> None:
+    """Outcomes wait up to 0.4 s to share a transaction; the server is SIGKILLed mid-batch. Every result the
+    store held survives unchanged, every outcome not yet written is recomputed after the restart, each item
+    lands once."""
+    db = tmp_path / "jobs.sqlite3"
+    env = {"TS_TEST_TASKS": "slow-batch", "TS_TEST_ITEM_SECONDS": "0.15", "THRUSTSHAPE_DB_PATH": str(db),
+           "THRUSTSHAPE_WORKERS": "2", "THRUSTSHAPE_FALLBACK_WORKERS": "1", "THRUSTSHAPE_BATCH_WRITE_GROUP_S": "0.4"}
+    missions = [mission(f"g{i}", amplitude=0.1 + 0.01 * i) for i in range(16)]
+    first = start_server(tmp_path, env)
+    try:
+        batch_id = httpx.post(f"{first.url}/v1/batches", json={"missions": missions}, timeout=10).json()["id"]
+        end = time.monotonic() + 60
+        while httpx.get(f"{first.url}/v1/batches/{batch_id}", timeout=10).json()["counts"]["done"] < 4:
+            assert time.monotonic() < end, "batch made no progress"
+            time.sleep(0.02)
+    finally:
+        first.kill()
+    with sqlite3.connect(db) as con:
+        before = dict(con.execute("SELECT idx, result FROM items WHERE batch_id = ? AND state = 'done'",
+                                  (batch_id,)).fetchall())
+        stamps = Counter(t for (t,) in con.execute("SELECT finished_at FROM items WHERE batch_id = ? AND "
+                                                   "state = 'done'", (batch_id,)))
+    assert 4 <= len(before) < len(missions) and max(stamps.values()) >= 2  # grouped, and killed mid-batch
+    second = start_server(tmp_path, env)
+    try:
+        end = time.monotonic() + 90
+        while httpx.get(f"{second.url}/v1/batches/{batch_id}", timeout=10).json()["status"] != "done":
+            assert time.monotonic() < end, "batch not finished after restart"
+            time.sleep(0.1)
+    finally:
+        second.stop()
+    with sqlite3.connect(db) as con:
+        rows = con.execute("SELECT idx, state, result FROM items WHERE batch_id = ? ORDER BY idx",
+                           (batch_id,)).fetchall()
+    assert [r[0] for r in rows] == list(range(len(missions))) and {r[1] for r in rows} == {"done"}
+    for idx, result in before.items():  # stored before the kill: untouched
+        assert rows[idx][2] == result
+    expected = [digest(MissionRequest.model_validate(m).model_dump(mode="json")) for m in missions]
+    assert [json.loads(r[2])["digest"] for r in rows] == expected
