@@ -90,3 +90,28 @@ def test_every_core_module_imports(name: str) -> None:
 def test_no_core_module_is_over_the_size_limit() -> None:
     sizes = {name: len(path.read_text(encoding="utf-8").splitlines()) for name, path in _modules().items()}
     assert {name: n for name, n in sizes.items() if n > MAX_LINES} == {}
+
+
+def _all_imports(path: Path) -> set[str]:
+    """Every module ``path`` imports anywhere (function bodies included), as written."""
+    found: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            found |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom) and not node.level and node.module:
+            found.add(node.module)
+    return found
+
+
+@pytest.mark.parametrize(("layer", "below"), [("ocp", ("service", "clients")), ("service", ("clients",))])
+def test_dependencies_point_one_way(layer: str, below: tuple[str, ...]) -> None:
+    """clients -> service -> ocp: a layer never imports the layers that depend on it, not even lazily."""
+    wrong = {str(p.relative_to(ROOT)): sorted(m for m in _all_imports(p) if m.split(".")[0] in below)
+             for p in sorted((ROOT / layer).rglob("*.py"))}
+    assert {k: v for k, v in wrong.items() if v} == {}
+
+
+def test_no_service_or_client_module_is_over_the_size_limit() -> None:
+    sizes = {str(p.relative_to(ROOT)): len(p.read_text(encoding="utf-8").splitlines())
+             for layer in ("service", "clients") for p in sorted((ROOT / layer).rglob("*.py"))}
+    assert {name: n for name, n in sizes.items() if n > MAX_LINES} == {}

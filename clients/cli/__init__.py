@@ -25,7 +25,8 @@ from ocp.errors import ThrustshapeError
 
 #: command modules, in help order; each has ``register(subparsers) -> None``
 COMMAND_MODULES: tuple[str, ...] = ("clients.cli.core", "clients.cli.optimize", "clients.cli.gallery",
-                                    "clients.cli.service", "clients.cli.model", "clients.cli.stream")
+                                    "clients.cli.service", "clients.cli.model", "clients.cli.design",
+                                    "clients.cli.stream")
 
 #: exit status after a closed output pipe (128 + SIGPIPE)
 EXIT_PIPE = 141
@@ -49,8 +50,8 @@ def _known_error(exc: BaseException) -> bool:
     can have been raised, so the client is never imported here just to test for its class)."""
     if isinstance(exc, ThrustshapeError | OSError):
         return True
-    client = sys.modules.get("clients.client")
-    return client is not None and isinstance(exc, client.ClientError)
+    errors = sys.modules.get("clients.errors")
+    return errors is not None and isinstance(exc, errors.ClientError)
 
 
 def _pipe_closed() -> int:
