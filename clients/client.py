@@ -4,21 +4,9 @@ Both wrap an ``httpx`` client; pass ``transport=`` to talk to an app in-process 
 ``httpx.ASGITransport(app)``) or through any other httpx transport. A 503 is retried up to
 ``retries`` times, waiting what the server's ``Retry-After`` says (capped by ``max_retry_wait``);
 ``wait_batch`` polls through dropped connections (``reconnects`` in a row, with backoff).
-Errors form a tree, so callers catch as broadly or as narrowly as they need::
-
-    ClientError                      root: everything this module raises
-    ├── TransportError               no HTTP answer (connection refused, reset, ...)
-    │   └── Timeout                  no answer within the client's timeout
-    └── APIError                     the server answered with an error (problem+json parsed)
-        ├── MalformedResponse        the answer breaks the protocol (e.g. an unreadable Retry-After)
-        ├── BadRequest(ValueError)   4xx: .field and .reason say what to fix
-        │   ├── Unauthorized         401: missing or wrong API key
-        │   ├── NotFound             404
-        │   ├── PayloadTooLarge      413
-        │   └── InvalidInput         422
-        ├── ServerBusy               503 after the retries
-        └── ServerError              other 5xx (504: ComputationTimeout)
-            └── ComputationTimeout
+Errors form a tree (:mod:`clients.errors`: :class:`ClientError` at the root, :class:`TransportError` when no
+HTTP answer came, :class:`APIError` with the parsed problem+json when the server answered with an error), so
+callers catch as broadly or as narrowly as they need; every name is importable from here.
 """
 
 from __future__ import annotations
@@ -160,25 +148,10 @@ class Client:
                          backoff: float = 0.5) -> dict[str, Any]:
         """Poll a job until it finished (``on_progress(fraction)`` each time), then return its result (or raise
         its problem). Dropped connections are retried like :meth:`wait_batch`'s; raises :class:`Timeout`."""
-        end = None if timeout is None else time.monotonic() + timeout
-        failures = 0
-        while True:
-            try:
-                status = self.model_check_job(job_id)
-            except TransportError:
-                failures += 1
-                if failures > reconnects or (end is not None and time.monotonic() > end):
-                    raise
-                time.sleep(self._spec.reconnect_delay(failures, backoff))
-                continue
-            failures = 0
-            if on_progress is not None:
-                on_progress(1.0 if status["status"] == "done" else float(status["progress"]))
-            if status["status"] in ("done", "failed"):
-                return self.model_check_result(job_id)
-            if end is not None and time.monotonic() > end:
-                raise Timeout(f"model-check job {job_id} not finished after {timeout} s")
-            time.sleep(poll)
+        self._poll(lambda: self.model_check_job(job_id), f"model-check job {job_id}", poll, timeout, reconnects,
+                   backoff, None if on_progress is None else
+                   lambda st: on_progress(1.0 if st["status"] == "done" else float(st["progress"])))
+        return self.model_check_result(job_id)
 
     def design_experiment(self, log: LogSource, params: str | Mapping[str, Any], *,
                           on_progress: Callable[[float], None] | None = None, timeout: float | None = None,
@@ -220,11 +193,19 @@ class Client:
         A dropped connection (e.g. the server restarting) is retried up to ``reconnects`` times in a row,
         waiting ``backoff`` [s], doubled each time (at most 10 s); the batch is stored, so nothing is lost.
         """
+        return self._poll(lambda: self.batch(batch_id), f"batch {batch_id}", poll, timeout, reconnects, backoff,
+                          on_progress)
+
+    def _poll(self, fetch: Callable[[], dict[str, Any]], what: str, poll: float, timeout: float | None,
+              reconnects: int, backoff: float,
+              on_progress: Callable[[dict[str, Any]], None] | None) -> dict[str, Any]:
+        """``fetch()`` a job's status until it is done or failed (returned), through ``reconnects`` dropped
+        connections in a row (waits doubling from ``backoff`` [s]); :class:`Timeout` after ``timeout`` [s]."""
         end = None if timeout is None else time.monotonic() + timeout
         failures = 0
         while True:
             try:
-                status = self.batch(batch_id)
+                status = fetch()
             except TransportError:
                 failures += 1
                 if failures > reconnects or (end is not None and time.monotonic() > end):
@@ -237,5 +218,5 @@ class Client:
             if status["status"] in ("done", "failed"):
                 return status
             if end is not None and time.monotonic() > end:
-                raise Timeout(f"batch {batch_id} not finished after {timeout} s")
+                raise Timeout(f"{what} not finished after {timeout} s")
             time.sleep(poll)
