@@ -8,6 +8,7 @@ nominal constants; its verdict is compared with the truth.
 
     python bench/modelcheck.py                 # 200 logs, seeds 0..199, 2 processes
     python bench/modelcheck.py --n 40 --first 1000   # a tuning set (keep tuning seeds apart from these)
+    python bench/modelcheck.py --n 100 --first 1000 --cache /tmp/pg   # keep generated logs for the next run
 
 Prints: verdicts exactly right, false alarms on clean logs, per label (effect or named constant)
 precision and recall with counts, alignment error, time per log (diagnose only, and generating).
@@ -16,8 +17,10 @@ precision and recall with counts, alignment error, time per log (diagnose only, 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import multiprocessing
+import pickle
 import sys
 import time
 from collections import Counter
@@ -27,17 +30,31 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
-def one(seed: int) -> dict[str, Any]:
-    """Generate case ``seed`` and diagnose it; a JSON-ready record."""
+def _case(seed: int, cache: str | None) -> Any:
+    """Proving-ground case ``seed``, generated, or read from (and written to) the ``cache`` folder."""
+    from tests.proving_ground import make_case
+
+    if cache is None:
+        return make_case(seed)
+    path = Path(cache) / f"case-{seed}.pkl"
+    if path.exists():
+        return pickle.loads(path.read_bytes())
+    case = make_case(seed)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(pickle.dumps(case))
+    return case
+
+
+def one(seed: int, cache: str | None = None) -> dict[str, Any]:
+    """Generate case ``seed`` (or read it from ``cache``) and diagnose it; a JSON-ready record."""
     from ocp.identify import diagnose
     from ocp.logs import log_from_arrays
     from ocp.logs.timebase import uniform
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
-    from tests.proving_ground import make_case
 
     t0 = time.perf_counter()
-    case = make_case(seed)
+    case = _case(seed, cache)
     t1 = time.perf_counter()
     # a jittery logger's time stamps are resampled to a uniform grid, as the file readers do (and say)
     t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
@@ -95,13 +112,16 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--first", type=int, default=0, help="first seed (tuning: use seeds >= 1000)")
     ap.add_argument("--procs", type=int, default=2)
     ap.add_argument("--json", default=None, help="write every record here")
+    ap.add_argument("--cache", default=None,
+                    help="folder of generated logs: read a seed's log from it, write it there when missing "
+                         "(only the diagnosis is then timed afresh; the generator's code is not checked)")
     ap.add_argument("--misses", action="store_true", help="list the wrong verdicts")
     args = ap.parse_args(argv)
     seeds = range(args.first, args.first + args.n)
     t0 = time.perf_counter()
     with multiprocessing.get_context("spawn").Pool(args.procs) as pool:
         rows = []
-        for k, r in enumerate(pool.imap_unordered(one, seeds), 1):
+        for k, r in enumerate(pool.imap_unordered(functools.partial(one, cache=args.cache), seeds), 1):
             rows.append(r)
             print(f"\r{k}/{args.n}", end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
