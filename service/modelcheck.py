@@ -140,7 +140,7 @@ def log_suffix(filename: str | None, head: bytes) -> str:
 
 def _read_log(payload: Payload) -> Any:
     """The uploaded log (bytes in ``payload["log"]``) as an :class:`ocp.logs.Log`; errors name the column or ``log``."""
-    from ocp.logs import LogKind, ReadOptions, check_parquet_size, read_log
+    from ocp.logs import LogKind, ReadOptions, check_size, read_log
 
     data: bytes = payload["log"]
     name = re.sub(r"[^A-Za-z0-9._ -]+", "_", str(payload.get("filename") or "log"))[:120] or "log"
@@ -153,9 +153,8 @@ def _read_log(payload: Payload) -> Any:
         path = Path(tmp) / f"upload{log_suffix(name, data[:8])}"
         path.write_bytes(data)
         try:
-            if path.suffix == ".parquet":  # footer only: refuse a decompression bomb before decoding it
-                max_rows = int(payload["max_samples"])
-                check_parquet_size(path, max_rows=max_rows, max_bytes=max_rows * 8 * 64)
+            # headers only: refuse a decompression bomb (Parquet, .xlsx, .mat) before decoding it
+            check_size(path, max_rows=int(payload["max_samples"]))
             log = read_log(path, payload.get("columns"), kind, options=options)
         except LogError as exc:
             if exc.field in (path.name, str(path)):

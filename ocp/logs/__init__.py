@@ -25,6 +25,7 @@ from typing import Any, Literal
 
 from ocp.errors import LogError
 from ocp.logs.assemble import column_specs, command_fraction, log_from_table
+from ocp.logs.bounds import check_parquet_size, check_size
 from ocp.logs.model import (
     MIN_SAMPLES,
     QUANTITIES,
@@ -36,11 +37,11 @@ from ocp.logs.model import (
     check_finite,
     log_from_arrays,
 )
-from ocp.logs.tables import check_parquet_size, read_table
+from ocp.logs.tables import read_table
 from ocp.logs.writers import write_log_csv, write_reference_mat
 
 __all__ = ["MIN_SAMPLES", "QUANTITIES", "UNITS", "ColumnSpec", "Log", "LogKind", "ReadOptions", "check_finite",
-           "check_parquet_size",
+           "check_parquet_size", "check_size",
            "column_specs", "command_fraction", "log_from_arrays", "log_from_table", "read_log", "read_table",
            "write_log_csv", "write_reference_mat"]
 

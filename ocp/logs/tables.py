@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from ocp.errors import LogError
+from ocp.logs.bounds import check_parquet_size, check_size
 from ocp.logs.headers import parse_header
 
 _SCAN_LINES = 30
@@ -22,24 +23,6 @@ _SCAN_LINES = 30
 
 def _is_number(type_name: str) -> bool:
     return type_name.startswith(("int", "uint", "float", "double", "halffloat"))
-
-
-#: what a Parquet log may announce in its footer before any of it is decoded (a small file can expand to GBs)
-PARQUET_LIMITS = {"rows": 10_000_000, "columns": 1_000, "bytes": 1 << 30}
-
-
-def check_parquet_size(path: str | Path, max_rows: int = PARQUET_LIMITS["rows"],
-                       max_columns: int = PARQUET_LIMITS["columns"], max_bytes: int = PARQUET_LIMITS["bytes"]) -> None:
-    """Refuse (:class:`LogError` ``log``) a Parquet file whose metadata announces more than ``max_rows`` rows,
-    ``max_columns`` columns or ``max_bytes`` uncompressed bytes: only the footer is read, nothing decoded."""
-    import pyarrow.parquet as pq
-
-    meta = pq.ParquetFile(path).metadata
-    size = sum(meta.row_group(i).total_byte_size for i in range(meta.num_row_groups))
-    for what, n, top in (("rows", meta.num_rows, max_rows), ("columns", meta.num_columns, max_columns),
-                         ("uncompressed bytes", size, max_bytes)):
-        if n > top:
-            raise LogError("log", f"the Parquet file announces {n} {what}; at most {top} accepted")
 
 
 def _read_parquet(p: Path) -> dict[str, np.ndarray]:
@@ -126,6 +109,7 @@ def _sheet_columns(rows: list[tuple[Any, ...]]) -> dict[str, np.ndarray]:
 
 
 def _read_xlsx(p: Path) -> dict[str, np.ndarray]:
+    check_size(p)
     try:
         import openpyxl
     except ImportError:
@@ -148,6 +132,7 @@ def _read_xlsx(p: Path) -> dict[str, np.ndarray]:
 def _read_mat(p: Path) -> dict[str, np.ndarray]:
     from scipy import io as sio
 
+    check_size(p)
     try:
         data = sio.loadmat(p, squeeze_me=True, simplify_cells=True)
     except NotImplementedError:

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import io
 import json
-from collections.abc import Iterator
+import zipfile
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import httpx
@@ -15,6 +16,7 @@ import numpy as np
 import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
+import scipy.io as sio
 
 from ocp.logs import Log, write_log_csv
 from ocp.model.effects import CATALOGUE, load_plant
@@ -206,4 +208,32 @@ def test_parquet_bomb_is_refused_from_its_footer(http: httpx.Client, server: Ser
     before = {w: _peak_rss_mb(w) for w in workers}
     p = problem(post(http, CHECK, ("bomb.parquet", buf.getvalue())), 422)
     assert p["field"] == "log" and "announces 3000000 rows" in p["reason"], p
+    assert all(_peak_rss_mb(w) - before[w] < 50.0 for w in workers if Path(f"/proc/{w}").exists())
+
+
+def _xlsx_bomb() -> bytes:
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=9) as z:
+        z.writestr("xl/worksheets/sheet1.xml", b" " * 150_000_000)
+    return buf.getvalue()
+
+
+def _mat_bomb() -> bytes:
+    buf = io.BytesIO()
+    sio.savemat(buf, {"t": np.zeros(3_000_000), "rpm": np.zeros(3_000_000)}, do_compression=True)
+    return buf.getvalue()
+
+
+@pytest.mark.parametrize(("name", "make"), [("bomb.xlsx", _xlsx_bomb), ("bomb.mat", _mat_bomb)])
+def test_xlsx_and_mat_bombs_are_refused_before_decoding(http: httpx.Client, server: Server, name: str,
+                                                        make: Callable[[], bytes]) -> None:
+    """A workbook whose sheet inflates to 150 MB and a .mat file of 48 MB of zeros, each under the upload limit,
+    are refused from their headers (the zip's directory; the .mat elements inflated in chunks and counted)
+    against the server's row limit: 422 on ``log``, and no worker's peak memory grows by 50 MB."""
+    data = make()
+    assert len(data) < UPLOAD_LIMIT
+    workers = _children(server.proc.pid)
+    before = {w: _peak_rss_mb(w) for w in workers}
+    p = problem(post(http, CHECK, (name, data)), 422)
+    assert p["field"] == "log" and "expands to more than" in p["reason"], p
     assert all(_peak_rss_mb(w) - before[w] < 50.0 for w in workers if Path(f"/proc/{w}").exists())
