@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import io
 import json
-import os
 import zipfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -18,58 +17,34 @@ from typing import Any
 
 import pytest
 
+from tests.browser import chromium, playwright, served, watched
 from tests.page.test_page_example import HIDDEN, MISSION
-from tests.service.test_service_support import ROOT, Server, start_server
+from tests.service.test_service_support import ROOT, Server
 
 pytestmark = pytest.mark.integration
 
-CHROMIUM = Path("/usr/bin/chromium")
 ARTIFACTS = ROOT / "test-artifacts"
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 LONG = 120_000  # ms: diagnose fits every catalogue effect (seconds on a shared 2-core machine)
-
-if not (CHROMIUM.is_file() and os.access(CHROMIUM, os.X_OK)):
-    pytest.skip("Debian's chromium is not installed at /usr/bin/chromium (scripts/test.sh installs it with apt-get "
-                "when run as root)", allow_module_level=True)
-sync_api = pytest.importorskip("playwright.sync_api", reason="the playwright package is not installed (dev extra)")
+sync_api = playwright()
 
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    tmp = tmp_path_factory.mktemp("page-server")
-    srv = start_server(tmp, {"THRUSTSHAPE_DB_PATH": str(tmp / "jobs.sqlite"), "THRUSTSHAPE_WORKERS": "2"})
-    try:
+    with served(tmp_path_factory.mktemp("page-server"), THRUSTSHAPE_WORKERS="2") as srv:
         yield srv
-    finally:
-        srv.stop()
 
 
 @pytest.fixture(scope="module")
 def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
-    profile = tmp_path_factory.mktemp("chromium-profile")
-    with sync_api.sync_playwright() as pw:
-        ctx = pw.chromium.launch_persistent_context(str(profile), executable_path=str(CHROMIUM), args=ARGS,
-                                                    headless=True, viewport={"width": 1400, "height": 1000},
-                                                    accept_downloads=True)
-        try:
-            yield ctx
-        finally:
-            ctx.close()
+    with chromium(tmp_path_factory.mktemp("chromium-profile"), accept_downloads=True) as ctx:
+        yield ctx
 
 
 @pytest.fixture()
 def page(browser: Any, server: Server) -> Iterator[Any]:
     """A fresh tab on the server; fails the test on any uncaught script error."""
-    pg = browser.new_page()
-    errors: list[str] = []
-    pg.on("pageerror", lambda e: errors.append(str(e)))
-    pg.set_default_timeout(30_000)
-    try:
+    with watched(browser.new_page()) as pg:
         yield pg
-        assert errors == [], f"script errors on the page: {errors}"
-    finally:
-        pg.close()
 
 
 def shot(page: Any, name: str) -> None:

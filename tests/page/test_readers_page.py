@@ -11,38 +11,24 @@ from typing import Any
 
 import pytest
 
+from tests.browser import chromium, served, watched
 from tests.logfiles import Thruster, thruster_sweep, write_csv
-from tests.page.test_page import ARGS, CHROMIUM, LONG, open_tab, shot, sync_api
-from tests.service.test_service_support import Server, start_server
+from tests.page.test_page import LONG, open_tab, shot
+from tests.service.test_service_support import Server
 
 pytestmark = pytest.mark.integration
 
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    tmp = tmp_path_factory.mktemp("readers-page")
-    srv = start_server(tmp, {"THRUSTSHAPE_DB_PATH": str(tmp / "jobs.sqlite")})
-    try:
+    with served(tmp_path_factory.mktemp("readers-page")) as srv:
         yield srv
-    finally:
-        srv.stop()
 
 
 @pytest.fixture(scope="module")
 def page(tmp_path_factory: pytest.TempPathFactory, server: Server) -> Iterator[Any]:
-    profile = tmp_path_factory.mktemp("chromium-profile")
-    with sync_api.sync_playwright() as pw:
-        ctx = pw.chromium.launch_persistent_context(str(profile), executable_path=str(CHROMIUM), args=ARGS,
-                                                    headless=True, viewport={"width": 1400, "height": 1000})
-        pg = ctx.new_page()
-        errors: list[str] = []
-        pg.on("pageerror", lambda e: errors.append(str(e)))
-        pg.set_default_timeout(30_000)
-        try:
-            yield pg
-            assert errors == [], f"script errors on the page: {errors}"
-        finally:
-            ctx.close()
+    with chromium(tmp_path_factory.mktemp("chromium-profile")) as ctx, watched(ctx.new_page()) as pg:
+        yield pg
 
 
 def _custom_params(page: Any, params: dict[str, float]) -> None:

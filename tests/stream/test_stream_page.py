@@ -4,58 +4,37 @@ comes back from the stream as an error next to its input."""
 
 from __future__ import annotations
 
-import os
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import pytest
 
-from tests.service.test_service_support import ROOT, Server, start_server
+from tests.browser import chromium, playwright, served, watched
+from tests.service.test_service_support import ROOT, Server
 
 pytestmark = pytest.mark.integration
 
-CHROMIUM = Path("/usr/bin/chromium")
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking"]
-
-if not (CHROMIUM.is_file() and os.access(CHROMIUM, os.X_OK)):
-    pytest.skip("Debian's chromium is not installed at /usr/bin/chromium", allow_module_level=True)
-sync_api = pytest.importorskip("playwright.sync_api", reason="the playwright package is not installed (dev extra)")
+playwright()
 pytest.importorskip("websockets", reason="uvicorn needs the websockets package for WebSocket routes")
 
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    tmp = tmp_path_factory.mktemp("stream-page")
-    srv = start_server(tmp, {"THRUSTSHAPE_DB_PATH": str(tmp / "jobs.sqlite")})
-    try:
+    with served(tmp_path_factory.mktemp("stream-page")) as srv:
         yield srv
-    finally:
-        srv.stop()
 
 
 @pytest.fixture(scope="module")
-def browser() -> Iterator[Any]:
-    with sync_api.sync_playwright() as pw:
-        b = pw.chromium.launch(executable_path=str(CHROMIUM), args=ARGS, headless=True)
-        try:
-            yield b
-        finally:
-            b.close()
+def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
+    with chromium(tmp_path_factory.mktemp("chromium-profile"), height=1100) as ctx:
+        yield ctx
 
 
 @pytest.fixture()
 def page(server: Server, browser: Any) -> Iterator[Any]:
-    pg = browser.new_page(viewport={"width": 1400, "height": 1100})
-    errors: list[str] = []
-    pg.on("pageerror", lambda e: errors.append(str(e)))
-    pg.set_default_timeout(60_000)
-    try:
+    with watched(browser.new_page(), 60_000) as pg:
         pg.goto(server.url + "/#stream")
         yield pg
-        assert errors == [], f"script errors on the page: {errors}"
-    finally:
-        pg.close()
 
 
 def _value(page: Any, key: str) -> str:
