@@ -211,8 +211,8 @@ def _upload(args: argparse.Namespace) -> dict[str, Any]:
 def cmd_check(args: argparse.Namespace) -> int:
     if args.server:
         with client(args) as c:
-            d = c.check(**_upload(args))
-            if args.report:
+            d = _server_job(c, "check", args)
+            if args.report:  # the HTML report is a synchronous request (?report=html): no job returns HTML
                 Path(args.report).write_text(c.check_report(**_upload(args)), encoding="utf-8")
     else:
         from ocp.identify import CheckOptions, check
@@ -247,9 +247,8 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         raise ParameterError("--max-effects", "must be >= 1")
     if args.server:
         _diagnose_options(args)  # checked here, named by the CLI option
-        with client(args) as c, _Progress("diagnose") as bar:  # a job: no request timeout, progress polled
-            job = c.submit_model_check("diagnose", **_upload(args), **_diagnose_fields(args))
-            d = c.wait_model_check(job["id"], on_progress=bar.update)
+        with client(args) as c:
+            d = _server_job(c, "diagnose", args, **_diagnose_fields(args))
     else:
         from ocp.identify import diagnose
         from ocp.model.effects import load_plant
@@ -263,6 +262,14 @@ def cmd_diagnose(args: argparse.Namespace) -> int:
         return 0
     _print_diagnosis(d)
     return 0
+
+
+def _server_job(c: Any, op: str, args: argparse.Namespace, **fields: Any) -> dict[str, Any]:
+    """``op`` on ``--server`` as a model-check job (stored, no request timeout), its progress drawn on stderr."""
+    with _Progress(op) as bar:
+        job = c.submit_model_check(op, **_upload(args), **fields)
+        result: dict[str, Any] = c.wait_model_check(job["id"], on_progress=bar.update)
+        return result
 
 
 def _diagnose_options(args: argparse.Namespace) -> DiagnoseOptions:
@@ -342,7 +349,7 @@ def cmd_fit(args: argparse.Namespace) -> int:
         raise ParameterError("--effects", "give at least one effect name")
     if args.server:
         with client(args) as c:
-            d = c.fit(**_upload(args), effects=names, refine=not args.no_refine)
+            d = _server_job(c, "fit", args, effects=",".join(names), refine=not args.no_refine)
         if args.out:  # the same file FitResult.write makes
             Path(args.out).write_text(json.dumps(d["calibrated_params"], indent=2, allow_nan=False) + "\n",
                                       encoding="utf-8")

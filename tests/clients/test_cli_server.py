@@ -7,6 +7,7 @@ from __future__ import annotations
 import asyncio
 import json
 import math
+import sqlite3
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
@@ -72,6 +73,12 @@ def both(argv: list[str], server: Server, capsys: pytest.CaptureFixture[str]) ->
     return local, remote
 
 
+def jobs_run(server: Server, op: str) -> int:
+    """How many ``op`` model-check jobs the server has stored (its SQLite file, beside its log)."""
+    with sqlite3.connect(server.log.parent / "jobs.db") as db:
+        return int(db.execute("SELECT COUNT(*) FROM model_checks WHERE op = ?", (op,)).fetchone()[0])
+
+
 def close(a: Any, b: Any, rel: float = 1e-9, path: str = "") -> None:
     """Recursive equality, floats to ``rel`` (two processes may round the last bits differently)."""
     if isinstance(a, dict):
@@ -91,7 +98,9 @@ def close(a: Any, b: Any, rel: float = 1e-9, path: str = "") -> None:
 def test_check_json_text_and_report(server: Server, rig_csv: Path, tmp_path: Path,
                                     capsys: pytest.CaptureFixture[str]) -> None:
     argv = ["check", str(rig_csv), "--params", "paper-rig"]
+    before = jobs_run(server, "check")
     local, remote = both([*argv, "--json"], server, capsys)
+    assert jobs_run(server, "check") == before + 1  # a job: no request timeout on a long log
     close(json.loads(local), json.loads(remote))
     local, remote = both(argv, server, capsys)
     assert remote == local and remote.startswith("free run (model simulated")
@@ -114,12 +123,14 @@ def test_diagnose_names_the_effect_like_the_local_run(server: Server, rig_csv: P
 def test_fit_writes_the_same_calibrated_file(server: Server, rig_csv: Path, tmp_path: Path,
                                              capsys: pytest.CaptureFixture[str]) -> None:
     argv = ["fit", str(rig_csv), "--params", "paper-rig", "--effects", "brush_drop"]
+    before = jobs_run(server, "fit")
     code, local, err = run([*argv, "--out", str(tmp_path / "local.json")], capsys)
     assert code == 0, err
     code, remote, err = run([*argv, "--out", str(tmp_path / "remote.json"), "--server", server.url,
                              "--api-key", KEY], capsys)
     assert code == 0, err
     assert remote == local and "brush_drop.v_b" in remote
+    assert jobs_run(server, "fit") == before + 1
     close(json.loads((tmp_path / "local.json").read_text()), json.loads((tmp_path / "remote.json").read_text()))
     plant = load_plant(tmp_path / "remote.json")
     assert plant.effects[0].v_b == pytest.approx(0.3, rel=0.05)  # type: ignore[attr-defined]
