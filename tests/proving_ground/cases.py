@@ -4,8 +4,10 @@ Motors span a 5 W hobby motor to a 500 W drive (J, R, L, k over decades). A case
 two effects, one wrong nominal constant (5-50 %), or an effect plus a wrong constant. Every drawn
 discrepancy must be visible: replayed open loop under the logged commands, the log without it must differ
 from the log with it by at least ``VISIBLE`` noise levels (RMS, in some channel); amplitudes are doubled
-(up to twice) until it is, else the draw is replaced. ``expected`` is the exact verdict a correct model
-check gives: the effects, plus ``param:<name>`` for a constant off by more than ``TOLERANCE``.
+(up to twice) until it is, a constant error raised to 50 %, else the draw is replaced (the next draw of the
+same seed); the criterion is checked again under the commands the final log holds. ``expected`` is the exact
+verdict a correct model check gives: the effects, plus ``param:<name>`` for a constant off by more than
+``TOLERANCE``.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ CONSTANTS = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 TOLERANCE = 0.10
 VISIBLE = 1.5
 MAX_SAMPLES = 6000
+MAX_ATTEMPTS = 20
 
 
 @dataclass
@@ -128,18 +131,37 @@ def _kind(rng: np.random.Generator) -> str:
 
 
 def make_case(seed: int, kind: str | None = None) -> Case:
-    """Case number ``seed`` (deterministic). ``kind``: clean, one, two, constant, constant+one (random if None)."""
-    rng = np.random.default_rng(seed)
+    """Case number ``seed`` (deterministic). ``kind``: clean, one, two, constant, constant+one (random if None).
+
+    A draw whose discrepancy cannot be made visible is replaced by the next draw of the same seed, with the
+    same kind, effects and wrong constant (rig, logger, excitation and sizes drawn anew)."""
+    labels: tuple[list[str], str | None] | None = None
+    for attempt in range(MAX_ATTEMPTS):
+        rng = np.random.default_rng(seed if attempt == 0 else [seed, attempt])
+        case, kind, labels = _attempt(seed, rng, kind, labels)
+        if case is not None:
+            return case
+    raise RuntimeError(f"proving-ground seed {seed}: no visible draw in {MAX_ATTEMPTS} attempts")
+
+
+Labels = tuple[list[str], str | None]  # the hidden effects, the wrong constant
+
+
+def _attempt(seed: int, rng: np.random.Generator, kind: str | None,
+             labels: Labels | None) -> tuple[Case | None, str, Labels]:
+    """One draw of case ``seed`` from ``rng`` (its kind and labels when not given), with its kind and labels;
+    no case when a drawn discrepancy stays invisible (module doc)."""
     truth, tau_m = draw_motor(rng)
     sc = _scales(truth)
     lg = draw_logger(rng, tau_m, sc["w0"], sc["i"], sc["F"], truth.v_max)
     kind = kind or _kind(rng)
     n_eff = {"clean": 0, "one": 1, "two": 2, "constant": 0, "constant+one": 1}[kind]
-    names = [str(x) for x in rng.choice(EFFECTS, size=n_eff, replace=False)]
+    drawn = [str(x) for x in rng.choice(EFFECTS, size=n_eff, replace=False)]
+    const = str(rng.choice(CONSTANTS)) if kind.startswith("constant") else None
+    names, const = (drawn, const) if labels is None else labels
     errors: dict[str, float] = {}
-    if kind.startswith("constant"):
-        c = str(rng.choice(CONSTANTS))
-        errors[c] = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.05, 0.5))
+    if const is not None:
+        errors[const] = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.05, 0.5))
     truth.effects = {nm: draw_effect(nm, truth, lg.dt, rng) for nm in names}
     nominal = _nominal(truth, errors)
     exc = _excitations(rng)
@@ -149,23 +171,40 @@ def make_case(seed: int, kind: str | None = None) -> Case:
     _, cmds = run(truth, _closed(cmds, exc, n, lg, nominal, truth, tau_m, np.random.default_rng(seed + 1)), n,
                   lg.dt, _lag(truth, lg), _substeps(truth, lg, tau_m))  # the commands issued, for the replays
     sig = np.array([lg.speed_noise(), lg.noise_i, lg.noise_f])
-    for nm in names:  # each hidden effect must show in the log
-        for _ in range(3):
-            if _visible(truth, replace(truth, effects={k: v for k, v in truth.effects.items() if k != nm}),
-                        cmds, lg, tau_m, sig):
+    for nm in names:  # each hidden effect must show in the log: doubled up to twice, else the draw is replaced
+        for doubling in range(3):
+            if _shows(truth, nm, cmds, lg, tau_m, sig):
                 break
+            if doubling == 2:
+                return None, kind, (names, const)
             truth.effects[nm] = _scale(nm, truth.effects[nm], 2.0)
-    for c, e in list(errors.items()):  # the wrong constant too (else it is a calibration detail)
-        alt = replace(truth, **{c: getattr(truth, c) / (1.0 + e)})
-        if abs(e) > TOLERANCE and not _visible(truth, alt, cmds, lg, tau_m, sig):
+    for c, e in list(errors.items()):  # the wrong constant too (else it is a calibration detail): at most 50 %
+        if abs(e) > TOLERANCE and not _believed(truth, c, e, cmds, lg, tau_m, sig):
             errors[c] = float(np.sign(e) * 0.5)
             nominal = _nominal(truth, errors)
+            if not _believed(truth, c, errors[c], cmds, lg, tau_m, sig):
+                return None, kind, (names, const)
     truth_log, issued = run(truth, _closed(cmds, exc, n, lg, nominal, truth, tau_m, rng), n, lg.dt,
                             _lag(truth, lg), _substeps(truth, lg, tau_m))
+    # the criterion once more, under the commands the log really holds (its PI loops saw other noise)
+    if not (all(_shows(truth, nm, issued, lg, tau_m, sig) for nm in names)
+            and all(_believed(truth, c, e, issued, lg, tau_m, sig) for c, e in errors.items() if abs(e) > TOLERANCE)):
+        return None, kind, (names, const)
     cols = record(lg, truth_log, issued, rng)
     expected = frozenset(names) | {f"param:{c}" for c, e in errors.items() if abs(e) > TOLERANCE}
     return Case(seed, kind, cols, nominal, expected, truth, lg, tuple(exc), errors,
-                {"tau_m": tau_m, "n": n, "power_w": sc["tau"] * sc["w0"] * 0.7})
+                {"tau_m": tau_m, "n": n, "power_w": sc["tau"] * sc["w0"] * 0.7}), kind, (names, const)
+
+
+def _believed(truth: Truth, c: str, e: float, cmds: np.ndarray, lg: Logger, tau_m: float, sig: np.ndarray) -> bool:
+    """Whether constant ``c`` believed off by ``e`` (true = believed (1 + e)) is visible under ``cmds``."""
+    return _visible(truth, replace(truth, **{c: getattr(truth, c) / (1.0 + e)}), cmds, lg, tau_m, sig)
+
+
+def _shows(truth: Truth, name: str, cmds: np.ndarray, lg: Logger, tau_m: float, sig: np.ndarray) -> bool:
+    """Whether effect ``name`` of ``truth`` is visible under ``cmds`` (:func:`_visible` without it)."""
+    return _visible(truth, replace(truth, effects={k: v for k, v in truth.effects.items() if k != name}),
+                    cmds, lg, tau_m, sig)
 
 
 def _excitations(rng: np.random.Generator) -> list[str]:
