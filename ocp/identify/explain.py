@@ -113,8 +113,8 @@ def units(item: str) -> dict[str, str]:
 
 def spectrum_peak(design: Design) -> dict[str, Any] | None:
     """The angle spectrum's strongest period count and amplitude [N m] (None when not computed)."""
-    if not design.spectrum:
+    if not design.spectrum or design.periods < 1:
         return None
     s = np.asarray(design.spectrum)
-    return {"periods": int(np.argmax(s)) + 1, "amplitude": float(np.max(s)),
-            "median_amplitude": float(np.median(s)), "amplitudes": [float(v) for v in s]}
+    return {"periods": design.periods, "amplitude": float(s[design.periods - 1]),
+            "median_amplitude": float(np.median(s)), "amplitudes": [float(v) for v in s], **design.angle}
