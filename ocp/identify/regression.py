@@ -18,13 +18,14 @@ are explained by a linear combination of columns, one set per candidate:
 * effects with a shape parameter (Stribeck speed, dead-band width, wake time constant) get one column per
   value on a grid; cogging gets ``sin/cos(n theta)`` with ``n`` from the residual's spectrum against angle.
 
-The torque equation is written on the RAW rows (:func:`raw_signals`: with a logged angle, mean speeds
-between samples, exact), not the low-passed ones, and judged through the speed view (:func:`speed_view`):
-a torque ripple locked to the rotor angle is often faster than the low-pass (20-60 periods/rev), and
-would be filtered out before it could be seen. Its columns are the ripple's exact means over each row
-(:func:`interval_ripple`), so a ripple faster than the sampling averages out instead of aliasing, and its
-period count is found in the angle domain (:func:`angle_spectrum`; :func:`angle_limits` says when the
-log cannot show it).
+Where an angle is logged, the torque equation can also be written on the RAW rows (``raw_torque``;
+:func:`raw_signals`: mean speeds between samples, exact from the angle), judged through the same speed view
+(:func:`speed_view`): a torque ripple locked to the rotor angle is often faster than the low-pass (20-60
+periods/rev) and would be filtered out before it could be seen (:func:`ocp.identify.diagnose.diagnose`
+keeps that view when it finds a ripple in it, else the low-passed one). The ripple's columns are its exact
+means over each row (:func:`interval_ripple`), so a ripple faster than the sampling averages out instead
+of aliasing, and its period count is found in the angle domain (:func:`angle_spectrum`; :func:`angle_limits`
+says when the log cannot show it).
 
 Rows are split into training and held-out samples (every ``holdout_every``-th segment); each
 equation is weighted by its noise level. Only Gram matrices leave this module: fitting a model (a
@@ -33,6 +34,7 @@ subset of columns, bounded) and scoring it on held-out rows are ``P x P`` algebr
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -100,6 +102,7 @@ class Design:
     spectrum: list[float] = field(default_factory=list)
     unresolved: dict[str, str] = field(default_factory=dict)
     angle: dict[str, object] = field(default_factory=dict)  # how far the log resolves the ripple (angle_limits)
+    raw_torque: bool = False  # eq. dc_mechanical written on the raw rows (module doc)
     independence: float = 1.0  # fraction of rows that are independent (low-passed rows are correlated)
 
     def index(self, item: str) -> list[int]:
@@ -128,24 +131,18 @@ class Signals:
     triangle: bool = False  # rows centred on the samples, torque weighted by a triangle (raw_signals)
 
 
-def raw_signals(log: Log) -> Signals:
-    """The log's rows as they are, for eq. dc_mechanical where a fast torque must keep its part: with a
-    logged angle, row k compares the mean speeds over k-1 -> k and k -> k+1 (``w0, w1``, exact from the
-    angle), whose difference times ``J`` is the torque's impulse under a triangle over k-1 -> k+1
-    (``triangle``); the current and speed are that triangle's means. Without an angle: the held interval
-    k -> k+1 of :func:`signals`, unfiltered."""
+def raw_signals(log: Log, theta: np.ndarray) -> Signals:
+    """The log's rows as they are, for eq. dc_mechanical where a fast torque must keep its part, from the
+    logged angle ``theta`` (N,) [rad]: row k compares the mean speeds over k-1 -> k and k -> k+1 (``w0, w1``,
+    exact from the angle), whose difference times ``J`` is the torque's impulse under a triangle over
+    k-1 -> k+1 (``triangle``); the current and speed are that triangle's means."""
     dt, n = log.dt, log.n
-    if log.theta is None:
-        w, i = log.omega, log.current
-        theta = np.concatenate([[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * dt)])
-        return Signals(w[:-1], w[1:], i[:-1], i[1:], 0.5 * (w[:-1] + w[1:]), 0.5 * (i[:-1] + i[1:]),
-                       log.voltage[:-1], log.thrust[:-1], theta[:-1], log.t[:-1], dt)
-    mean_w = np.diff(log.theta) / dt  # (N-1,) over k -> k+1
+    mean_w = np.diff(theta) / dt  # (N-1,) over k -> k+1
     w0 = np.concatenate([mean_w[:1], mean_w[:-1]])
     i = log.current
     i0, i1 = 0.5 * (np.concatenate([i[:1], i[:n - 2]]) + i[:-1]), 0.5 * (i[:-1] + i[1:])  # at k -/+ half a sample
     return Signals(w0, mean_w, i0, i1, 0.5 * (w0 + mean_w), 0.5 * (i0 + i1), log.voltage[:-1], log.thrust[:-1],
-                   log.theta[:-1], log.t[:-1], dt, triangle=True)
+                   theta[:-1], log.t[:-1], dt, triangle=True)
 
 
 def signals(log: Log, p: MotorParams) -> Signals:
@@ -243,8 +240,12 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
             return []
         z = np.zeros_like(s.w)
         theta = np.append(s.theta, s.theta[-1] + s.w1[-1] * s.dt)
+        means = list(interval_ripple(theta, periods, s.triangle))
+        if not s.triangle:  # low-passed rows (no logged angle): the ripple low-passed like them
+            fc = cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
+            means = [smooth(m, log.dt, fc) for m in means]
         return [(Column(name, k, float(periods)), np.vstack([m, z, z]))
-                for k, m in zip(("tau_sin", "tau_cos"), interval_ripple(theta, periods, s.triangle), strict=True)]
+                for k, m in zip(("tau_sin", "tau_cos"), means, strict=True)]
     key = CATALOGUE[name].fitted[0]
     return [(Column(name, key), _effect(name, {key: 1.0}, p, s))]
 
@@ -292,12 +293,14 @@ def visible_torque(p: MotorParams, s: Signals, noise: dict[str, float]) -> float
 
 
 def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects: tuple[str, ...],
-          noise: dict[str, float] | None = None) -> Design:
+          noise: dict[str, float] | None = None, raw_torque: bool = False) -> Design:
     """Gram matrices (module doc) of the constants and ``effects`` on the ``train``/``test`` masks (N,).
     ``noise`` (per-sample channel noise, :func:`ocp.identify.predict.noise_levels`) floors the torque
-    equation's weight at the smallest torque error a free run would show (:func:`visible_torque`)."""
+    equation's weight at the smallest torque error a free run would show (:func:`visible_torque`).
+    ``raw_torque``: eq. dc_mechanical on the raw rows where an angle is logged (module doc)."""
     s = signals(log, p)
-    raw = raw_signals(log) if log.kind is LogKind.TIME_SERIES else s  # eq. dc_mechanical: fast torque kept
+    use_raw = raw_torque and log.kind is LogKind.TIME_SERIES and log.theta is not None
+    raw = raw_signals(log, log.theta) if use_raw and log.theta is not None else s
     t = targets(p, s)
     smooth_t, t[0] = t[0].copy(), targets(p, raw)[0]
     rows = s.w.size
@@ -307,7 +310,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         m = min(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt)), rows // 6)
         edge[:m] = edge[rows - m:] = True
     train, test = train[:rows] & ~edge, test[:rows] & ~edge
-    cols, mech = _columns(p, s, raw, log, effects)
+    cols = _columns(p, s, raw, log, effects)
     # noise level per equation: what the richest fit (one shape per effect) leaves on training rows
     # (the motor constant is left out: with it, J, B and c_tau the torque balance scales to zero)
     keep = [j for j, (c, _) in enumerate(cols)
@@ -315,12 +318,10 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     periods, spectrum, cands, angle = 0, np.zeros(0), [], {}
     if "cogging" in effects and s.theta is not None and raw.theta is not None and log.kind is LogKind.TIME_SERIES:
         theta = np.append(raw.theta, raw.theta[-1] + raw.w1[-1] * raw.dt)
-        spectrum, share = angle_spectrum(_rich_residual(t[0], [mech[j] for j in keep], train), theta,
+        spectrum, share = angle_spectrum(_rich_residual(t[0], [cols[j][1][0] for j in keep], train), theta,
                                          raw.triangle, train, test)  # the raw rows: a fast ripple kept
         slow = instant_spectrum(_rich_residual(smooth_t, [cols[j][1][0] for j in keep], train), s.theta, train)
         cands = sorted({int(np.argmax(share)) + 1, int(np.argmax(slow)) + 1})
-    for (_, a), row in zip(cols, mech, strict=True):
-        a[0] = row
 
     # eq. dc_mechanical judged by the speed error it causes (speed_view), the others as they are; the
     # edge rows are zeroed on both sides first (still an equation), so their transients do not spread
@@ -347,27 +348,38 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
     return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
-                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle,
+                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
                   1.0 if s.dt == 0 else min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt,
                                             s.dt / (2.0 * tau) if tau > 0 else 1.0))  # (speed view's memory)
 
 
 def _columns(p: MotorParams, s: Signals, raw: Signals, log: Log,
-             effects: tuple[str, ...]) -> tuple[list[tuple[Column, np.ndarray]], list[np.ndarray]]:
-    """Columns (3, M) of the constants, nuisances and ``effects`` (but cogging) on the low-passed rows
-    ``s``, and each one's torque row (M,) on the ``raw`` rows (module doc)."""
-    smooth_cols, raw_cols = (constant_columns(p, x) | nuisance_columns(p, x) for x in (s, raw))
-    cols: list[tuple[Column, np.ndarray]] = [(Column(c, c), a) for c, a in smooth_cols.items()]
-    mech = [raw_cols[c][0] for c in smooth_cols]
+             effects: tuple[str, ...]) -> list[tuple[Column, np.ndarray]]:
+    """Columns (3, M) of the constants, nuisances and ``effects`` (but cogging) on the low-passed rows ``s``,
+    their torque rows on the ``raw`` rows (module doc)."""
+    def both(make: Callable[[Signals], list[tuple[Column, np.ndarray]]]) -> list[tuple[Column, np.ndarray]]:
+        out = make(s)
+        if raw is not s:
+            for (_, a), (_, b) in zip(out, make(raw), strict=True):
+                a[0] = b[0]
+        return out
+
+    def fixed(x: Signals) -> list[tuple[Column, np.ndarray]]:
+        return [(Column(c, c), a) for c, a in (constant_columns(p, x) | nuisance_columns(p, x)).items()]
+
+    cols = both(fixed)
     for name in effects:
-        if name != "cogging":
-            part = effect_columns(name, p, s, log, 0)
-            cols += part
-            if CATALOGUE[name].channel in ("mechanical", "current-sensor"):
-                mech += [a[0] for _, a in effect_columns(name, p, raw, log, 0)]
-            else:  # no torque part
-                mech += [np.zeros_like(raw.w) for _ in part]
-    return cols, mech
+        if name == "cogging":
+            continue
+        if CATALOGUE[name].channel in ("mechanical", "current-sensor"):
+            cols += both(functools.partial(_effect_columns_on, name, p, log))
+        else:  # no torque part: its torque rows are zero either way
+            cols += effect_columns(name, p, s, log, 0)
+    return cols
+
+
+def _effect_columns_on(name: str, p: MotorParams, log: Log, s: Signals) -> list[tuple[Column, np.ndarray]]:
+    return effect_columns(name, p, s, log, 0)
 
 
 def _pick_periods(cands: list[int], p: MotorParams, raw: Signals, log: Log, target: np.ndarray,
