@@ -18,34 +18,28 @@ import numpy as np
 MAX_PERIODS = 64
 
 
-def _box(a: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """``int_0^1 exp(i (a + d u)) du`` (complex, elementwise)."""
+def _means(ea: np.ndarray, ed: np.ndarray, d: np.ndarray, triangle: bool) -> np.ndarray:
+    """Row means (complex, (M,)) of ``exp(i phi)`` with the phase moving linearly from ``a`` by ``d`` over each
+    interval (``ea = exp(i a)``, ``ed = exp(i d)``): ``int_0^1 exp(i (a + d u)) du`` (box), or the triangle
+    over the interval before and this one, ``int_0^1 u ...`` rising then ``int_0^1 (1 - u) ...`` falling."""
     tiny = np.abs(d) < 1e-3
     safe = np.where(tiny, 1.0, d)
-    return np.exp(1j * a) * np.where(tiny, 1.0 + 0.5j * d - d * d / 6.0, (np.exp(1j * d) - 1.0) / (1j * safe))
-
-
-def _ramp(a: np.ndarray, d: np.ndarray) -> np.ndarray:
-    """``int_0^1 u exp(i (a + d u)) du`` (complex, elementwise)."""
-    tiny = np.abs(d) < 1e-3
-    safe = np.where(tiny, 1.0, d)
-    e = np.exp(1j * d)
-    exact = e / (1j * safe) + (e - 1.0) / (safe * safe)
-    return np.exp(1j * a) * np.where(tiny, 0.5 + 1j * d / 3.0 - d * d / 8.0, exact)
+    box = ea * np.where(tiny, 1.0 + 0.5j * d - d * d / 6.0, (ed - 1.0) / (1j * safe))
+    if not triangle:
+        return np.asarray(box)
+    up = ea * np.where(tiny, 0.5 + 1j * d / 3.0 - d * d / 8.0, ed / (1j * safe) + (ed - 1.0) / (safe * safe))
+    prev = np.concatenate([up[:1], up[:-1]])  # the rising half over k-1 -> k (first row: its own interval)
+    return np.asarray(prev + box - up)
 
 
 def interval_ripple(theta: np.ndarray, n: int, triangle: bool) -> tuple[np.ndarray, np.ndarray]:
     """Weighted means of ``sin(n theta)`` and ``cos(n theta)`` (M,) on the rows of the sampled angle
     ``theta`` (M + 1,) [rad], moving linearly between samples: over each interval k -> k+1, or (``triangle``,
-    :func:`raw_signals`) under the triangle over k-1 -> k+1. Integrated in closed form: a ripple faster
-    than the sampling averages out (its impulse over the row, eq. dc_mechanical) instead of aliasing as
-    samples at the instants would."""
-    a, d = n * theta[:-1], n * np.diff(theta)
-    z = _box(a, d)
-    if triangle:
-        up = _ramp(a, d)
-        prev = np.concatenate([up[:1], up[:-1]])  # the rising half over k-1 -> k (first row: its own interval)
-        z = prev + z - up
+    :func:`ocp.identify.regression.raw_signals`) under the triangle over k-1 -> k+1. Integrated in closed
+    form: a ripple faster than the sampling averages out (its impulse over the row, eq. dc_mechanical)
+    instead of aliasing as samples at the instants would."""
+    d = n * np.diff(theta)
+    z = _means(np.exp(1j * n * theta[:-1]), np.exp(1j * d), d, triangle)
     return z.imag, z.real
 
 
@@ -70,10 +64,16 @@ def angle_spectrum(resid: np.ndarray, theta: np.ndarray, triangle: bool, train: 
     amp, share = np.zeros(MAX_PERIODS), np.zeros(MAX_PERIODS)
     r, q = resid[train], resid[test]
     total = float(q @ q) or 1.0
+    step = np.diff(theta)
+    e1a, e1d = np.exp(1j * theta[:-1]), np.exp(1j * step)
+    ea, ed = np.ones_like(e1a), np.ones_like(e1d)
     for n in range(1, MAX_PERIODS + 1):
-        sc = np.column_stack(interval_ripple(theta, n, triangle))
-        x, *_ = np.linalg.lstsq(sc[train], r, rcond=None)
-        e = q - sc[test] @ x
+        ea, ed = ea * e1a, ed * e1d  # exp(i n a), exp(i n d) by recurrence
+        z = _means(ea, ed, n * step, triangle)
+        a = np.stack([z.imag[train], z.real[train]])  # (2, rows): sin, cos
+        g = a @ a.T + 1e-300 * np.eye(2)
+        x = np.linalg.lstsq(g, a @ r, rcond=1e-12)[0]
+        e = q - x[0] * z.imag[test] - x[1] * z.real[test]
         amp[n - 1], share[n - 1] = math.hypot(*x), 1.0 - float(e @ e) / total
     return amp, share
 

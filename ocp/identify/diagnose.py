@@ -264,18 +264,14 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],
              noise: dict[str, float], opt: DiagnoseOptions, delayed: bool,
              progress: Callable[[float], None] | None) -> tuple[Design, Selection]:
-    """Regression and selection. Where an angle is logged, the torque equation is first written on the raw
-    rows (a torque ripple faster than the low-pass kept, :mod:`.regression`); that view is kept when it
-    adopts an angle-periodic torque, else the low-passed one decides (it averages noise the raw rows keep)."""
-    for raw in ((True, False) if log.theta is not None and "cogging" in effects else (False,)):
-        design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=raw)
-        if progress is not None:
-            progress(0.2)
-        sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
-                     opt.ambiguity_margin, None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
-        if "cogging" in sel.final.items:
-            break
-    return design, sel
+    """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
+    ripple faster than the low-pass kept, :mod:`.regression`)."""
+    design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True)
+    if progress is not None:
+        progress(0.2)
+    return design, select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor,
+                          opt.max_effects - delayed, opt.ambiguity_margin,
+                          None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
 
 
 def _allowed(opt: DiagnoseOptions) -> set[str]:

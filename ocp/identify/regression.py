@@ -22,7 +22,7 @@ Where an angle is logged, the torque equation can also be written on the RAW row
 :func:`raw_signals`: mean speeds between samples, exact from the angle), judged through the same speed view
 (:func:`speed_view`): a torque ripple locked to the rotor angle is often faster than the low-pass (20-60
 periods/rev) and would be filtered out before it could be seen (:func:`ocp.identify.diagnose.diagnose`
-keeps that view when it finds a ripple in it, else the low-passed one). The ripple's columns are its exact
+uses that view wherever an angle is logged). The ripple's columns are its exact
 means over each row (:func:`interval_ripple`), so a ripple faster than the sampling averages out instead
 of aliasing, and its period count is found in the angle domain (:func:`angle_spectrum`; :func:`angle_limits`
 says when the log cannot show it).
