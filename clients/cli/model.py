@@ -333,9 +333,11 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
                   f"{_g(rel, '+6.1f')} %{'  NAMED' if c['named'] else ''}")
     ap = d.get("angle_periodic")
     if ap:
-        print(f"angle-periodic torque: strongest at {ap['periods']} periods/rev, "
+        print(f"angle-periodic torque: best fit at {ap['periods']} periods/rev, "
               f"amplitude {_g(ap['amplitude'], '.3g')} "
               f"N m (median over 1..64: {_g(ap['median_amplitude'], '.3g')} N m)")
+        if ap.get("note"):
+            print(f"  {ap['note']}")
     print("ranking (held-out error reduction):")
     for e in d["ranking"][:8]:
         imp = 100 * e["improvement"] if isinstance(e["improvement"], int | float) else None

@@ -44,7 +44,7 @@ from ocp.identify.explain import (
 )
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
-from ocp.identify.select import Fitted, select
+from ocp.identify.select import Fitted, Selection, select
 from ocp.logs import Log, LogKind
 from ocp.model.effects import make_effect
 from ocp.model.plant import DCMotorPlant
@@ -227,12 +227,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         else opt.segment_s  # short logs: shorter segments, so that some are held out
     sp = split(work, seg, opt.holdout_every)
     noise = noise_levels(work)
-    design = build(plant.params, work, sp.train, sp.test, effects, noise)
-    if progress is not None:
-        progress(0.2)
-    sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor,
-                 opt.max_effects - (delay is not None), opt.ambiguity_margin,
-                 None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
+    design, sel = _explain(plant, work, sp, effects, pool, noise, opt, delay is not None, progress)
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:
@@ -264,6 +259,19 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
                           spectrum_peak(design), opt.tolerance)
+
+
+def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],
+             noise: dict[str, float], opt: DiagnoseOptions, delayed: bool,
+             progress: Callable[[float], None] | None) -> tuple[Design, Selection]:
+    """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
+    ripple faster than the low-pass kept, :mod:`.regression`)."""
+    design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True)
+    if progress is not None:
+        progress(0.2)
+    return design, select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor,
+                          opt.max_effects - delayed, opt.ambiguity_margin,
+                          None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
 
 
 def _allowed(opt: DiagnoseOptions) -> set[str]:

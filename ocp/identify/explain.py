@@ -112,9 +112,12 @@ def units(item: str) -> dict[str, str]:
 
 
 def spectrum_peak(design: Design) -> dict[str, Any] | None:
-    """The angle spectrum's strongest period count and amplitude [N m] (None when not computed)."""
-    if not design.spectrum:
+    """The angle-periodic torque's period count (the best held-out fit, :mod:`.regression`) and amplitude
+    [N m], the amplitudes at 1..64 periods, how far the log resolves it (:func:`.angle.angle_limits`) and
+    which torque rows found it (None when not computed)."""
+    if not design.spectrum or design.periods < 1:
         return None
     s = np.asarray(design.spectrum)
-    return {"periods": int(np.argmax(s)) + 1, "amplitude": float(np.max(s)),
-            "median_amplitude": float(np.median(s)), "amplitudes": [float(v) for v in s]}
+    return {"periods": design.periods, "amplitude": float(s[design.periods - 1]),
+            "median_amplitude": float(np.median(s)), "amplitudes": [float(v) for v in s], **design.angle,
+            "torque_rows": "raw" if design.raw_torque else "low-passed"}

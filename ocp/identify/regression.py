@@ -18,6 +18,15 @@ are explained by a linear combination of columns, one set per candidate:
 * effects with a shape parameter (Stribeck speed, dead-band width, wake time constant) get one column per
   value on a grid; cogging gets ``sin/cos(n theta)`` with ``n`` from the residual's spectrum against angle.
 
+Where an angle is logged, the torque equation can also be written on the RAW rows (``raw_torque``;
+:func:`raw_signals`: mean speeds between samples, exact from the angle), judged through the same speed view
+(:func:`speed_view`): a torque ripple locked to the rotor angle is often faster than the low-pass (20-60
+periods/rev) and would be filtered out before it could be seen (:func:`ocp.identify.diagnose.diagnose`
+uses that view wherever an angle is logged). The ripple's columns are its exact
+means over each row (:func:`interval_ripple`), so a ripple faster than the sampling averages out instead
+of aliasing, and its period count is found in the angle domain (:func:`angle_spectrum`; :func:`angle_limits`
+says when the log cannot show it).
+
 Rows are split into training and held-out samples (every ``holdout_every``-th segment); each
 equation is weighted by its noise level. Only Gram matrices leave this module: fitting a model (a
 subset of columns, bounded) and scoring it on held-out rows are ``P x P`` algebra (:mod:`.select`).
@@ -25,15 +34,18 @@ subset of columns, bounded) and scoring it on held-out rows are ``P x P`` algebr
 
 from __future__ import annotations
 
+import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import signal
 
 from ocp.identify.align import cutoff_hz, smooth
+from ocp.identify.angle import angle_limits, angle_spectrum, instant_spectrum, interval_ripple
 from ocp.logs import Log, LogKind
-from ocp.model.effects import CATALOGUE, Cogging, ThrustLag, make_effect
+from ocp.model.effects import CATALOGUE, ThrustLag, make_effect
 from ocp.model.params import MotorParams
 from ocp.model.plant import NUMPY
 
@@ -50,7 +62,6 @@ GRID = 12
 #: one noise level (:func:`visible_torque`): far smaller mismatches are averaged out of a long log but never
 #: show in a prediction (tuned on proving-ground seeds 1000..1099)
 VISIBLE_FRACTION = 0.15
-MAX_PERIODS = 64
 
 
 @dataclass(frozen=True)
@@ -90,6 +101,8 @@ class Design:
     periods: int = 0
     spectrum: list[float] = field(default_factory=list)
     unresolved: dict[str, str] = field(default_factory=dict)
+    angle: dict[str, object] = field(default_factory=dict)  # how far the log resolves the ripple (angle_limits)
+    raw_torque: bool = False  # eq. dc_mechanical written on the raw rows (module doc)
     independence: float = 1.0  # fraction of rows that are independent (low-passed rows are correlated)
 
     def index(self, item: str) -> list[int]:
@@ -115,6 +128,21 @@ class Signals:
     theta: np.ndarray | None
     t: np.ndarray
     dt: float
+    triangle: bool = False  # rows centred on the samples, torque weighted by a triangle (raw_signals)
+
+
+def raw_signals(log: Log, theta: np.ndarray) -> Signals:
+    """The log's rows as they are, for eq. dc_mechanical where a fast torque must keep its part, from the
+    logged angle ``theta`` (N,) [rad]: row k compares the mean speeds over k-1 -> k and k -> k+1 (``w0, w1``,
+    exact from the angle), whose difference times ``J`` is the torque's impulse under a triangle over
+    k-1 -> k+1 (``triangle``); the current and speed are that triangle's means."""
+    dt, n = log.dt, log.n
+    mean_w = np.diff(theta) / dt  # (N-1,) over k -> k+1
+    w0 = np.concatenate([mean_w[:1], mean_w[:-1]])
+    i = log.current
+    i0, i1 = 0.5 * (np.concatenate([i[:1], i[:n - 2]]) + i[:-1]), 0.5 * (i[:-1] + i[1:])  # at k -/+ half a sample
+    return Signals(w0, mean_w, i0, i1, 0.5 * (w0 + mean_w), 0.5 * (i0 + i1), log.voltage[:-1], log.thrust[:-1],
+                   theta[:-1], log.t[:-1], dt, triangle=True)
 
 
 def signals(log: Log, p: MotorParams) -> Signals:
@@ -212,22 +240,14 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
             return []
         z = np.zeros_like(s.w)
         theta = np.append(s.theta, s.theta[-1] + s.w1[-1] * s.dt)
-        out = []
-        for k in ("tau_sin", "tau_cos"):  # the ripple at the sample instants, low-passed like the signals,
-            ripple = np.asarray(Cogging(**{k: 1.0}, periods=periods).bound_load_torque([theta], theta, NUMPY))
-            ripple = smooth(ripple, log.dt, cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)))
-            out.append((Column(name, k, float(periods)), np.vstack([0.5 * (ripple[:-1] + ripple[1:]), z, z])))
-        return out  # averaged over each held interval
+        means = list(interval_ripple(theta, periods, s.triangle))
+        if not s.triangle:  # low-passed rows (no logged angle): the ripple low-passed like them
+            fc = cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
+            means = [smooth(m, log.dt, fc) for m in means]
+        return [(Column(name, k, float(periods)), np.vstack([m, z, z]))
+                for k, m in zip(("tau_sin", "tau_cos"), means, strict=True)]
     key = CATALOGUE[name].fitted[0]
     return [(Column(name, key), _effect(name, {key: 1.0}, p, s))]
-
-
-def angle_spectrum(resid: np.ndarray, theta: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """Amplitude [N m] of ``resid`` (N,) at 1..64 periods per revolution of ``theta`` (N,) on ``rows``."""
-    n = np.arange(1, MAX_PERIODS + 1)
-    r = resid[rows] - resid[rows].mean()
-    ph = np.exp(-1j * np.outer(n, theta[rows]))
-    return np.asarray(2.0 * np.abs(ph @ r) / max(r.size, 1), float)
 
 
 def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
@@ -273,12 +293,16 @@ def visible_torque(p: MotorParams, s: Signals, noise: dict[str, float]) -> float
 
 
 def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects: tuple[str, ...],
-          noise: dict[str, float] | None = None) -> Design:
+          noise: dict[str, float] | None = None, raw_torque: bool = False) -> Design:
     """Gram matrices (module doc) of the constants and ``effects`` on the ``train``/``test`` masks (N,).
     ``noise`` (per-sample channel noise, :func:`ocp.identify.predict.noise_levels`) floors the torque
-    equation's weight at the smallest torque error a free run would show (:func:`visible_torque`)."""
+    equation's weight at the smallest torque error a free run would show (:func:`visible_torque`).
+    ``raw_torque``: eq. dc_mechanical on the raw rows where an angle is logged (module doc)."""
     s = signals(log, p)
+    use_raw = raw_torque and log.kind is LogKind.TIME_SERIES and log.theta is not None
+    raw = raw_signals(log, log.theta) if use_raw and log.theta is not None else s
     t = targets(p, s)
+    smooth_t, t[0] = t[0].copy(), targets(p, raw)[0]
     rows = s.w.size
     edge = np.zeros(rows, dtype=bool)
     tau = rotor_tau(p, s) if log.kind is LogKind.TIME_SERIES else 0.0
@@ -286,24 +310,32 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         m = min(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt)), rows // 6)
         edge[:m] = edge[rows - m:] = True
     train, test = train[:rows] & ~edge, test[:rows] & ~edge
-    cols: list[tuple[Column, np.ndarray]] = [(Column(c, c), a) for c, a in
-                                             (constant_columns(p, s) | nuisance_columns(p, s)).items()]
-    for name in effects:
-        if name != "cogging":
-            cols += effect_columns(name, p, s, log, 0)
+    cols = _columns(p, s, raw, log, effects)
     # noise level per equation: what the richest fit (one shape per effect) leaves on training rows
     # (the motor constant is left out: with it, J, B and c_tau the torque balance scales to zero)
-    rich = [a for c, a in cols if c.item != "k" and (math.isnan(c.shape) or c.shape == _mid(cols, c.item))]
-    periods, spectrum = 0, np.zeros(0)
-    if "cogging" in effects and s.theta is not None and log.kind is LogKind.TIME_SERIES:
-        spectrum = angle_spectrum(_rich_residual(t[0], [a[0] for a in rich], train), s.theta, train)
-        periods = int(np.argmax(spectrum)) + 1
-        cols += effect_columns("cogging", p, s, log, periods)
-        rich = [*rich, *(a for c, a in cols if c.item == "cogging")]
+    keep = [j for j, (c, _) in enumerate(cols)
+            if c.item != "k" and (math.isnan(c.shape) or c.shape == _mid(cols, c.item))]
+    periods, spectrum, cands, angle = 0, np.zeros(0), [], {}
+    if "cogging" in effects and s.theta is not None and raw.theta is not None and log.kind is LogKind.TIME_SERIES:
+        theta = np.append(raw.theta, raw.theta[-1] + raw.w1[-1] * raw.dt)
+        spectrum, share = angle_spectrum(_rich_residual(t[0], [cols[j][1][0] for j in keep], train), theta,
+                                         raw.triangle, train, test)  # the raw rows: a fast ripple kept
+        slow = instant_spectrum(_rich_residual(smooth_t, [cols[j][1][0] for j in keep], train), s.theta, train)
+        cands = sorted({int(np.argmax(share)) + 1, int(np.argmax(slow)) + 1})
+
     # eq. dc_mechanical judged by the speed error it causes (speed_view), the others as they are; the
     # edge rows are zeroed on both sides first (still an equation), so their transients do not spread
+    def view(y: np.ndarray) -> np.ndarray:
+        return speed_view(np.where(edge, 0.0, y), s.dt, tau)
+
     for y in (t, *(a for _, a in cols)):
-        y[0] = speed_view(np.where(edge, 0.0, y[0]), s.dt, tau)
+        y[0] = view(y[0])
+    rich = [cols[j][1] for j in keep]
+    if cands:
+        periods, cogging = _pick_periods(cands, p, raw, log, t[0], [a[0] for a in rich], train, test, view)
+        cols += cogging
+        rich += [a for _, a in cogging]
+        angle = angle_limits(raw.theta, periods, log.theta is not None)
     resid = np.vstack([_rich_residual(t[e], [a[e] for a in rich], train) for e in range(3)])
     sigma = np.array([max(float(np.sqrt(np.mean(resid[e][train] ** 2))), 1e-12 * (np.std(t[e]) + 1e-30))
                       for e in range(3)])
@@ -316,9 +348,58 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
     return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
-                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log),
+                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
                   1.0 if s.dt == 0 else min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt,
                                             s.dt / (2.0 * tau) if tau > 0 else 1.0))  # (speed view's memory)
+
+
+def _columns(p: MotorParams, s: Signals, raw: Signals, log: Log,
+             effects: tuple[str, ...]) -> list[tuple[Column, np.ndarray]]:
+    """Columns (3, M) of the constants, nuisances and ``effects`` (but cogging) on the low-passed rows ``s``,
+    their torque rows on the ``raw`` rows (module doc)."""
+    def both(make: Callable[[Signals], list[tuple[Column, np.ndarray]]]) -> list[tuple[Column, np.ndarray]]:
+        out = make(s)
+        if raw is not s:
+            for (_, a), (_, b) in zip(out, make(raw), strict=True):
+                a[0] = b[0]
+        return out
+
+    def fixed(x: Signals) -> list[tuple[Column, np.ndarray]]:
+        return [(Column(c, c), a) for c, a in (constant_columns(p, x) | nuisance_columns(p, x)).items()]
+
+    cols = both(fixed)
+    for name in effects:
+        if name == "cogging":
+            continue
+        if CATALOGUE[name].channel in ("mechanical", "current-sensor"):
+            cols += both(functools.partial(_effect_columns_on, name, p, log))
+        else:  # no torque part: its torque rows are zero either way
+            cols += effect_columns(name, p, s, log, 0)
+    return cols
+
+
+def _effect_columns_on(name: str, p: MotorParams, log: Log, s: Signals) -> list[tuple[Column, np.ndarray]]:
+    return effect_columns(name, p, s, log, 0)
+
+
+def _pick_periods(cands: list[int], p: MotorParams, raw: Signals, log: Log, target: np.ndarray,
+                  rich: list[np.ndarray], train: np.ndarray, test: np.ndarray,
+                  view: Callable[[np.ndarray], np.ndarray]) -> tuple[int, list[tuple[Column, np.ndarray]]]:
+    """Of the candidate period counts, the one whose ripple (columns seen through ``view``) explains most
+    of the viewed torque residual ``target`` (M,) beyond the ``rich`` columns on the held-out rows."""
+    resid = _rich_residual(target, rich, train)
+    best: tuple[float, int, list[tuple[Column, np.ndarray]]] = (-math.inf, 0, [])
+    for n in cands:
+        cols = effect_columns("cogging", p, raw, log, n)
+        for _, a in cols:
+            a[0] = view(a[0])
+        sc = np.column_stack([a[0] for _, a in cols])
+        x, *_ = np.linalg.lstsq(sc[train], resid[train], rcond=None)
+        e = resid[test] - sc[test] @ x
+        gain = float(resid[test] @ resid[test] - e @ e)
+        if gain > best[0]:
+            best = (gain, n, cols)
+    return best[1], best[2]
 
 
 def unresolved(p: MotorParams, log: Log) -> dict[str, str]:

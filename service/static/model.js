@@ -210,7 +210,8 @@ function showDiagnosisDetails(res, after) {
     line(`Calibration (within ±${fmt(tol, 2)} % a constant is refined, not named): ${parts.join(", ")}`, "m-calibration");
   }
   const ap = res.angle_periodic;
-  if (ap) line(`Angle-periodic torque: strongest at ${ap.periods} periods/rev, ${fmt(ap.amplitude, 3)} N m`, "m-angle");
+  if (ap) line(`Angle-periodic torque: best fit at ${ap.periods} periods/rev, ${fmt(ap.amplitude, 3)} N m` +
+               (ap.note ? ` (${ap.note})` : ""), "m-angle");
 }
 
 function showFit(res) {

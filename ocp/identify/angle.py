@@ -1,0 +1,100 @@
+"""Angle-periodic torque (cogging, commutator ripple): its columns and its period count, in the angle domain.
+
+A ripple ``tau_sin sin(n theta) + tau_cos cos(n theta)`` [N m] acts on the rotor through the angle, not time:
+at speed ``w`` it is a tone at ``n |w| / (2 pi)`` Hz, often beyond a slow logger's Nyquist frequency, but the
+angle is sampled too. Between two samples the angle moves (nearly) linearly, so the ripple's mean over a
+row is known in closed form (:func:`interval_ripple`): on slow rows it is the ripple itself, on fast rows
+it averages out (a sinc), never aliasing. The period count (1..64) is the one whose columns explain most of
+the torque residual on held-out rows (:func:`angle_spectrum`: a matched filter against the angle);
+:func:`angle_limits` says how much of the log can show a ripple of that count, and when it cannot.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+MAX_PERIODS = 64
+
+
+def _means(ea: np.ndarray, ed: np.ndarray, d: np.ndarray, triangle: bool) -> np.ndarray:
+    """Row means (complex, (M,)) of ``exp(i phi)`` with the phase moving linearly from ``a`` by ``d`` over each
+    interval (``ea = exp(i a)``, ``ed = exp(i d)``): ``int_0^1 exp(i (a + d u)) du`` (box), or the triangle
+    over the interval before and this one, ``int_0^1 u ...`` rising then ``int_0^1 (1 - u) ...`` falling."""
+    tiny = np.abs(d) < 1e-3
+    safe = np.where(tiny, 1.0, d)
+    box = ea * np.where(tiny, 1.0 + 0.5j * d - d * d / 6.0, (ed - 1.0) / (1j * safe))
+    if not triangle:
+        return np.asarray(box)
+    up = ea * np.where(tiny, 0.5 + 1j * d / 3.0 - d * d / 8.0, ed / (1j * safe) + (ed - 1.0) / (safe * safe))
+    prev = np.concatenate([up[:1], up[:-1]])  # the rising half over k-1 -> k (first row: its own interval)
+    return np.asarray(prev + box - up)
+
+
+def interval_ripple(theta: np.ndarray, n: int, triangle: bool) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted means of ``sin(n theta)`` and ``cos(n theta)`` (M,) on the rows of the sampled angle
+    ``theta`` (M + 1,) [rad], moving linearly between samples: over each interval k -> k+1, or (``triangle``,
+    :func:`ocp.identify.regression.raw_signals`) under the triangle over k-1 -> k+1. Integrated in closed
+    form: a ripple faster than the sampling averages out (its impulse over the row, eq. dc_mechanical)
+    instead of aliasing as samples at the instants would."""
+    d = n * np.diff(theta)
+    z = _means(np.exp(1j * n * theta[:-1]), np.exp(1j * d), d, triangle)
+    return z.imag, z.real
+
+
+def instant_spectrum(resid: np.ndarray, theta: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """Amplitude [N m] of ``resid`` (N,) at 1..64 periods per revolution of ``theta`` (N,) on ``rows`` (the
+    angle at the sample instants: what a low-passed torque residual holds of a slow ripple)."""
+    n = np.arange(1, MAX_PERIODS + 1)
+    r = resid[rows] - resid[rows].mean()
+    ph = np.exp(-1j * np.outer(n, theta[rows]))
+    return np.asarray(2.0 * np.abs(ph @ r) / max(r.size, 1), float)
+
+
+def angle_spectrum(resid: np.ndarray, theta: np.ndarray, triangle: bool, train: np.ndarray,
+                   test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A torque ripple at 1..64 periods per revolution fitted to the torque residual ``resid`` (M,): per
+    period count ``n``, the least-squares fit on the ``train`` rows by the row means of ``sin/cos(n theta)``
+    (:func:`interval_ripple`; ``theta`` (M + 1,) [rad], ``triangle`` as there). The residual's spectrum
+    against the rotor angle, as a matched filter: a ripple faster than the sampling averages out of its
+    columns instead of aliasing. Returns (64,) each: the amplitude [N m] and the fraction of the residual's
+    square sum it explains on the ``test`` rows (a ripple locked to the angle holds there, a slow residual
+    that happens to correlate with the angle does not)."""
+    amp, share = np.zeros(MAX_PERIODS), np.zeros(MAX_PERIODS)
+    r, q = resid[train], resid[test]
+    total = float(q @ q) or 1.0
+    step = np.diff(theta)
+    e1a, e1d = np.exp(1j * theta[:-1]), np.exp(1j * step)
+    ea, ed = np.ones_like(e1a), np.ones_like(e1d)
+    for n in range(1, MAX_PERIODS + 1):
+        ea, ed = ea * e1a, ed * e1d  # exp(i n a), exp(i n d) by recurrence
+        z = _means(ea, ed, n * step, triangle)
+        a = np.stack([z.imag[train], z.real[train]])  # (2, rows): sin, cos
+        g = a @ a.T + 1e-300 * np.eye(2)
+        x = np.linalg.lstsq(g, a @ r, rcond=1e-12)[0]
+        e = q - x[0] * z.imag[test] - x[1] * z.real[test]
+        amp[n - 1], share[n - 1] = math.hypot(*x), 1.0 - float(e @ e) / total
+    return amp, share
+
+
+def angle_limits(theta: np.ndarray | None, periods: int, logged: bool) -> dict[str, object]:
+    """What a log whose rotor angle is ``theta`` (N,) [rad] can show of a ripple of ``periods`` per
+    revolution: the fraction of rows on which it
+    is sampled at least twice per period (``n |dtheta| < pi``; on faster rows it averages out within a
+    sample, :func:`interval_ripple`), the largest count resolved on half the moving rows, and a note when
+    the log cannot show it (too few resolving rows, or an angle integrated from a speed column, whose
+    drift blurs high counts)."""
+    step = np.abs(np.diff(theta)) if theta is not None and theta.size > 1 else np.zeros(1)
+    moving = step[step > 0]
+    resolved = float(np.mean(periods * step < math.pi)) if step.size else 0.0
+    top = int(min(MAX_PERIODS, math.pi / float(np.median(moving)))) if moving.size else MAX_PERIODS
+    notes = []
+    if resolved < 0.05:
+        notes.append(f"at {periods} periods/rev the ripple is faster than half the sampling on "
+                     f"{100 * (1 - resolved):.0f} % of the rows: this log cannot show it (a faster logger would)")
+    if not logged:
+        notes.append("no angle column: the angle is integrated from the speed, whose noise makes it drift; "
+                     "high period counts may not show (log the encoder angle)")
+    return {"rows_resolved": resolved, "max_resolved_periods": top, "angle": "logged" if logged else "integrated",
+            "note": "; ".join(notes)}
