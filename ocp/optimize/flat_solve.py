@@ -27,7 +27,9 @@ from ocp.optimize.problem import Problem, Scales, chain_order, crossing_order, s
 from ocp.optimize.result import Crossing, OptimizeResult, SolverProgram, SolverStats, Status, Unsolved
 from ocp.optimize.solution import package
 
-COMMAND_STEP_S = 2.5e-4  # the smooth voltage is held over pieces of at most this [s] (the verification's step)
+#: the smooth voltage is held on the output grid (1 ms), and on SUBSTEPS pieces of a step where it turns by more
+#: than COMMAND_DV of its limit (a 1 ms hold of a fast-turning voltage moves the current by percents of its limit)
+COMMAND_DV, SUBSTEPS = 4e-3, 4
 SPANS_PER_INTERVALS = 3  # one B-spline span per this many Radau intervals of a phase ...
 SPANS = (8, 20)  # ... between these (per phase)
 NO_CONTEXT = SolveContext()
@@ -190,20 +192,27 @@ class FlatPlan:
         return np.vstack([w[0], cur]), volts
 
 
-def _answer(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatData,
-            info: SolverStats) -> OptimizeResult:
-    """Package the solved flat program: the smooth voltage held on pieces of :data:`COMMAND_STEP_S`, simulated."""
+def plan_of(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatData) -> FlatPlan:
+    """The solved flat program ``x`` (n_x,) as functions of time (SI)."""
     P, nc = st.n_phases, st.n_coef
     mp = problem.mission.motor()
     h = x[:P] * problem.phases.durations
-    edges = np.concatenate([[0.0], np.cumsum(h)])
     coef = x[P:].reshape(P, nc) * data.scales.x[0]
-    plan = FlatPlan(splines=[BSpline(flat.knots(st.spans), coef[j], flat.DEGREE) for j in range(P)],
-                    phase_edges=edges, signs=problem.phases.signs,
+    return FlatPlan(splines=[BSpline(flat.knots(st.spans), coef[j], flat.DEGREE) for j in range(P)],
+                    phase_edges=np.concatenate([[0.0], np.cumsum(h)]), signs=problem.phases.signs,
                     constants={k: float(getattr(mp, k)) for k in flat.CONSTANTS})
+
+
+def _answer(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatData,
+            info: SolverStats) -> OptimizeResult:
+    """Package the solved flat program: the smooth voltage held (:data:`COMMAND_DV`), simulated."""
+    plan = plan_of(problem, st, x, data)
+    edges = plan.phase_edges
     t = output_grid(float(edges[-1]))
-    pieces = max(1, math.ceil((t[1] - t[0]) / COMMAND_STEP_S)) if t.size > 1 else 1
-    fine = (t[:-1, None] + np.arange(pieces)[None, :] / pieces * np.diff(t)[:, None]).ravel()
+    # the output grid, each step where the voltage turns by more than COMMAND_DV of its limit cut in SUBSTEPS
+    turns = np.abs(np.diff(plan.states(t)[1])) > COMMAND_DV * data.scales.u_lim
+    parts = np.where(turns, SUBSTEPS, 1)
+    fine = np.concatenate([t[k] + np.arange(n) / n * (t[k + 1] - t[k]) for k, n in enumerate(parts)])
     knots = np.union1d(np.append(fine, t[-1]), edges)
     u_knots = plan.states(0.5 * (knots[:-1] + knots[1:]))[1]
     return package(problem, plan.states, edges, (knots, u_knots), data.x_start, _crossings(plan, data), info)

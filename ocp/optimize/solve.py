@@ -35,7 +35,8 @@ MAX_REFINEMENTS = 3  # back-off rounds when the simulated response exceeds a lim
 NO_CONTEXT = SolveContext()
 
 
-def optimize(mission: Mission, warm: bool | None = False, context: SolveContext = NO_CONTEXT) -> OptimizeResult:
+def optimize(mission: Mission, warm: bool | None = False, context: SolveContext = NO_CONTEXT,
+             program: SolverProgram | None = None) -> OptimizeResult:
     """Optimised reference for ``mission`` (or the analytic fallback with the reason).
 
     ``warm``: start from the cached program's last solution (primal and dual) never (``False``, the default:
@@ -45,14 +46,15 @@ def optimize(mission: Mission, warm: bool | None = False, context: SolveContext 
 
     A min-time mission is solved on successively doubled meshes until its duration converges
     (:func:`ocp.optimize.min_time.refine`); any other mission on its own mesh (:func:`optimize_mesh`).
-    ``context``: a caller's deadline and build observer (:class:`~ocp.optimize.collocation.SolveContext`).
+    ``context``: a caller's deadline and build observer (:class:`~ocp.optimize.collocation.SolveContext`);
+    ``program``: which program answers (:func:`optimize_mesh`; default the flat one where it applies).
     """
     # --- min-time mesh refinement (issue 15) ---
     if mission.objective == "min-time":
         fastest = fastest_analytic(mission)
         return min_time.refine(mission, lambda m, previous: optimize_mesh(m, warm, previous, context),
                                None if fastest is None else 0.5 * fastest.period, _mesh_size)
-    return optimize_mesh(mission, warm, context=context)
+    return optimize_mesh(mission, warm, context=context, program=program)
 
 
 def _mesh_size(mission: Mission) -> int:
@@ -90,12 +92,12 @@ def _flat_or_radau(mission: Mission, warm: bool | None, previous: OptimizeResult
     """The flat program's answer where it applies and verifies, else the Radau program's (see
     :func:`optimize_mesh`); the time of a flat attempt that did not answer is reported with the Radau answer."""
     problem = problem_for(mission)
-    if program is SolverProgram.RADAU or previous is not None or flat_solve.applies(problem) is not None:
-        if program is SolverProgram.FLAT:
+    if program == SolverProgram.RADAU or previous is not None or flat_solve.applies(problem) is not None:
+        if program == SolverProgram.FLAT:
             return Unsolved(f"flat program: {flat_solve.applies(problem) or 'not on a min-time refinement'}")
         return _optimize_mesh(problem, warm, previous, context, started)
     answer = flat_solve.solve_flat(problem, context)
-    if isinstance(answer, OptimizeResult) or program is SolverProgram.FLAT:
+    if isinstance(answer, OptimizeResult) or program == SolverProgram.FLAT:
         answer.solver.setup_time_s = time.perf_counter() - started - _spent(answer.solver)
         return answer
     attempt = time.perf_counter() - started
