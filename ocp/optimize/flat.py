@@ -49,7 +49,9 @@ from ocp.optimize import collocation as col
 
 DEGREE = 5  # omega: C^4 inside a phase, so the voltage is C^2 and its slew C^1
 CHECKS = 4  # limit check points per span (equally spaced)
-END_CHECKS = 4 * CHECKS  # ... in the first and last span of a phase
+#: ... in the END_SPANS first and last spans of a phase, where a reversal's held voltage may jump and the current
+#: turns fastest (with 1 end span of 16 checks the continuous-voltage user missions needed back-off rounds)
+END_CHECKS, END_SPANS = 3 * CHECKS, 3
 GAUSS = 4  # Gauss-Legendre points per span for the tracking integral
 #: knots graded towards the phase ends: a reversal with omega ~ s^3 needs fine spans there (the continuous-voltage
 #: reversal's tracking objective fell by 8x from uniform spans to GRADE 0.8 at 20 spans; 0.5 keeps the middle of
@@ -104,9 +106,15 @@ def basis(spans: int, tau: np.ndarray, order: int) -> np.ndarray:
 
 
 @lru_cache(maxsize=32)
+def quad_basis(spans: int) -> np.ndarray:
+    """The basis at the Gauss points of :func:`points` (the initial guess's least squares), (spans GAUSS, n_coef)."""
+    return basis(spans, points(spans)["quad"], 0)
+
+
+@lru_cache(maxsize=32)
 def points(spans: int) -> dict[str, np.ndarray]:
-    """Normalised times of one phase: limit checks ``check`` (CHECKS per span, END_CHECKS in the first and last
-    span, where a reversal's held voltage may jump and the current turns fastest; the phase's end included),
+    """Normalised times of one phase: limit checks ``check`` (CHECKS per span, END_CHECKS in the END_SPANS first
+    and last spans; the phase's end included),
     Gauss points ``quad`` (spans GAUSS,) with weights ``weight`` (sum 1), and ``mid`` (spans,) the spans'
     midpoints, where the smoothness and effort terms sample the control."""
     g, wg = np.polynomial.legendre.leggauss(GAUSS)
@@ -114,7 +122,7 @@ def points(spans: int) -> dict[str, np.ndarray]:
     width = np.diff(edges)
     quad = (edges[:-1, None] + 0.5 * (g[None, :] + 1.0) * width[:, None]).ravel()
     per = np.full(spans, CHECKS)
-    per[[0, -1]] = END_CHECKS
+    per[:END_SPANS] = per[-END_SPANS:] = END_CHECKS
     check = np.append(np.concatenate([a + np.arange(n) / n * w for a, n, w in zip(edges[:-1], per, width,
                                                                                   strict=True)]), 1.0)
     return {"check": check, "quad": quad, "weight": (0.5 * wg[None, :] * width[:, None]).ravel(),

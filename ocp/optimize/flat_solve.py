@@ -27,9 +27,10 @@ from ocp.optimize.problem import Problem, Scales, chain_order, crossing_order, s
 from ocp.optimize.result import Crossing, OptimizeResult, SolverProgram, SolverStats, Status, Unsolved
 from ocp.optimize.solution import package
 
-#: the smooth voltage is held on the output grid (1 ms), and on SUBSTEPS pieces of a step where it turns by more
-#: than COMMAND_DV of its limit (a 1 ms hold of a fast-turning voltage moves the current by percents of its limit)
-COMMAND_DV, SUBSTEPS = 4e-3, 4
+#: the smooth voltage is held on pieces (of at least 1/SUBSTEPS of the 1 kHz output step) over which it moves by
+#: about COMMAND_DV of its limit (:func:`held_command`): the response's current stays within ~COMMAND_DV V/R of
+#: the plan, and a hold is one piece (a replay of the command meets few discontinuities)
+COMMAND_DV, SUBSTEPS = 2e-3, 4
 SPANS_PER_INTERVALS = 3  # one B-spline span per this many Radau intervals of a phase ...
 SPANS = (8, 20)  # ... between these (per phase)
 NO_CONTEXT = SolveContext()
@@ -114,7 +115,7 @@ def _guess(problem: Problem, st: flat.FlatStructure, w2: np.ndarray, ws: float, 
            ubx: np.ndarray) -> np.ndarray:
     """Static inverse: per phase the least-squares spline through sigma sqrt(|F_d| / c_f) at the Gauss points
     (``w2`` (P, nq): desired thrust / c_f [rad^2/s^2]); stretch 1; clipped into the bounds."""
-    quad = flat.basis(st.spans, flat.points(st.spans)["quad"], 0)
+    quad = flat.quad_basis(st.spans)
     speed = problem.phases.signs[:, None] * np.sqrt(np.abs(w2)) / ws
     coef = np.linalg.lstsq(quad, speed.T, rcond=None)[0].T  # (P, nc)
     return np.clip(np.concatenate([np.ones(st.n_phases), coef.ravel()]), lbx, ubx)
@@ -209,13 +210,26 @@ def _answer(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatD
     plan = plan_of(problem, st, x, data)
     edges = plan.phase_edges
     t = output_grid(float(edges[-1]))
-    # the output grid, each step where the voltage turns by more than COMMAND_DV of its limit cut in SUBSTEPS
-    turns = np.abs(np.diff(plan.states(t)[1])) > COMMAND_DV * data.scales.u_lim
-    parts = np.where(turns, SUBSTEPS, 1)
-    fine = np.concatenate([t[k] + np.arange(n) / n * (t[k + 1] - t[k]) for k, n in enumerate(parts)])
-    knots = np.union1d(np.append(fine, t[-1]), edges)
-    u_knots = plan.states(0.5 * (knots[:-1] + knots[1:]))[1]
+    knots, u_knots = held_command(plan, t, COMMAND_DV * data.scales.u_lim)
     return package(problem, plan.states, edges, (knots, u_knots), data.x_start, _crossings(plan, data), info)
+
+
+def held_command(plan: FlatPlan, t: np.ndarray, dv: float) -> tuple[np.ndarray, np.ndarray]:
+    """The plan's smooth voltage as a held command: (knots (K+1,) [s], values (K,) [V]). On a grid of SUBSTEPS
+    pieces per output step ``t`` (M,) [s] (and the phase edges), a piece ends where the voltage moves to another
+    multiple of ``dv`` [V] (rounded), or at a phase edge; each piece holds the voltage's mean over it. A hold
+    needs one piece, a reversal as many as its voltage's variation over ``dv``."""
+    frac = np.arange(SUBSTEPS) / SUBSTEPS
+    grid = np.union1d(np.append((t[:-1, None] + frac[None, :] * np.diff(t)[:, None]).ravel(), t[-1]),
+                      plan.phase_edges)
+    dt = np.diff(grid)
+    v = plan.states(0.5 * (grid[:-1] + grid[1:]))[1]
+    level = np.round(v / dv)
+    cut = np.flatnonzero(np.diff(level) != 0) + 1  # a piece starts at these grid steps
+    at_edges = np.searchsorted(grid, plan.phase_edges[1:-1])
+    starts = np.union1d(np.concatenate([[0], cut, at_edges]), []).astype(int)
+    held = np.add.reduceat(v * dt, starts) / np.add.reduceat(dt, starts)
+    return np.append(grid[starts], grid[-1]), held
 
 
 def _crossings(plan: FlatPlan, data: FlatData) -> list[Crossing]:

@@ -100,8 +100,12 @@ def _flat_or_radau(mission: Mission, warm: bool | None, previous: OptimizeResult
     if isinstance(answer, OptimizeResult) or program == SolverProgram.FLAT:
         answer.solver.setup_time_s = time.perf_counter() - started - _spent(answer.solver)
         return answer
+    if answer.solver.status.stopped_by_time:  # the mission's time (or the caller's) is spent
+        return Unsolved("solver time limit reached", answer.solver)
     attempt = time.perf_counter() - started
-    result = _optimize_mesh(problem, warm, previous, context, time.perf_counter())
+    # the Radau program gets what is left of the mission's time limit
+    left = dataclasses.replace(context, deadline=min(context.deadline, started + mission.time_limit_s))
+    result = _optimize_mesh(problem, warm, previous, left, time.perf_counter())
     result.solver.flat_attempt_s = attempt
     return result
 
