@@ -23,12 +23,14 @@ Everything the Radau program imposes is kept, as bounds where the B-spline's pro
   (``omega ~ s^3``) also ``omega' = omega'' = 0`` on both sides (three coefficients zero), so current and voltage
   vanish there; order 2 keeps the current continuous (``omega'`` continuous in physical time), a continuous
   voltage also ``omega''``, a C^1 voltage ``omega'''`` (equalities across the two phases' lengths);
-* ``|i| <= I (1 - margin)`` and ``|V| <= V`` at :data:`CHECKS` points per span (the verified answer, the
-  command simulated on the integration grid, decides; :mod:`ocp.optimize.solve` falls back to Radau).
+* ``|i| <= I (1 - MARGIN)`` and ``|V| <= V (1 - MARGIN)`` at :data:`CHECKS` points per span (:data:`END_CHECKS`
+  near the phase ends); the verified answer (the command simulated on the integration grid) decides, with
+  back-off rounds (:mod:`ocp.optimize.flat_solve`) and then the Radau program (:mod:`ocp.optimize.solve`).
 
 The objective is the Radau program's (``ocp.optimize.data.WEIGHTS``): tracking at the same normalised time of the
 desired phase (Gauss quadrature per span), stretch, and the smoothness and effort of the Radau program's control
-(input, its slew or its second derivative by the chain) sampled at the midpoints of the Radau intervals.
+(input, its slew or its second derivative by the chain) sampled at the middle of each span and scaled to the Radau
+program's sums over its intervals. :mod:`ocp.optimize.evaluate` scores either program's answer alike.
 Plant constants, scales and limits are parameters: one solver per :class:`FlatStructure` is built and cached.
 """
 
@@ -70,7 +72,7 @@ class FlatStructure:
 
     Attributes:
         n_phases: phases (reversals + 1); spans: B-spline spans per phase
-        intervals: Radau intervals per phase (where the smoothness and effort terms sample the control)
+        intervals: the Radau program's intervals per phase (the smoothness and effort terms' normalisation)
         chain: the Radau program's input chain (0 held, 1 continuous, 2 C^1 voltage)
         order6: crossing order 6 (omega ~ s^3) instead of 2
     """

@@ -38,13 +38,18 @@ def _scipy_replay(result, params, t_eval):
     one solve across all their jumps took minutes). Returns (current (M,), thrust (M,)) on ``t_eval`` (M,)."""
     ct, cv = result.arrays["command_t"], result.arrays["command"]
     plant = DCMotorPlant(params)
+    p = params
+
+    def jac(_t, y):  # of J w' = k_t i - B w - c_tau w|w|, L i' = V - R i - k_e w
+        return [[-(p.B + 2 * p.c_tau * abs(y[0])) / p.J, p.k_t / p.J], [-p.k_e / p.L, -p.R / p.L]]
+
     x = np.array([result.arrays["omega"][0], result.arrays["current"][0]], float)
     out = np.empty((2, t_eval.size))
     cuts = np.union1d(np.clip(ct, t_eval[0], t_eval[-1]), [t_eval[0], t_eval[-1]])
     for a, b in itertools.pairwise(cuts):
         volts = float(cv[min(max(int(np.searchsorted(ct, 0.5 * (a + b), side="right")) - 1, 0), cv.size - 1)])
         inside = (t_eval >= a) & (t_eval < b)
-        sol = solve_ivp(lambda _t, y, v=volts: plant.rhs(list(y), v), (a, b), x, method="Radau",
+        sol = solve_ivp(lambda _t, y, v=volts: plant.rhs(list(y), v), (a, b), x, method="Radau", jac=jac,
                         t_eval=np.append(t_eval[inside], b), rtol=1e-9, atol=1e-10)
         assert sol.success
         out[:, inside] = sol.y[:, :-1]
