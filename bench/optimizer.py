@@ -9,9 +9,9 @@ Usage::
 profiles sampled at 200 Hz, binding current limits, ``bounded`` and ``continuous-voltage``) and checks the
 issue's targets; the default runs both suites side by side.
 
-For every mission of a suite, the same collocation program (states, scaling, Radau degree 3, weights
-``ocp.optimize.data.WEIGHTS``, bounds, phases, initial guess: all taken from ``problem_for``/``problem_data``)
-is solved three ways, interleaved so that machine noise hits all of them alike:
+For every mission of a suite, the same mission (for Radau, Opti and rockit the same collocation program:
+states, scaling, Radau degree 3, weights ``ocp.optimize.data.WEIGHTS``, bounds, phases, initial guess, all taken
+from ``problem_for``/``problem_data``) is solved four ways, interleaved so that machine noise hits all of them alike:
 
 * **thrustshape** -- ``optimize_mesh(mission)`` (one mesh; a min-time mission is not refined here): the flat
   program (``ocp.optimize.flat``: the speed as a B-spline per phase) where it applies, else the Radau program,
