@@ -9,26 +9,32 @@ Usage::
 profiles sampled at 200 Hz, binding current limits, ``bounded`` and ``continuous-voltage``) and checks the
 issue's targets; the default runs both suites side by side.
 
-For every mission of a suite, the same collocation program (states, scaling, Radau degree 3, weights
-``ocp.optimize.data.WEIGHTS``, bounds, phases, initial guess: all taken from ``problem_for``/``problem_data``)
-is solved three ways, interleaved so that machine noise hits all of them alike:
+For every mission of a suite, the same mission (for Radau, Opti and rockit the same collocation program:
+states, scaling, Radau degree 3, weights ``ocp.optimize.data.WEIGHTS``, bounds, phases, initial guess, all taken
+from ``problem_for``/``problem_data``) is solved four ways, interleaved so that machine noise hits all of them alike:
 
-* **thrustshape** -- ``optimize_mesh(mission)`` (one mesh; a min-time mission is not refined here): the
-  cached ``nlpsol`` of the structure. *cold*: structure cached, initial guess = static inverse
+* **thrustshape** -- ``optimize_mesh(mission)`` (one mesh; a min-time mission is not refined here): the flat
+  program (``ocp.optimize.flat``: the speed as a B-spline per phase) where it applies, else the Radau program,
+  each the cached ``nlpsol`` of its structure (column ``prog`` says which answered). *cold*: structure cached,
+  initial guess = static inverse
   (``warm=False``); *warm*: ``warm=True`` right after a solve of the same structure with thrust levels
   scaled by 1.02. Reported: IPOPT time
   (``result.solver["solve_time_s"]``), solution time (:func:`solution_time`: mission to solution, like the
   others), end-to-end time (``result.total_time_s``, adds the a-posteriori verification), and the one-off
   build time. Ratios are taken to the cold solution time, and to the cold end-to-end time beside it.
-* **Opti** -- the same program written as a naive user would, as a ``casadi.Opti`` built from scratch on
+* **Radau** -- ``optimize_mesh(mission, program="radau")``: the Radau collocation program alone (the reference
+  and fallback of the flat program), cold; its objective is the one the flat answer must equal or beat.
+* **Opti** -- the same (Radau) program written as a naive user would, as a ``casadi.Opti`` built from scratch on
   every call (``Opti()``, variables, ``subject_to``, ``minimize``, ``solver("ipopt")``). Reported: wall
   time of the whole call.
 * **rockit** -- one ``Stage`` per phase with free time ``T`` bounded by the stretch bounds,
   ``DirectCollocation(N, M=1, degree=3, scheme="radau")``, path bounds at the integrator roots,
   ``expand=True``. Reported: build (modelling + transcription) + solve, and the solve call alone.
 
-Objective and constraint violation of every solution are recomputed with one evaluator of the
-thrustshape program (scaled residuals and bound violations), so the three are compared on equal terms.
+The objective of every answer is recomputed by one evaluator (``ocp.optimize.evaluate.objective_of``: the
+simulated thrust and the held command, the Opti and rockit vectors packaged as the Radau program's are), so the
+four are compared on equal terms; constraint violations are the Radau program's residuals (the flat answer: its
+own program's).
 This is a benchmark, not a test: it prints tables and never fails the build.
 """
 
@@ -57,10 +63,11 @@ from ocp.model.plant import CASADI
 from ocp.optimize import collocation as col
 from ocp.optimize.collocation import ipopt_options, solver_options
 from ocp.optimize.data import ProblemData, problem_data
+from ocp.optimize.evaluate import objective_of
 from ocp.optimize.mission import Mission, mission_from_mapping
 from ocp.optimize.problem import Problem, problem_for
-from ocp.optimize.result import OptimizeResult
-from ocp.optimize.solution import extract
+from ocp.optimize.result import OptimizeResult, SolverProgram, SolverStats
+from ocp.optimize.solution import extract, finish_result
 from ocp.optimize.solve import optimize_mesh
 from ocp.optimize.verify import simulate_response
 
@@ -489,6 +496,9 @@ class MissionBench:
     replay: dict[str, float] = field(default_factory=dict)
     #: back-off rounds of the last cold and warm solve (0: the limits held between nodes at once)
     backoff: dict[str, int] = field(default_factory=dict)
+    #: which program answered the cold solve (flat or radau), and the Radau program's own cold solve
+    program: str = ""
+    radau: dict[str, float] = field(default_factory=dict)
 
 
 def solution_time(result: OptimizeResult) -> float:
@@ -511,19 +521,26 @@ def bench_mission(spec: dict[str, Any], repeats: int, log: Callable[[str], None]
     optimize_mesh(mission)  # first solve (not timed)
     optimize_mesh(predecessor, warm=False)  # and the first warm start: builds the warm solver (one-off, not timed)
     optimize_mesh(mission, warm=True)
+    optimize_mesh(mission, program=SolverProgram.RADAU)  # the Radau program built and run once (not timed)
     times: dict[str, list[float]] = {k: [] for k in ("cold_ipopt", "cold_solution", "cold_total", "warm_ipopt",
                                                       "warm_solution", "warm_total", "opti_wall", "opti_ipopt",
+                                                      "radau_ipopt", "radau_solution", "radau_total",
                                                       "rockit_total", "rockit_build", "rockit_solve", "rockit_ipopt")}
     ts_x = np.zeros(0)
     ts_status = opti_status = rockit_status = ""
     ts_iter = warm_iter = opti_iter = rockit_iter = -1
     sources = set()
     opti_run = rockit_run = None
+    cold = radau = None
     for _ in range(repeats):
         cold = optimize_mesh(mission, warm=False)
+        radau = optimize_mesh(mission, warm=False, program=SolverProgram.RADAU)
         last = prog.last_solution
         assert last is not None
-        ts_x = last
+        ts_x = last  # the Radau program's decision vector (its constraint violation)
+        times["radau_ipopt"].append(radau.solve_time_s)
+        times["radau_solution"].append(solution_time(radau))
+        times["radau_total"].append(radau.total_time_s)
         times["cold_ipopt"].append(cold.solve_time_s)
         times["cold_solution"].append(solution_time(cold))
         times["cold_total"].append(cold.total_time_s)
@@ -544,15 +561,23 @@ def bench_mission(spec: dict[str, Any], repeats: int, log: Callable[[str], None]
         times["rockit_build"].append(rockit_run.extra["build_s"])
         times["rockit_solve"].append(rockit_run.solve_s)
         times["rockit_ipopt"].append(rockit_run.extra["ipopt_s"])
-    assert opti_run is not None and rockit_run is not None
+    assert opti_run is not None and rockit_run is not None and cold is not None and radau is not None
     opti_status, opti_iter = opti_run.status, opti_run.iterations
     rockit_status, rockit_iter = rockit_run.status, rockit_run.iterations
-    f_ts, v_ts = evaluate(ts_x)
-    f_opti, v_opti = evaluate(opti_run.x)
-    f_rockit, v_rockit = evaluate(rockit_run.x)
     data0 = problem_data(problem)
-    replay = {name: replay_peak(problem, prog, data0, x) for name, x in
-              (("thrustshape", ts_x), ("opti", opti_run.x), ("rockit", rockit_run.x))}
+    # one evaluator of every answer (ocp.optimize.evaluate: the simulated thrust and the held command), the
+    # Opti and rockit decision vectors packaged as the Radau program's are
+    f_ts, f_radau = objective_of(problem, cold), objective_of(problem, radau)
+    f_opti, f_rockit = (objective_of(problem, finish_result(problem, prog, x, data0, SolverStats()))
+                        for x in (opti_run.x, rockit_run.x))
+    _, v_radau = evaluate(ts_x)
+    _, v_opti = evaluate(opti_run.x)
+    _, v_rockit = evaluate(rockit_run.x)
+    v_ts = v_radau if cold.solver.program == SolverProgram.RADAU else cold.solver.constraint_violation
+    replay = {name: replay_peak(problem, prog, data0, x) for name, x in (("opti", opti_run.x),
+                                                                           ("rockit", rockit_run.x))}
+    replay["thrustshape"] = float(np.max(np.abs(cold.fine["current"]))) / mission.limits.current
+    replay["radau"] = float(np.max(np.abs(radau.fine["current"]))) / mission.limits.current
     med = {k: _median(v) for k, v in times.items()}
     out = MissionBench(
         name=mission.name, shape=f"{st.n_phases}x{st.intervals} c{st.chain}",
@@ -563,11 +588,13 @@ def bench_mission(spec: dict[str, Any], repeats: int, log: Callable[[str], None]
         rockit={"total": med["rockit_total"], "build": med["rockit_build"], "solve": med["rockit_solve"],
                 "ipopt": med["rockit_ipopt"]},
         status={"thrustshape": ts_status, "opti": opti_status, "rockit": rockit_status},
-        objective={"thrustshape": f_ts, "opti": f_opti, "rockit": f_rockit},
-        violation={"thrustshape": v_ts, "opti": v_opti, "rockit": v_rockit},
+        objective={"thrustshape": f_ts, "radau": f_radau, "opti": f_opti, "rockit": f_rockit},
+        violation={"thrustshape": v_ts, "radau": v_radau, "opti": v_opti, "rockit": v_rockit},
         iterations={"thrustshape_cold": ts_iter, "thrustshape_warm": warm_iter, "opti": opti_iter,
-                    "rockit": rockit_iter},
-        source="/".join(sorted(sources)), replay=replay, backoff=backoff)
+                    "rockit": rockit_iter, "radau": int(radau.solver.iterations)},
+        source="/".join(sorted(sources)), replay=replay, backoff=backoff, program=str(cold.solver.program),
+        radau={"ipopt": med["radau_ipopt"], "solution": med["radau_solution"], "total": med["radau_total"],
+               "backoff": int(radau.solver.backoff_rounds), "source": str(radau.source)})
     log(f"  {mission.name}: done ({sum(sum(v) for v in times.values()):.1f} s timed)")
     return out
 
@@ -586,30 +613,36 @@ def _objective_ok(f_ts: float, f_other: float) -> bool:
 def report(rows: list[MissionBench], expected: int, print_: Callable[[str], None] = print) -> dict[str, Any]:
     print_("\nPer-mission medians (times in ms; ipopt = solver call; sol = mission to solution, data preparation and "
            "every back-off round included; e2e = sol + evaluation, verification simulation and packaging)")
-    head = (f"{'mission':20s} {'phases':>9s} {'build':>8s} {'cold':>8s} {'cold':>8s} {'cold':>8s} {'warm':>8s} "
-            f"{'warm':>8s} {'warm':>8s} {'Opti':>8s} {'rockit':>8s} {'rockit':>8s} {'rockit':>8s}")
-    sub = (f"{'':20s} {'xN chain':>9s} {'':>8s} {'ipopt':>8s} {'sol':>8s} {'e2e':>8s} {'ipopt':>8s} {'sol':>8s} "
-           f"{'e2e':>8s} {'call':>8s} {'b+s':>8s} {'solve':>8s} {'ipopt':>8s}")
+    print_("thrustshape = the default path (the flat program where it applies, else Radau; 'prog' says which "
+           "answered); Radau = the Radau program alone on the same mission (the reference)")
+    head = (f"{'mission':20s} {'phases':>9s} {'prog':>5s} {'build':>8s} {'cold':>8s} {'cold':>8s} {'cold':>8s} "
+            f"{'warm':>8s} {'warm':>8s} {'warm':>8s} {'Radau':>8s} {'Radau':>8s} {'Opti':>8s} {'rockit':>8s} "
+            f"{'rockit':>8s} {'rockit':>8s}")
+    sub = (f"{'':20s} {'xN chain':>9s} {'':>5s} {'':>8s} {'ipopt':>8s} {'sol':>8s} {'e2e':>8s} {'ipopt':>8s} "
+           f"{'sol':>8s} {'e2e':>8s} {'ipopt':>8s} {'sol':>8s} {'call':>8s} {'b+s':>8s} {'solve':>8s} {'ipopt':>8s}")
     print_(head)
     print_(sub)
     for r in rows:
         cells = [r.ts[k] for k in ("build", "cold_ipopt", "cold_solution", "cold_total", "warm_ipopt",
                                    "warm_solution", "warm_total")]
-        cells += [r.opti["wall"], r.rockit["total"], r.rockit["solve"], r.rockit["ipopt"]]
-        print_(f"{r.name:20s} {r.shape:>9s} " + " ".join(_ms(c) for c in cells))
-    print_("\nObjective (thrustshape program, recomputed), max constraint violation (scaled), iterations, status")
-    print_(f"{'mission':20s} {'f thrustshape':>13s} {'f Opti':>13s} {'f rockit':>13s} {'viol ts':>8s} "
+        cells += [r.radau["ipopt"], r.radau["solution"], r.opti["wall"], r.rockit["total"], r.rockit["solve"],
+                  r.rockit["ipopt"]]
+        print_(f"{r.name:20s} {r.shape:>9s} {r.program:>5s} " + " ".join(_ms(c) for c in cells))
+    print_("\nObjective (one evaluator of every answer: simulated thrust and held command, ocp.optimize.evaluate), "
+           "max constraint violation (scaled; ts: its own program's), iterations, status")
+    print_(f"{'mission':20s} {'f thrustshape':>13s} {'f Radau':>13s} {'f Opti':>13s} {'f rockit':>13s} {'viol ts':>8s} "
            f"{'viol Opti':>9s} {'viol rk':>8s} {'|i|/I ts/O/r':>18s} {'it c/w/O/r':>12s}  status (ts / Opti / rockit)")
     for r in rows:
         o, v, it, rp = r.objective, r.violation, r.iterations, r.replay
         its = f"{it['thrustshape_cold']}/{it['thrustshape_warm']}/{it['opti']}/{it['rockit']}"
         reps = f"{rp['thrustshape']:.3f}/{rp['opti']:.3f}/{rp['rockit']:.3f}"
         flag = "" if r.source == "optimized" else f"  [thrustshape source: {r.source}]"
-        print_(f"{r.name:20s} {o['thrustshape']:13.6e} {o['opti']:13.6e} {o['rockit']:13.6e} "
+        print_(f"{r.name:20s} {o['thrustshape']:13.6e} {o['radau']:13.6e} {o['opti']:13.6e} {o['rockit']:13.6e} "
                f"{v['thrustshape']:8.1e} {v['opti']:9.1e} {v['rockit']:8.1e} {reps:>18s} {its:>12s}  "
                f"{r.status['thrustshape']} / {r.status['opti']} / {r.status['rockit']}{flag}")
 
     ratios = {
+        "radau": [r.radau["solution"] / r.ts["cold_solution"] for r in rows],
         "opti": [r.opti["wall"] / r.ts["cold_solution"] for r in rows],
         "opti_e2e": [r.opti["wall"] / r.ts["cold_total"] for r in rows],
         "opti_warm": [r.opti["wall"] / r.ts["warm_solution"] for r in rows],
@@ -621,8 +654,8 @@ def report(rows: list[MissionBench], expected: int, print_: Callable[[str], None
     print_("\nRatios per mission: other / thrustshape cold sol (like for like: neither side verifies); Opti/wrm: "
            "Opti / warm sol; "
            "also / cold e2e (our verification counted against us); rockit IPOPT / thrustshape IPOPT")
-    print_(f"{'mission':20s} {'Opti':>8s} {'Opti e2e':>8s} {'Opti/wrm':>8s} {'rockit':>8s} {'rk e2e':>8s} "
-           f"{'rk solve':>8s} {'rk ipopt':>8s}")
+    print_(f"{'mission':20s} {'Radau':>8s} {'Opti':>8s} {'Opti e2e':>8s} {'Opti/wrm':>8s} {'rockit':>8s} "
+           f"{'rk e2e':>8s} {'rk solve':>8s} {'rk ipopt':>8s}")
     for k, r in enumerate(rows):
         print_(f"{r.name:20s} " + " ".join(f"{ratios[key][k]:8.1f}" for key in ratios))
     def med(key: Callable[[MissionBench], float]) -> float:
@@ -636,6 +669,7 @@ def report(rows: list[MissionBench], expected: int, print_: Callable[[str], None
         "median_warm_ipopt_s": med(lambda r: r.ts["warm_ipopt"]),
         "median_warm_solution_s": med(lambda r: r.ts["warm_solution"]),
         "median_warm_total_s": med(lambda r: r.ts["warm_total"]),
+        "median_radau_solution_s": med(lambda r: r.radau["solution"]),
         "median_opti_wall_s": med(lambda r: r.opti["wall"]),
         "median_rockit_total_s": med(lambda r: r.rockit["total"]),
         "median_rockit_solve_s": med(lambda r: r.rockit["solve"]),
@@ -703,15 +737,27 @@ def report(rows: list[MissionBench], expected: int, print_: Callable[[str], None
 def report_issue14(rows: list[MissionBench], ratios: dict[str, list[float]],
                    print_: Callable[[str], None] = print) -> list[tuple[str, bool, str]]:
     """Per-mission iterations and back-off rounds, and the targets of issue 14 with PASS/FAIL."""
-    print_("\nIterations and back-off rounds (cold / warm), cold mission to solution [ms]")
-    print_(f"{'mission':20s} {'it cold':>8s} {'it warm':>8s} {'bo cold':>8s} {'bo warm':>8s} {'cold sol':>8s}")
+    print_("\nIterations and back-off rounds (cold / warm), cold mission to solution [ms]; the same for the Radau "
+           "program alone; objective thrustshape / Radau - 1 (one evaluator)")
+    print_(f"{'mission':20s} {'prog':>5s} {'it cold':>8s} {'it warm':>8s} {'bo cold':>8s} {'bo warm':>8s} "
+           f"{'cold sol':>8s} {'Radau it':>8s} {'Radau bo':>8s} {'Radau sol':>9s} {'f/f_R-1':>9s}")
     for r in rows:
-        print_(f"{r.name:20s} {r.iterations['thrustshape_cold']:8d} {r.iterations['thrustshape_warm']:8d} "
-               f"{r.backoff.get('cold', -1):8d} {r.backoff.get('warm', -1):8d} {_ms(r.ts['cold_solution'])}")
+        rel = r.objective["thrustshape"] / r.objective["radau"] - 1.0 if r.objective["radau"] else math.nan
+        print_(f"{r.name:20s} {r.program:>5s} {r.iterations['thrustshape_cold']:8d} "
+               f"{r.iterations['thrustshape_warm']:8d} {r.backoff.get('cold', -1):8d} {r.backoff.get('warm', -1):8d} "
+               f"{_ms(r.ts['cold_solution'])} {r.iterations['radau']:8d} {int(r.radau['backoff']):8d} "
+               f"{_ms(r.radau['solution']):>9s} {rel:+9.2e}")
     solves = [r.backoff.get(k, 0) for r in rows for k in ("cold", "warm")]
     print_(f"  back-off rounds: {sum(solves)} over {len(solves)} solves; solves with at least one: "
            f"{sum(1 for b in solves if b)}")
     checks: list[tuple[str, bool, str]] = []
+    worse = [r.name for r in rows if not _objective_ok(r.objective["thrustshape"], r.objective["radau"])]
+    flat_rows = [r for r in rows if r.program == SolverProgram.FLAT]
+    checks.append((f"objective equal or better than the Radau program's (rtol {OBJ_RTOL:g}, one evaluator)",
+                   not worse, "all missions" if not worse else "worse on: " + ", ".join(worse)))
+    checks.append(("the flat program answered where it applies (else Radau)", True,
+                   f"flat on {len(flat_rows)} of {len(rows)}: Radau on "
+                   + (", ".join(r.name for r in rows if r.program != SolverProgram.FLAT) or "none")))
     user = [r for r in rows if r.name in USER]
     if user:
         times = [r.ts["cold_solution"] for r in user]

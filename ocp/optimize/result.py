@@ -74,6 +74,14 @@ class Status(StrEnum):
         return self in (Status.USER_REQUESTED_STOP, Status.MAXIMUM_CPUTIME_EXCEEDED, Status.MAXIMUM_WALLTIME_EXCEEDED)
 
 
+class SolverProgram(StrEnum):
+    """Which program produced an optimised answer: the flat B-spline program in the speed
+    (:mod:`ocp.optimize.flat`, the fast path) or the Radau collocation program (the reference and fallback)."""
+
+    FLAT = "flat"
+    RADAU = "radau"
+
+
 class Record:
     """Read access by name for a result record (dataclass): ``r["x"]``, ``r.get("x")``, ``"x" in r``."""
 
@@ -101,6 +109,10 @@ class SolverStats(Record):
     """How the answer was computed; times add up over the back-off rounds (the build happens in the first)."""
 
     status: Status = field(default=Status.UNKNOWN, metadata=info("", "IPOPT return status of the last solve"))
+    program: SolverProgram = field(default=SolverProgram.RADAU, metadata=info(
+        "", "the program that produced the answer: flat (B-spline in the speed) or radau (collocation)"))
+    flat_attempt_s: float = field(default=0.0, metadata=info(
+        "s", "time spent on a flat program attempt that did not answer (then the Radau program did)"))
     iterations: int = field(default=0, metadata=info("1", "IPOPT iterations over every solve"))
     objective: float = field(default=float("nan"), metadata=info("1", "objective of the last solve (scaled)"))
     constraint_violation: float = field(default=0.0, metadata=info("1", "largest scaled collocation residual"))

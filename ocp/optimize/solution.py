@@ -7,6 +7,7 @@ samples the command, simulates the plant under it (:mod:`ocp.optimize.verify`) a
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -82,24 +83,37 @@ def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: P
     ``verification.thrust_rms_error``. Between nodes the polynomial of a fast state (the current,
     with L/R ~ 0.4 ms) says little, the simulated response is what the motor does.
     """
-    m, plant = problem.mission, problem.plant
     sol = extract(problem, prog, xopt, data)
     t = output_grid(float(sol.phase_edges[-1]))
-    x_plan, u = sol.states(t)
-    npx = prog.n_plant_states
-    f_plan = np.asarray(plant.thrust([x_plan[i] for i in range(npx)]), float)
-    # desired thrust at the retimed time (same normalised time within each phase)
-    j = np.clip(np.searchsorted(sol.phase_edges, t, side="right") - 1, 0, problem.phases.signs.size - 1)
-    frac = (t - sol.phase_edges[j]) / np.diff(sol.phase_edges)[j]
-    f_des = np.interp(problem.phases.bounds[j] + frac * problem.phases.durations[j], problem.t_desired,
-                      problem.f_desired)
     if sol.chain:  # continuous input: knots on the output grid and COMMAND_SUBSTEPS per collocation interval
         # (a 1 kHz hold smears a voltage that turns within one interval: a min-time solve's do, in 0.1 ms)
         knots = np.union1d(t, _subdivide(sol.edges, COMMAND_SUBSTEPS))
         u_knots = sol.states(0.5 * (knots[:-1] + knots[1:]))[1]
     else:
         knots, u_knots = sol.edges, sol.controls
-    resp = simulate_response(plant, knots, u_knots, sol.points[0, 0, :npx], t)
+    crossings = _crossings(sol, data.scales.x, data.scales.u)
+    return package(problem, sol.states, sol.phase_edges, (knots, u_knots), sol.points[0, 0, :prog.n_plant_states],
+                   crossings, solver_info)
+
+
+def package(problem: Problem, plan: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], phase_edges: np.ndarray,
+            command: tuple[np.ndarray, np.ndarray], x0: np.ndarray, crossings: list[Crossing],
+            solver_info: SolverStats) -> OptimizeResult:
+    """The answer of a solved program (Radau or flat): ``plan(t)`` its planned (states (nx, M), input (M,)) at
+    times ``t`` (M,) [s]; ``phase_edges`` (P+1,) [s]; ``command`` (knots (K+1,) [s], input held from each (K,));
+    ``x0`` (n_plant_states,) the initial state. The command is simulated and verified on the output grid."""
+    m, plant = problem.mission, problem.plant
+    npx = len(plant.state_names)
+    t = output_grid(float(phase_edges[-1]))
+    x_plan, u = plan(t)
+    f_plan = np.asarray(plant.thrust([x_plan[i] for i in range(npx)]), float)
+    # desired thrust at the retimed time (same normalised time within each phase)
+    j = np.clip(np.searchsorted(phase_edges, t, side="right") - 1, 0, problem.phases.signs.size - 1)
+    frac = (t - phase_edges[j]) / np.diff(phase_edges)[j]
+    f_des = np.interp(problem.phases.bounds[j] + frac * problem.phases.durations[j], problem.t_desired,
+                      problem.f_desired)
+    knots, u_knots = command
+    resp = simulate_response(plant, knots, u_knots, x0, t)
     x = resp.at_out
     thrust = np.asarray(plant.thrust([x[i] for i in range(npx)]), float)
     arrays = {"t": t, "thrust": thrust, "thrust_desired": f_des, "omega": x[0],
@@ -108,8 +122,7 @@ def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: P
     arrays["command_t"], arrays["command"] = knots, np.append(u_knots, u_knots[-1])
     fine = channels(m, resp)
     report = verification(m, arrays, f_plan, fine)
-    crossings = _crossings(sol, data.scales.x, data.scales.u)
-    stretch = (np.diff(sol.phase_edges) / problem.phases.durations).tolist()
+    stretch = (np.diff(phase_edges) / problem.phases.durations).tolist()
     return OptimizeResult(name=m.name, source=Source.OPTIMIZED, status=solver_info.status, reason="",
                           arrays=arrays, crossings=crossings, stretch=stretch, verification=report,
                           solver=solver_info, fine=fine)

@@ -21,13 +21,13 @@ import numpy as np
 
 from ocp.errors import MissionError
 from ocp.optimize import collocation as col
-from ocp.optimize import min_time
+from ocp.optimize import flat_solve, min_time
 from ocp.optimize.collocation import SolveContext
 from ocp.optimize.data import ProblemData, problem_data
 from ocp.optimize.guess import fastest_analytic
 from ocp.optimize.mission import Mission
 from ocp.optimize.problem import Problem, problem_for
-from ocp.optimize.result import OptimizeResult, SolverStats, Status, Unsolved
+from ocp.optimize.result import OptimizeResult, SolverProgram, SolverStats, Status, Unsolved
 from ocp.optimize.solution import finish_result
 from ocp.reference.fallback_answer import analytic_fallback
 
@@ -35,7 +35,8 @@ MAX_REFINEMENTS = 3  # back-off rounds when the simulated response exceeds a lim
 NO_CONTEXT = SolveContext()
 
 
-def optimize(mission: Mission, warm: bool | None = False, context: SolveContext = NO_CONTEXT) -> OptimizeResult:
+def optimize(mission: Mission, warm: bool | None = False, context: SolveContext = NO_CONTEXT,
+             program: SolverProgram | None = None) -> OptimizeResult:
     """Optimised reference for ``mission`` (or the analytic fallback with the reason).
 
     ``warm``: start from the cached program's last solution (primal and dual) never (``False``, the default:
@@ -45,14 +46,15 @@ def optimize(mission: Mission, warm: bool | None = False, context: SolveContext 
 
     A min-time mission is solved on successively doubled meshes until its duration converges
     (:func:`ocp.optimize.min_time.refine`); any other mission on its own mesh (:func:`optimize_mesh`).
-    ``context``: a caller's deadline and build observer (:class:`~ocp.optimize.collocation.SolveContext`).
+    ``context``: a caller's deadline and build observer (:class:`~ocp.optimize.collocation.SolveContext`);
+    ``program``: which program answers (:func:`optimize_mesh`; default the flat one where it applies).
     """
     # --- min-time mesh refinement (issue 15) ---
     if mission.objective == "min-time":
         fastest = fastest_analytic(mission)
         return min_time.refine(mission, lambda m, previous: optimize_mesh(m, warm, previous, context),
                                None if fastest is None else 0.5 * fastest.period, _mesh_size)
-    return optimize_mesh(mission, warm, context=context)
+    return optimize_mesh(mission, warm, context=context, program=program)
 
 
 def _mesh_size(mission: Mission) -> int:
@@ -62,16 +64,21 @@ def _mesh_size(mission: Mission) -> int:
 
 
 def optimize_mesh(mission: Mission, warm: bool | None = False, previous: OptimizeResult | None = None,
-                  context: SolveContext = NO_CONTEXT) -> OptimizeResult:
+                  context: SolveContext = NO_CONTEXT, program: SolverProgram | None = None) -> OptimizeResult:
     """Optimised reference for ``mission`` on its own mesh (or the analytic fallback with the reason);
     ``previous``: a coarser answer of the same mission to start from (min-time refinement).
+
+    ``program``: ``None`` (the default) asks the flat program first where it applies
+    (:func:`ocp.optimize.flat_solve.applies`; not on a min-time refinement) and the Radau program when the flat
+    one fails or its verified answer breaks a limit; ``radau`` asks the Radau program only (the reference, in
+    benchmarks and tests); ``flat`` the flat program only (its failure goes to the analytic fallback).
 
     When the simulated response exceeds a limit between collocation nodes, the current and voltage
     bounds of the intervals where it does (and of their neighbours) are backed off by the excess (plus
     20 %) and the same cached program is solved again, warm-started (min-time: from the analytic guess).
     """
     started = time.perf_counter()
-    outcome = _optimize_mesh(mission, warm, previous, context, started)
+    outcome = _flat_or_radau(mission, warm, previous, context, started, program)
     if isinstance(outcome, Unsolved):  # the one entry into the fallback
         result = analytic_fallback(mission, outcome.reason, outcome.solver)
     else:
@@ -80,9 +87,36 @@ def optimize_mesh(mission: Mission, warm: bool | None = False, previous: Optimiz
     return result
 
 
-def _optimize_mesh(mission: Mission, warm: bool | None, previous: OptimizeResult | None, context: SolveContext,
-                   started: float) -> OptimizeResult | Unsolved:
+def _flat_or_radau(mission: Mission, warm: bool | None, previous: OptimizeResult | None, context: SolveContext,
+                   started: float, program: SolverProgram | None) -> OptimizeResult | Unsolved:
+    """The flat program's answer where it applies and verifies, else the Radau program's (see
+    :func:`optimize_mesh`); the time of a flat attempt that did not answer is reported with the Radau answer."""
     problem = problem_for(mission)
+    if program == SolverProgram.RADAU or previous is not None or flat_solve.applies(problem) is not None:
+        if program == SolverProgram.FLAT:
+            return Unsolved(f"flat program: {flat_solve.applies(problem) or 'not on a min-time refinement'}")
+        return _optimize_mesh(problem, warm, previous, context, started)
+    answer = flat_solve.solve_flat(problem, context)
+    if isinstance(answer, OptimizeResult) or program == SolverProgram.FLAT:
+        answer.solver.setup_time_s = time.perf_counter() - started - _spent(answer.solver)
+        return answer
+    if answer.solver.status.stopped_by_time:  # the mission's time (or the caller's) is spent
+        return Unsolved("solver time limit reached", answer.solver)
+    attempt = time.perf_counter() - started
+    # the Radau program gets what is left of the mission's time limit
+    left = dataclasses.replace(context, deadline=min(context.deadline, started + mission.time_limit_s))
+    result = _optimize_mesh(problem, warm, previous, left, time.perf_counter())
+    result.solver.flat_attempt_s = attempt
+    return result
+
+
+def _spent(s: SolverStats) -> float:
+    return s.build_time_s + s.solve_time_s + s.verify_time_s
+
+
+def _optimize_mesh(problem: Problem, warm: bool | None, previous: OptimizeResult | None, context: SolveContext,
+                   started: float) -> OptimizeResult | Unsolved:
+    mission = problem.mission
     try:
         data = problem_data(problem)
     except MissionError as exc:

@@ -13,7 +13,10 @@ from ocp.model.plant import DCMotorPlant
 from ocp.optimize import path_limits
 from ocp.optimize.collocation import TAU
 from ocp.optimize.mission import mission_from_mapping
+from ocp.optimize.result import SolverProgram
 from ocp.optimize.solve import optimize
+
+RADAU = SolverProgram.RADAU  # the Radau program's own in-interval limits and warm starts (the flat one runs cold)
 
 EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
 SMALL_MOTOR = {"J": 4e-5, "B": 1e-6, "c_tau": 1e-6, "c_f": 2e-5, "k_t": 0.03, "k_e": 0.03, "R": 3.0, "L": 2e-3}
@@ -47,7 +50,7 @@ def _ramp_mission() -> dict:
 def test_a_binding_current_limit_holds_between_the_nodes_without_a_back_off_round() -> None:
     """A bounded ramp through zero on a small motor whose current limit binds (before: one back-off round on
     every such mission): the simulated answer keeps the limit on the integration grid at the first solve."""
-    r = optimize(mission_from_mapping(_ramp_mission()), warm=False)
+    r = optimize(mission_from_mapping(_ramp_mission()), warm=False, program=RADAU)
     assert r.source == "optimized", r.reason
     assert r.solver["backoff_rounds"] == 0
     assert r.path_ok
@@ -69,13 +72,13 @@ def test_a_repeated_request_starts_warm_and_lands_on_the_cold_answer() -> None:
         for key in ("thrust", "to"):
             if key in seg:
                 seg[key] *= -1.0
-    cold = optimize(base, warm=False)
-    near = optimize(mission_from_mapping(scaled), warm=None)  # warm=None: what the service's workers ask
-    again = optimize(base, warm=None)
+    cold = optimize(base, warm=False, program=RADAU)
+    near = optimize(mission_from_mapping(scaled), warm=None, program=RADAU)  # warm=None: what the service's workers ask
+    again = optimize(base, warm=None, program=RADAU)
     assert not cold.solver["warm_start"] and near.solver["warm_start"] and again.solver["warm_start"]
     assert again.source == cold.source == "optimized"
     f_cold = cold.solver["objective"]
     assert f_cold * (1.0 - 1e-3) <= again.solver["objective"] <= f_cold * (1.0 + 1e-6)
-    far = optimize(mission_from_mapping(mirrored), warm=None)
+    far = optimize(mission_from_mapping(mirrored), warm=None, program=RADAU)
     assert not far.solver["warm_start"]
     assert far.source == "optimized" and math.isclose(far.solver["objective"], cold.solver["objective"], rel_tol=1e-3)

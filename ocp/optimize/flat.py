@@ -1,0 +1,329 @@
+"""The flat program: the speed per phase as a B-spline, current and voltage from it (issue 14 item 3).
+
+The voltage-driven DC motor with its propeller is differentially flat in the speed ``omega``: along any
+smooth ``omega(t)`` the current and the voltage that produce it follow in closed form,
+
+    i = (J w' + B w + c_tau w|w|) / k_t            (eq. dc_mechanical)
+    V = R i + L i' + k_e w                          (eq. dc_electrical)
+    F = c_f w|w|                                     (eq. thrust_model)
+
+so the program needs no states and no collocation residuals. In phase ``j`` (speed sign ``sigma_j``, desired
+duration ``d_j``, retimed length ``h_j = stretch_j d_j``) ``omega`` is a clamped B-spline of degree
+:data:`DEGREE` on :attr:`FlatStructure.spans` uniform spans of the normalised time ``tau in [0, 1]``, with
+coefficients ``c_j`` (scaled by the speed scale). Decision variables: the stretches and the coefficients, a
+few tens per phase against ~1,200 of the Radau program.
+
+Everything the Radau program imposes is kept, as bounds where the B-spline's properties allow it:
+
+* speed sign and speed limit: ``0 <= sigma_j c_j <= w_max`` (a B-spline lies in the hull of its coefficients);
+* start at the mission's equilibrium: ``omega(0) = w_0`` and ``omega'(0) = 0`` (the current is the equilibrium
+  one), and ``omega''(0) = 0`` when the voltage is continuous (chain >= 1), ``omega'''(0) = 0`` for a C^1
+  voltage: the first coefficients equal (a clamped spline's r-th derivative at 0 uses ``c_0..c_r`` only);
+* reversal: ``omega = 0`` at each phase boundary (last and first coefficient zero); crossing order 6
+  (``omega ~ s^3``) also ``omega' = omega'' = 0`` on both sides (three coefficients zero), so current and voltage
+  vanish there; order 2 keeps the current continuous (``omega'`` continuous in physical time), a continuous
+  voltage also ``omega''``, a C^1 voltage ``omega'''`` (equalities across the two phases' lengths);
+* ``|i| <= I (1 - MARGIN)`` and ``|V| <= V (1 - MARGIN)`` at :data:`CHECKS` points per span (:data:`END_CHECKS`
+  near the phase ends); the verified answer (the command simulated on the integration grid) decides, with
+  back-off rounds (:mod:`ocp.optimize.flat_solve`) and then the Radau program (:mod:`ocp.optimize.solve`).
+
+The objective is the Radau program's (``ocp.optimize.data.WEIGHTS``): tracking at the same normalised time of the
+desired phase (Gauss quadrature per span), stretch, and the smoothness and effort of the Radau program's control
+(input, its slew or its second derivative by the chain) sampled at the middle of each span and scaled to the Radau
+program's sums over its intervals. :mod:`ocp.optimize.evaluate` scores either program's answer alike.
+Plant constants, scales and limits are parameters: one solver per :class:`FlatStructure` is built and cached.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from scipy.interpolate import BSpline
+
+from ocp.optimize import collocation as col
+
+DEGREE = 5  # omega: C^4 inside a phase, so the voltage is C^2 and its slew C^1
+CHECKS = 4  # limit check points per span (equally spaced)
+#: ... in the END_SPANS first and last spans of a phase, where a reversal's held voltage may jump and the current
+#: turns fastest (with 1 end span of 16 checks the continuous-voltage user missions needed back-off rounds)
+END_CHECKS, END_SPANS = 3 * CHECKS, 3
+GAUSS = 4  # Gauss-Legendre points per span for the tracking integral
+#: knots graded towards the phase ends: a reversal with omega ~ s^3 needs fine spans there (the continuous-voltage
+#: reversal's tracking objective fell by 8x from uniform spans to GRADE 0.8 at 20 spans; 0.5 keeps the middle of
+#: a phase resolved for a ramp's corners)
+GRADE = 0.5
+#: IPOPT options of the flat program over the Radau program's: a monotone barrier (the adaptive one's mu oracle
+#: cost more than it saved on these small programs: 46 vs 79 ms on the 2 s reversal, 75 vs 124 ms on user-ramp-cv)
+IPOPT_OPTIONS = {"ipopt.mu_strategy": "monotone"}
+MARGIN = 5e-3  # the current and voltage bounds at the check points are the limits times (1 - MARGIN)
+CACHE_SIZE = 16
+
+
+@dataclass(frozen=True)
+class FlatStructure:
+    """What the flat NLP's shape depends on (its cache key; plant constants are parameters).
+
+    Attributes:
+        n_phases: phases (reversals + 1); spans: B-spline spans per phase
+        intervals: the Radau program's intervals per phase (the smoothness and effort terms' normalisation)
+        chain: the Radau program's input chain (0 held, 1 continuous, 2 C^1 voltage)
+        order6: crossing order 6 (omega ~ s^3) instead of 2
+    """
+
+    n_phases: int
+    spans: int
+    intervals: int
+    chain: int
+    order6: bool
+
+    @property
+    def n_coef(self) -> int:
+        return self.spans + DEGREE
+
+
+@lru_cache(maxsize=32)
+def knots(spans: int) -> np.ndarray:
+    """Clamped knot vector on [0, 1], graded towards both ends (``u - GRADE sin(2 pi u) / (2 pi)`` of uniform
+    ``u``: the end spans are ``1 - GRADE`` of the uniform width, the middle ones ``1 + GRADE``), shape
+    (spans + 2 DEGREE + 1,)."""
+    u = np.linspace(0.0, 1.0, spans + 1)
+    return np.concatenate([np.zeros(DEGREE), u - GRADE * np.sin(2 * np.pi * u) / (2 * np.pi), np.ones(DEGREE)])
+
+
+def basis(spans: int, tau: np.ndarray, order: int) -> np.ndarray:
+    """``order``-th tau-derivative of every basis function at ``tau`` (M,): shape (M, spans + DEGREE)."""
+    t, n = knots(spans), spans + DEGREE
+    out = np.empty((np.size(tau), n))
+    for k in range(n):
+        spline = BSpline(t, np.eye(n)[k], DEGREE, extrapolate=True)
+        out[:, k] = spline.derivative(order)(tau) if order else spline(tau)
+    return out
+
+
+@lru_cache(maxsize=32)
+def quad_basis(spans: int) -> np.ndarray:
+    """The basis at the Gauss points of :func:`points` (the initial guess's least squares), (spans GAUSS, n_coef)."""
+    return basis(spans, points(spans)["quad"], 0)
+
+
+@lru_cache(maxsize=32)
+def points(spans: int) -> dict[str, np.ndarray]:
+    """Normalised times of one phase: limit checks ``check`` (CHECKS per span, END_CHECKS in the END_SPANS first
+    and last spans; the phase's end included),
+    Gauss points ``quad`` (spans GAUSS,) with weights ``weight`` (sum 1), and ``mid`` (spans,) the spans'
+    midpoints, where the smoothness and effort terms sample the control."""
+    g, wg = np.polynomial.legendre.leggauss(GAUSS)
+    edges = knots(spans)[DEGREE:-DEGREE]
+    width = np.diff(edges)
+    quad = (edges[:-1, None] + 0.5 * (g[None, :] + 1.0) * width[:, None]).ravel()
+    per = np.full(spans, CHECKS)
+    per[:END_SPANS] = per[-END_SPANS:] = END_CHECKS
+    check = np.append(np.concatenate([a + np.arange(n) / n * w for a, n, w in zip(edges[:-1], per, width,
+                                                                                  strict=True)]), 1.0)
+    return {"check": check, "quad": quad, "weight": (0.5 * wg[None, :] * width[:, None]).ravel(),
+            "mid": 0.5 * (edges[:-1] + edges[1:])}
+
+
+def drive(w: list[Any], k: dict[str, Any], sigma: Any, upto: int) -> list[Any]:
+    """(current [A], voltage [V], voltage slew [V/s], ...) from the speed and its time derivatives ``w`` =
+    (w, w', w'', ...) [rad/s, rad/s^2, ...]; ``upto`` the highest voltage derivative wanted (0..2). ``k``: the
+    plant constants (J, B, c_tau, k_t, k_e, R, L). Symbolic (CasADi) or numeric (numpy arrays (M,))."""
+    # eq:dc_mechanical  k_t i = J w' + B w + c_tau sigma w^2, and its time derivatives
+    sq = [w[0] ** 2, 2 * w[0] * w[1], 2 * (w[1] ** 2 + w[0] * w[2]), 2 * (3 * w[1] * w[2] + w[0] * w[3])]
+    cur = [(k["J"] * w[r + 1] + k["B"] * w[r] + k["c_tau"] * sigma * sq[r]) / k["k_t"] for r in range(upto + 2)]
+    # eq:dc_electrical  V = R i + L i' + k_e w, and its time derivatives
+    volts = [k["R"] * cur[r] + k["L"] * cur[r + 1] + k["k_e"] * w[r] for r in range(upto + 1)]
+    return [cur[0], *volts]
+
+
+CONSTANTS = ("J", "B", "c_tau", "k_t", "k_e", "R", "L", "c_f")
+SCALES = ("w", "f", "i", "v", "u")  # speed [rad/s], thrust [N], current [A], voltage [V], control
+
+
+def param_slices(st: FlatStructure) -> dict[str, slice]:
+    """Layout of the parameter vector."""
+    nq = st.spans * GAUSS
+    sizes = {"constants": len(CONSTANTS), "scales": len(SCALES), "sigma": st.n_phases, "dur": st.n_phases,
+             "fd": st.n_phases * nq, "weights": 5}
+    out, k = {}, 0
+    for name, size in sizes.items():
+        out[name] = slice(k, k + size)
+        k += size
+    return out
+
+
+@dataclass
+class FlatProgram:
+    """A built flat NLP: ``x = (stretch (P,), c (P * n_coef,))``; ``g = (current, voltage at the check points,
+    each (P * n_check,), scaled by the limits; continuity equalities)``."""
+
+    structure: FlatStructure
+    solver: ca.Function
+    n_params: int
+    n_check: int
+    n_cont: int
+    deadline: col._Deadline
+    build_s: float
+    lock: threading.Lock
+
+    @property
+    def n_x(self) -> int:
+        return self.structure.n_phases * (1 + self.structure.n_coef)
+
+    def pack(self, **named: np.ndarray | float | tuple[float, ...]) -> np.ndarray:
+        """The parameter vector from its named parts (:func:`param_slices`), each checked for its size."""
+        p = np.empty(self.n_params)
+        for name, sl in param_slices(self.structure).items():
+            part = np.ravel(np.asarray(named[name], float))
+            if part.size != sl.stop - sl.start:
+                raise ValueError(f"parameter {name!r} has {part.size} values; the program takes {sl.stop - sl.start}")
+            p[sl] = part
+        return p
+
+    def g_bounds(self, current: float, voltage: float) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds of ``g``: |i| / scale <= ``current``, |V| / scale <= ``voltage`` (scaled), continuity = 0."""
+        P = self.structure.n_phases
+        ub = np.concatenate([np.full(P * self.n_check, current), np.full(P * self.n_check, voltage),
+                             np.zeros(self.n_cont)])
+        lb = -ub
+        return lb, ub
+
+
+def _phase_terms(st: FlatStructure, c: ca.SX, h: ca.SX, sigma: ca.SX, k: dict[str, ca.SX], ws: ca.SX,
+                 tables: dict[str, list[np.ndarray]]) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
+    """(current (n_check,), voltage (n_check,), speed at the Gauss points (nq,), control at the midpoints
+    (intervals,)) of one phase, SI; ``c`` its scaled coefficients, ``h`` its length [s]."""
+    def derivs(name: str, upto: int) -> list[ca.SX]:
+        return [ca.mtimes(_sparse(tables[name][r]), c) * ws / h**r for r in range(upto + 1)]
+
+    wc = [*derivs("check", 2), ca.SX(0.0)]
+    i_v = drive(wc, k, sigma, 0)
+    wm = derivs("mid", st.chain + 2) + [ca.SX(0.0)] * (2 - st.chain)
+    u = drive(wm, k, sigma, st.chain)[1 + st.chain]
+    wq = ca.mtimes(_sparse(tables["quad"][0]), c) * ws
+    return i_v[0], i_v[1], wq, u
+
+
+def _sparse(table: np.ndarray) -> ca.DM:
+    """A basis table as a sparse constant (a B-spline's local support: DEGREE + 1 nonzeros a row)."""
+    return ca.sparsify(ca.DM(np.where(np.abs(table) > 1e-14 * np.max(np.abs(table)), table, 0.0)))
+
+
+def build(st: FlatStructure) -> FlatProgram:
+    """Build the flat NLP of structure ``st`` (tens of milliseconds; then cached by :func:`program_for`)."""
+    started = time.perf_counter()
+    P, nc = st.n_phases, st.n_coef
+    pts = points(st.spans)
+    tables = {name: [basis(st.spans, pts[name], r) for r in range(5)] for name in ("check", "quad", "mid")}
+    ends = {side: [basis(st.spans, np.array([side]), r) for r in range(4)] for side in (0.0, 1.0)}
+    ps = param_slices(st)
+    n_par = max(s.stop for s in ps.values())
+    par = ca.SX.sym("p", n_par)
+    k = dict(zip(CONSTANTS, ca.vertsplit(par[ps["constants"]]), strict=True))
+    sc = dict(zip(SCALES, ca.vertsplit(par[ps["scales"]]), strict=True))
+    sigma, dur = par[ps["sigma"]], par[ps["dur"]]
+    fd = ca.reshape(par[ps["fd"]], st.spans * GAUSS, P)
+    w_track, _, w_stretch, w_smooth, w_effort = (par[ps["weights"]][r] for r in range(5))
+    stretch = ca.SX.sym("stretch", P)
+    coef = [ca.SX.sym(f"c{j}", nc) for j in range(P)]
+    total = ca.sum1(dur)
+    g_i, g_v, u_all = [], [], []
+    f_track = ca.SX(0.0)
+    weight = ca.DM(pts["weight"])
+    for j in range(P):
+        h = stretch[j] * dur[j]
+        cur, volts, wq, u = _phase_terms(st, coef[j], h, sigma[j], k, sc["w"], tables)
+        g_i.append(cur / sc["i"])
+        g_v.append(volts / sc["v"])
+        u_all.append(u / sc["u"])
+        # eq:thrust_model  F = c_f w|w| = c_f sigma w^2 in phase j
+        err = k["c_f"] * sigma[j] * wq**2 / sc["f"] - fd[:, j]
+        f_track += dur[j] / total * ca.dot(weight, err**2)
+    g_cont = _continuity(st, coef, stretch * dur, ends)
+    u_vec = ca.vertcat(*u_all)
+    # the Radau program's sum over its P N intervals of (u_{k+1} - u_k)^2 / (P N) and u_k^2 / (P N), from one
+    # sample a span: a difference across a span is N / spans of the Radau program's, squared, over spans / N terms
+    ratio = st.spans / st.intervals
+    obj = (w_track * f_track + w_stretch * ca.dot(stretch - 1, dur) / total
+           + w_smooth * ratio * ca.sumsqr(u_vec[1:] - u_vec[:-1]) / (P * st.intervals)
+           + w_effort * ca.sumsqr(u_vec) / (P * st.spans))
+    nlp = {"x": ca.vertcat(stretch, *coef), "f": obj, "g": ca.vertcat(*g_i, *g_v, *g_cont), "p": par}
+    deadline = col._Deadline()
+    solver = ca.nlpsol("flat", "ipopt", nlp, {**col.solver_options(), **IPOPT_OPTIONS,  # type: ignore[dict-item]
+                                              "iteration_callback": deadline})
+    return FlatProgram(structure=st, solver=solver, n_params=n_par, n_check=pts["check"].size,
+                       n_cont=len(g_cont), deadline=deadline, build_s=time.perf_counter() - started,
+                       lock=threading.Lock())
+
+
+def continuity_orders(st: FlatStructure) -> list[int]:
+    """Derivative orders of omega that must be continuous (physical time) across a reversal: the current
+    (omega'), a continuous voltage (omega''), a C^1 voltage (omega'''); the ones order 6 makes zero are bounds."""
+    wanted = list(range(1, st.chain + 2))
+    return [r for r in wanted if not (st.order6 and r <= 2)]
+
+
+def _continuity(st: FlatStructure, coef: list[ca.SX], h: ca.SX,
+                ends: dict[float, list[np.ndarray]]) -> list[ca.SX]:
+    """omega^(r) (left end of phase j) h_{j+1}^r = omega^(r) (right start of phase j+1) h_j^r, per order r."""
+    out = []
+    for j in range(st.n_phases - 1):
+        for r in continuity_orders(st):
+            left = ca.mtimes(ca.DM(ends[1.0][r]), coef[j])
+            right = ca.mtimes(ca.DM(ends[0.0][r]), coef[j + 1])
+            out.append(left * h[j + 1] ** r - right * h[j] ** r)
+    return out
+
+
+_CACHE: dict[FlatStructure, FlatProgram] = {}
+_CACHE_LOCK = threading.Lock()
+
+
+def program_for(st: FlatStructure) -> tuple[FlatProgram, float]:
+    """The cached flat program of ``st`` (built on first use; least recently used evicted) and the time [s]
+    this call spent building it (0 when cached)."""
+    with _CACHE_LOCK:
+        prog = _CACHE.pop(st, None)
+        if prog is not None:
+            _CACHE[st] = prog
+            return prog, 0.0
+    prog = build(st)
+    with _CACHE_LOCK:
+        while len(_CACHE) >= CACHE_SIZE:
+            _CACHE.pop(next(iter(_CACHE)))
+        _CACHE[st] = prog
+    return prog, prog.build_s
+
+
+def clear_cache() -> None:
+    """Forget every built flat program (benchmarks)."""
+    with _CACHE_LOCK:
+        _CACHE.clear()
+
+
+def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray,
+          g_bounds: tuple[np.ndarray, np.ndarray], until: float = math.inf) -> col.Solved:
+    """One IPOPT run of the flat program, stopped once ``perf_counter()`` passes ``until`` [s]. Thread-safe."""
+    with prog.lock:
+        prog.deadline.until = until
+        t0 = time.perf_counter()
+        try:
+            sol = prog.solver(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=g_bounds[0], ubg=g_bounds[1])
+        finally:
+            prog.deadline.until = math.inf
+        solve_time = time.perf_counter() - t0
+        stats = prog.solver.stats()
+    status = str(stats.get("return_status", "unknown"))
+    g = np.asarray(sol["g"]).ravel()
+    viol = float(np.max(np.maximum(g - g_bounds[1], g_bounds[0] - g), initial=0.0))
+    return col.Solved(x=np.asarray(sol["x"]).ravel(), status=status,
+                      success=bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level",
+                      iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]),
+                      constraint_violation=viol, solve_time_s=solve_time)

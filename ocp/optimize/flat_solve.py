@@ -1,0 +1,248 @@
+"""Problem -> the flat program's answer: where it applies, its data, its solve and the verified answer.
+
+:func:`applies` says why the flat program (:mod:`ocp.optimize.flat`) cannot serve a problem (``None``: it can);
+:func:`solve_flat` resolves the mission's limits into scaled bounds and parameters, solves the cached program
+from the static inverse, and returns the same :class:`~ocp.optimize.result.OptimizeResult` as the Radau
+program (reference, command, fine arrays, verification), or :class:`~ocp.optimize.result.Unsolved` with the
+reason; :mod:`ocp.optimize.solve` then falls back to the Radau program.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import cast
+
+import numpy as np
+from scipy.interpolate import BSpline
+
+from ocp.model.equilibrium import equilibrium, speed_for_thrust
+from ocp.model.plant import DCMotorPlant
+from ocp.optimize import flat
+from ocp.optimize.collocation import SolveContext
+from ocp.optimize.data import WEIGHTS
+from ocp.optimize.mission import output_grid
+from ocp.optimize.problem import Problem, Scales, chain_order, crossing_order, scales
+from ocp.optimize.result import Crossing, OptimizeResult, SolverProgram, SolverStats, Status, Unsolved
+from ocp.optimize.solution import package
+
+#: the smooth voltage is held on pieces (of at least 1/SUBSTEPS of the 1 kHz output step) over which it moves by
+#: about COMMAND_DV of its limit (:func:`held_command`): the response's current stays within ~COMMAND_DV V/R of
+#: the plan, and a hold is one piece (a replay of the command meets few discontinuities)
+COMMAND_DV, SUBSTEPS = 2e-3, 4
+SPANS_PER_INTERVALS = 3  # one B-spline span per this many Radau intervals of a phase ...
+SPANS = (8, 20)  # ... between these (per phase)
+NO_CONTEXT = SolveContext()
+ROUNDS = 2  # back-off rounds of the flat program before the Radau program is asked
+
+
+def applies(problem: Problem) -> str | None:
+    """Why the flat program cannot serve ``problem`` (``None``: it can): it needs the nominal voltage-driven
+    DC motor (no effects: a delay, a deadband or a stateful effect has no explicit flat inverse here), a
+    tracking objective and no voltage slew limit."""
+    m, plant = problem.mission, problem.plant
+    if m.objective != "track":
+        return "min-time missions use the Radau program (mesh refinement)"
+    if not (plant.voltage_driven and plant.is_nominal and isinstance(plant, DCMotorPlant)):
+        return "the flat inverse is written for the plain voltage-driven DC motor"
+    if m.limits.voltage_rate is not None:
+        return "a voltage slew limit is kept by the Radau program"
+    return None
+
+
+def structure_of(problem: Problem) -> flat.FlatStructure:
+    """The flat structure of ``problem``: its phases, spans per phase, the Radau intervals and chain, order."""
+    st = problem.structure
+    spans = int(np.clip(math.ceil(st.intervals / SPANS_PER_INTERVALS), *SPANS))
+    return flat.FlatStructure(n_phases=st.n_phases, spans=spans, intervals=st.intervals, chain=chain_order(
+        problem.mission), order6=crossing_order(problem.mission) == 6)
+
+
+@dataclass(frozen=True)
+class FlatData:
+    """One solve's data (scaled): parameters ``p``, bounds ``lbx``/``ubx`` and guess ``x0`` (n_x,), the scales,
+    the initial state ``x_start`` (omega [rad/s], current [A])."""
+
+    p: np.ndarray
+    lbx: np.ndarray
+    ubx: np.ndarray
+    x0: np.ndarray
+    scales: Scales
+    x_start: np.ndarray
+
+
+def flat_data(problem: Problem, prog: flat.FlatProgram) -> FlatData | None:
+    """Parameters, bounds and the static-inverse guess; ``None`` when the initial thrust breaks a limit (the
+    Radau path reports it)."""
+    m, plant, st = problem.mission, cast(DCMotorPlant, problem.plant), prog.structure
+    mp, lim, dur = m.motor(), m.limits, problem.phases.durations
+    x_start, u0 = equilibrium(plant, speed_for_thrust(plant, float(problem.f_desired[0]), mp.c_f))
+    if abs(u0) > lim.voltage or abs(x_start[1]) > lim.current:
+        return None
+    w_full = math.sqrt(max(float(np.max(np.abs(problem.f_desired))), 1e-6) / mp.c_f)
+    sc = scales(problem, equilibrium(plant, w_full)[0])
+    pts = flat.points(st.spans)
+    fd = np.array([np.interp(problem.phases.bounds[j] + pts["quad"] * dur[j], problem.t_desired, problem.f_desired)
+                   for j in range(st.n_phases)]) / sc.f  # (P, nq)
+    p = prog.pack(constants=np.array([getattr(mp, k) for k in flat.CONSTANTS], float),
+                  scales=np.array([sc.x[0], sc.f, lim.current, lim.voltage, sc.u], float),
+                  sigma=problem.phases.signs, dur=dur, fd=fd, weights=WEIGHTS[m.objective])
+    lbx, ubx = _bounds(problem, st, sc.x[0], x_start[0])
+    x0 = _guess(problem, st, fd * sc.f / mp.c_f, sc.x[0], lbx, ubx)
+    return FlatData(p=p, lbx=lbx, ubx=ubx, x0=x0, scales=sc, x_start=x_start)
+
+
+def _bounds(problem: Problem, st: flat.FlatStructure, ws: float, w0: float) -> tuple[np.ndarray, np.ndarray]:
+    """Stretch bounds, then per phase the coefficient bounds (sign, speed limit, start, reversal), scaled."""
+    m, P, nc = problem.mission, st.n_phases, st.n_coef
+    w_max = (m.limits.speed if m.limits.speed is not None else np.inf) / ws
+    lo = np.where(problem.phases.signs > 0, 0.0, -w_max)
+    hi = np.where(problem.phases.signs > 0, w_max, 0.0)
+    lbc, ubc = np.repeat(lo[:, None], nc, axis=1), np.repeat(hi[:, None], nc, axis=1)  # (P, nc)
+    # start at the equilibrium: omega(0) = w0 and its first 1 + chain derivatives zero
+    lbc[0, : 2 + st.chain] = ubc[0, : 2 + st.chain] = w0 / ws
+    # reversal: omega = 0 (order 6: with omega' and omega'') at both sides of each boundary
+    zero = 3 if st.order6 else 1
+    lbc[:-1, nc - zero:] = ubc[:-1, nc - zero:] = 0.0
+    lbc[1:, :zero] = ubc[1:, :zero] = 0.0
+    lbx = np.concatenate([np.full(P, m.retiming.min_stretch), lbc.ravel()])
+    ubx = np.concatenate([np.full(P, m.retiming.max_stretch), ubc.ravel()])
+    return lbx, ubx
+
+
+def _guess(problem: Problem, st: flat.FlatStructure, w2: np.ndarray, ws: float, lbx: np.ndarray,
+           ubx: np.ndarray) -> np.ndarray:
+    """Static inverse: per phase the least-squares spline through sigma sqrt(|F_d| / c_f) at the Gauss points
+    (``w2`` (P, nq): desired thrust / c_f [rad^2/s^2]); stretch 1; clipped into the bounds."""
+    quad = flat.quad_basis(st.spans)
+    speed = problem.phases.signs[:, None] * np.sqrt(np.abs(w2)) / ws
+    coef = np.linalg.lstsq(quad, speed.T, rcond=None)[0].T  # (P, nc)
+    return np.clip(np.concatenate([np.ones(st.n_phases), coef.ravel()]), lbx, ubx)
+
+
+def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT) -> OptimizeResult | Unsolved:
+    """The flat program's verified answer to ``problem`` (:func:`applies` must be ``None``), or why not.
+
+    When the simulated response exceeds the current or the voltage limit, that channel's bound at the check
+    points is backed off by the excess (plus 20 %) and the program solved again from its answer, at most
+    :data:`ROUNDS` times; the caller falls back to the Radau program when it still does."""
+    st = structure_of(problem)
+    prog, build_s = flat.program_for(st)
+    data = flat_data(problem, prog)
+    if data is None:
+        return Unsolved("the initial thrust needs more than the limits")
+    m = problem.mission
+    until = min(time.perf_counter() + m.time_limit_s, context.deadline)
+    bound = np.full(2, 1.0 - flat.MARGIN)  # current, voltage at the check points (fractions of the limits)
+    x0, info = data.x0, SolverStats(build_time_s=build_s, program=SolverProgram.FLAT)
+    for rounds in range(ROUNDS + 1):
+        run = flat.solve(prog, data.p, data.lbx, data.ubx, x0, prog.g_bounds(*bound), until)
+        _add_run(info, run, rounds, float(np.min(bound) / (1.0 - flat.MARGIN)))
+        if not run.success:
+            return Unsolved(f"flat program: IPOPT {run.status}", info)
+        t0 = time.perf_counter()
+        result = _answer(problem, st, run.x, data, info)
+        info.verify_time_s += time.perf_counter() - t0
+        ratios = problem.plant.limit_ratios(result.fine, m.bounds())
+        excess = np.array([np.max(ratios["limits.current"]), np.max(ratios["limits.voltage"])])
+        if result.path_ok or not np.all(np.isfinite(excess)):
+            return result if result.path_ok else Unsolved("flat program: the simulated response diverged", info)
+        bound = np.where(excess > 1.0, bound / (1.0 + 1.2 * (excess - 1.0)), bound)
+        x0 = run.x
+    return Unsolved(f"flat program: a limit is exceeded between the check points after {ROUNDS} back-off rounds",
+                    info)
+
+
+def _add_run(info: SolverStats, run: flat.col.Solved, rounds: int, backoff: float) -> None:
+    """Fold one IPOPT run into the answer's report (times and iterations add up over the rounds)."""
+    info.status = Status.parse(run.status)
+    info.iterations += run.iterations
+    info.solve_time_s += run.solve_time_s
+    info.objective, info.constraint_violation = run.objective, run.constraint_violation
+    info.backoff_rounds, info.limit_backoff = rounds, backoff
+
+
+@dataclass(frozen=True)
+class FlatPlan:
+    """A solved flat program as functions of time: the speed splines (SI) per phase and the phase edges [s]."""
+
+    splines: list[BSpline]
+    phase_edges: np.ndarray
+    signs: np.ndarray
+    constants: dict[str, float]
+
+    def derivatives(self, t: np.ndarray, upto: int = 2) -> tuple[list[np.ndarray], np.ndarray]:
+        """(omega and its first ``upto`` time derivatives at ``t`` (M,), each (M,); the speed sign (M,))."""
+        P = len(self.splines)
+        j = np.clip(np.searchsorted(self.phase_edges, t, side="right") - 1, 0, P - 1)
+        h = np.diff(self.phase_edges)
+        tau = np.clip((t - self.phase_edges[j]) / h[j], 0.0, 1.0)
+        out = [np.zeros_like(t) for _ in range(upto + 1)]
+        for k in range(P):
+            sel = j == k
+            for r in range(upto + 1):
+                spline = self.splines[k].derivative(r) if r else self.splines[k]
+                out[r][sel] = spline(tau[sel]) / h[k] ** r
+        return out, self.signs[j]
+
+    def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(states (omega [rad/s], current [A]) shape (2, M), voltage [V] (M,)) at ``t`` (M,)."""
+        w, sign = self.derivatives(t)
+        cur, volts = flat.drive([*w, np.zeros_like(t)], dict(self.constants), sign, 0)
+        return np.vstack([w[0], cur]), volts
+
+
+def plan_of(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatData) -> FlatPlan:
+    """The solved flat program ``x`` (n_x,) as functions of time (SI)."""
+    P, nc = st.n_phases, st.n_coef
+    mp = problem.mission.motor()
+    h = x[:P] * problem.phases.durations
+    coef = x[P:].reshape(P, nc) * data.scales.x[0]
+    return FlatPlan(splines=[BSpline(flat.knots(st.spans), coef[j], flat.DEGREE) for j in range(P)],
+                    phase_edges=np.concatenate([[0.0], np.cumsum(h)]), signs=problem.phases.signs,
+                    constants={k: float(getattr(mp, k)) for k in flat.CONSTANTS})
+
+
+def _answer(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatData,
+            info: SolverStats) -> OptimizeResult:
+    """Package the solved flat program: the smooth voltage held (:data:`COMMAND_DV`), simulated."""
+    plan = plan_of(problem, st, x, data)
+    edges = plan.phase_edges
+    t = output_grid(float(edges[-1]))
+    knots, u_knots = held_command(plan, t, COMMAND_DV * data.scales.u_lim)
+    return package(problem, plan.states, edges, (knots, u_knots), data.x_start, _crossings(plan, data), info)
+
+
+def held_command(plan: FlatPlan, t: np.ndarray, dv: float) -> tuple[np.ndarray, np.ndarray]:
+    """The plan's smooth voltage as a held command: (knots (K+1,) [s], values (K,) [V]). On a grid of SUBSTEPS
+    pieces per output step ``t`` (M,) [s] (and the phase edges), a piece ends where the voltage moves to another
+    multiple of ``dv`` [V] (rounded), or at a phase edge; each piece holds the voltage's mean over it. A hold
+    needs one piece, a reversal as many as its voltage's variation over ``dv``."""
+    frac = np.arange(SUBSTEPS) / SUBSTEPS
+    grid = np.union1d(np.append((t[:-1, None] + frac[None, :] * np.diff(t)[:, None]).ravel(), t[-1]),
+                      plan.phase_edges)
+    dt = np.diff(grid)
+    v = plan.states(0.5 * (grid[:-1] + grid[1:]))[1]
+    level = np.round(v / dv)
+    cut = np.flatnonzero(np.diff(level) != 0) + 1  # a piece starts at these grid steps
+    at_edges = np.searchsorted(grid, plan.phase_edges[1:-1])
+    starts = np.union1d(np.concatenate([[0], cut, at_edges]), []).astype(int)
+    held = np.add.reduceat(v * dt, starts) / np.add.reduceat(dt, starts)
+    return np.append(grid[starts], grid[-1]), held
+
+
+def _crossings(plan: FlatPlan, data: FlatData) -> list[Crossing]:
+    """Local exponent at each reversal: 2 + 2n with n the leading links of (current, voltage) that vanish
+    (below 1e-6 of their limits) just after the crossing; with the planned current and voltage there."""
+    out = []
+    scale = np.array([data.scales.x[1], data.scales.u_lim])  # the current and voltage limits [A], [V]
+    for ts in plan.phase_edges[1:-1]:
+        x, v = plan.states(np.array([ts]))  # at tau = 0 of the next phase
+        links = np.abs([x[1, 0], v[0]]) / scale
+        n = 0
+        while n < 2 and links[n] <= 1e-6:
+            n += 1
+        out.append(Crossing(t=float(ts), exponent=float(2 * n + 2), sign_change=True, current=float(x[1, 0]),
+                            voltage=float(v[0])))
+    return out
