@@ -14,7 +14,6 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ocp.errors import MissionError
-from ocp.model.plant import DCMotorPlant
 from ocp.optimize import collocation as col
 from ocp.optimize.collocation import ipopt_options
 from ocp.optimize.data import problem_data
@@ -26,6 +25,7 @@ from ocp.reference.fallback import design_sin
 from ocp.reference.fallback_answer import analytic_fallback
 from ocp.theory.crossings import classify_profile
 from ocp.theory.reversal import UNBOUNDED, ReversalRegularity
+from tests.motor_ode import dc_motor_ode
 
 EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
 SINE = {"name": "sine", "limits": {"voltage": 12.0, "current": 1.0},
@@ -37,11 +37,7 @@ def _scipy_replay(result, params, t_eval):
     piece: each piece is a smooth problem (a smooth voltage returned as a held command has hundreds of pieces, and
     one solve across all their jumps took minutes). Returns (current (M,), thrust (M,)) on ``t_eval`` (M,)."""
     ct, cv = result.arrays["command_t"], result.arrays["command"]
-    plant = DCMotorPlant(params)
-    p = params
-
-    def jac(_t, y):  # of J w' = k_t i - B w - c_tau w|w|, L i' = V - R i - k_e w
-        return [[-(p.B + 2 * p.c_tau * abs(y[0])) / p.J, p.k_t / p.J], [-p.k_e / p.L, -p.R / p.L]]
+    rhs, jac = dc_motor_ode(params)
 
     x = np.array([result.arrays["omega"][0], result.arrays["current"][0]], float)
     out = np.empty((2, t_eval.size))
@@ -49,8 +45,8 @@ def _scipy_replay(result, params, t_eval):
     for a, b in itertools.pairwise(cuts):
         volts = float(cv[min(max(int(np.searchsorted(ct, 0.5 * (a + b), side="right")) - 1, 0), cv.size - 1)])
         inside = (t_eval >= a) & (t_eval < b)
-        sol = solve_ivp(lambda _t, y, v=volts: plant.rhs(list(y), v), (a, b), x, method="Radau", jac=jac,
-                        t_eval=np.append(t_eval[inside], b), rtol=1e-9, atol=1e-10)
+        sol = solve_ivp(rhs, (a, b), x, method="Radau", jac=jac, args=(volts,), t_eval=np.append(t_eval[inside], b),
+                        rtol=1e-9, atol=1e-10)
         assert sol.success
         out[:, inside] = sol.y[:, :-1]
         x = sol.y[:, -1]

@@ -14,28 +14,15 @@ from ocp.optimize.mission import mission_from_mapping
 from ocp.optimize.result import SolverProgram
 from ocp.optimize.solve import optimize
 from ocp.optimize.verify import sim_step, simulate_response
+from tests.motor_ode import dc_motor_ode
 
 EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
-
-
-def _dc_motor(p):
-    """The DC motor with its propeller written out here (eq. dc_mechanical, eq. dc_electrical), x = (w [rad/s],
-    i [A]), independent of the plant's CasADi expressions: right-hand side and Jacobian for scipy."""
-    def rhs(_t, z, v):
-        w, i = z
-        return [(p.k_t * i - p.B * w - p.c_tau * w * abs(w)) / p.J, (v - p.R * i - p.k_e * w) / p.L]
-
-    def jac(_t, z, v):
-        w = z[0]
-        return [[-(p.B + 2.0 * p.c_tau * abs(w)) / p.J, p.k_t / p.J], [-p.k_e / p.L, -p.R / p.L]]
-
-    return rhs, jac
 
 
 def _reference(params, knots, u, x0, t_out, method="Radau"):
     """scipy's integrator restarted at every knot, tight tolerances: the oracle. Radau IIA (implicit,
     stiff-stable) by default; DOP853 (explicit, order 8) for a non-stiff winding, ten times faster there."""
-    rhs, jac = _dc_motor(params)
+    rhs, jac = dc_motor_ode(params)
     out = np.empty((len(x0), t_out.size))
     x = np.asarray(x0, float)
     for k in range(u.size):
