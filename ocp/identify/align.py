@@ -33,6 +33,8 @@ from ocp.logs import Log, LogKind
 #: finest lag step [samples] and the search range [samples]
 LAG_STEP = 0.125
 MAX_LAG = 24.0
+#: the fraction of a sample a drive's update instant adds to the logging skew (the rule, module doc)
+SKEW_FRACTION = 0.75
 
 
 @dataclass(frozen=True)
@@ -98,8 +100,8 @@ def _residual(target: np.ndarray, gram: np.ndarray, cross: np.ndarray, cols: np.
 
 def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
     """Alignment of a time-series log (see module doc); steady-state sweeps have none."""
-    rule = (f"lags up to {max_logging_skew:g} + 0.75 samples are logging conventions, removed and reported; "
-            "a longer lag is an input_delay (the whole lag)")
+    rule = (f"lags up to {max_logging_skew:g} + {SKEW_FRACTION:g} samples are logging conventions, removed and "
+            "reported; a longer lag is an input_delay (the whole lag)")
     if log.kind is LogKind.STEADY_STATE:
         return Alignment(0.0, 0.0, False, rule)
     dt = log.dt
@@ -112,20 +114,41 @@ def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
     lags = np.arange(0.0, MAX_LAG + 1e-9, LAG_STEP)
     gram, cross = np.einsum("mp,mq->pq", cols, cols), np.einsum("mp,m->p", cols, i[k + 1])
     res = np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k]) for lag in lags])
+    samples, sharp = _pick(lags, res)
+    if not sharp:
+        rule += "; here the lag is not identifiable (flat residual), none is assumed"
+    curve = (tuple(float(x) for x in lags), tuple(float(x / (np.std(i) or 1.0)) for x in res))
+    return Alignment(float(samples), float(samples * dt), bool(samples > max_logging_skew + SKEW_FRACTION), rule,
+                     curve)
+
+
+def _pick(lags: np.ndarray, res: np.ndarray) -> tuple[float, bool]:
+    """The lag [samples] of the smallest residual on the grid ``lags`` (K,), refined by a parabola through its
+    neighbours, and whether the minimum is sharp (the residual rises by >= 1 % one sample either side);
+    0 when it is not."""
     j = int(np.argmin(res))
     lag = float(lags[j])
     if 0 < j < lags.size - 1:  # parabola through the neighbours
         den = res[j - 1] - 2 * res[j] + res[j + 1]
         if den > 0:
             lag += 0.5 * LAG_STEP * (res[j - 1] - res[j + 1]) / den
-    samples = max(lag, 0.0)
-    one = round(1.0 / LAG_STEP)  # a sharp minimum: the residual rises by >= 1 % one sample either side
+    one = round(1.0 / LAG_STEP)
     side = [res[x] for x in (j - one, j + one) if 0 <= x < lags.size]
-    if not (side and min(side) >= 1.01 * res[j]):
-        samples = 0.0
-        rule += "; here the lag is not identifiable (flat residual), none is assumed"
-    curve = (tuple(float(x) for x in lags), tuple(float(x / (np.std(i) or 1.0)) for x in res))
-    return Alignment(float(samples), float(samples * dt), bool(samples > max_logging_skew + 0.75), rule, curve)
+    sharp = bool(side and min(side) >= 1.01 * res[j])
+    return (max(lag, 0.0) if sharp else 0.0), sharp
+
+
+def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
+    """``align`` restricted to what logging conventions explain (lags up to ``max_logging_skew`` + 0.75
+    samples): the best lag of its search curve there, never a delay (a longer lag was not confirmed)."""
+    lags, res = (np.asarray(x, float) for x in align.curve)
+    keep = lags <= max_logging_skew + SKEW_FRACTION + 1e-9
+    if not keep.any():
+        return Alignment(0.0, 0.0, False, align.rule, align.curve)
+    samples, _ = _pick(lags[keep], res[keep])
+    return Alignment(samples, samples * dt, False, align.rule + f"; the {align.samples:.2f}-sample lag of the "
+                     "search did not predict the held-out data better than one within the conventions, so the "
+                     "best lag within them is used and no input_delay is called", align.curve)
 
 
 def realign(log: Log, samples: float) -> Log:

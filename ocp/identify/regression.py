@@ -90,7 +90,9 @@ class Design:
     periods: int = 0
     spectrum: list[float] = field(default_factory=list)
     unresolved: dict[str, str] = field(default_factory=dict)
-    independence: float = 1.0  # fraction of rows that are independent (low-passed rows are correlated)
+    #: (3,) per equation, the fraction of rows that are independent (low-passed rows are correlated; the
+    #: torque rows' speed view remembers a rotor time constant)
+    independence: np.ndarray = field(default_factory=lambda: np.ones(3))
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
@@ -316,9 +318,16 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
     return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
-                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log),
-                  1.0 if s.dt == 0 else min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt,
-                                            s.dt / (2.0 * tau) if tau > 0 else 1.0))  # (speed view's memory)
+                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log), _independence(p, log, s, tau))
+
+
+def _independence(p: MotorParams, log: Log, s: Signals, tau: float) -> np.ndarray:
+    """(3,) fraction of independent rows per equation: ``2 f_c dt`` after the low-pass (cutoff ``f_c`` [Hz]),
+    and for the torque rows at most ``dt / (2 tau)`` (the speed view's memory, ``tau`` [s]); 1 on a sweep."""
+    if s.dt == 0:
+        return np.ones(3)
+    low = min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt)
+    return np.array([min(low, s.dt / (2.0 * tau) if tau > 0 else 1.0), low, low])
 
 
 def unresolved(p: MotorParams, log: Log) -> dict[str, str]:

@@ -143,7 +143,7 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
         if progress is not None:
             progress((r + 1) / (max_items + 1))
         ok = bool(tried) and _worst(design, current) > noise_floor \
-            and tried[0][1].score <= (1 - max(min_improvement, _scatter(design))) * current.score
+            and tried[0][1].score <= (1 - max(min_improvement, _scatter(design, current))) * current.score
         steps.append(Step(current, tried, tried[0][0] if ok else None))
         if not ok:
             break
@@ -152,11 +152,17 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
     return Selection(current, steps, _challenge(design, items, pool, current, tol, margin))
 
 
-def _scatter(design: Design) -> float:
-    """Two standard errors of a held-out RMS over its independent rows, ``2 / sqrt(2 n)`` (relative): a
-    smaller fall of the score is sampling noise (low-passed rows are correlated, :attr:`Design.independence`)."""
+def _scatter(design: Design, f: Fitted) -> float:
+    """Two standard errors of the held-out score of ``f`` (relative): a smaller fall of the score is sampling
+    noise. Each equation's mean square over ``n`` independent rows scatters by ``sqrt(2 / n)`` (relative);
+    the score ``sqrt(mean_e MS_e)`` by half the relative scatter of ``mean_e MS_e``, so the equation that
+    dominates the score sets it (low-passed rows are correlated: :attr:`Design.independence`)."""
     live = design.n_test > 0
-    return 2.0 / math.sqrt(2.0 * max(float(design.n_test[live].sum()) * design.independence, 1.0))
+    ms = f.per_eq[live] ** 2
+    n = np.maximum(design.n_test[live] * design.independence[live], 1.0)
+    if not live.any() or ms.sum() <= 0:
+        return 2.0 / math.sqrt(2.0 * max(float(n.sum()), 1.0))
+    return float(np.sqrt(np.sum(ms * ms * 2.0 / n)) / ms.sum())
 
 
 def _worst(design: Design, f: Fitted) -> float:
@@ -171,7 +177,7 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
     """Adopted items that another item explains as well on held-out data: within ``margin``, or within the
     held-out score's own sampling scatter (two standard errors of an RMS over the independent held-out
     rows, ``2 / sqrt(2 n)``), whichever is wider."""
-    margin = max(margin, _scatter(design))
+    margin = max(margin, _scatter(design, best))
     out = []
     for a, b in itertools.product(items, pool):
         if b in items:
