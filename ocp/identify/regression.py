@@ -197,6 +197,11 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
     if name == "stribeck":
         return [(Column(name, "tau_s", ws), _effect(name, {"tau_s": 1.0, "omega_s": ws}, p, s))
                 for ws in _grid(0.003 * w_peak, 0.15 * w_peak)]
+    if name == "brush_drop":  # the drop follows the current's sign, and while |V - k_e w| < v_b no current
+        u = s.v - p.k_e * s.w  # flows: the drop is V - k_e w there, so clip(V - k_e w, +-v_b) (quasi-static)
+        z = np.zeros_like(s.w)
+        return [(Column(name, "v_b", vb), np.vstack([z, np.clip(u, -vb, vb) / vb, z]))
+                for vb in _grid(0.005 * v_peak, 0.3 * v_peak)]
     if name == "voltage_deadband":
         return [(Column(name, "v_db", vd), _effect(name, {"v_db": vd}, p, s) / vd)
                 for vd in _grid(0.005 * v_peak, 0.3 * v_peak)]

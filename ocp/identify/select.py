@@ -80,7 +80,7 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float) -> F
     y = np.linalg.solve(gs, h / d)  # unconstrained first; bounded only when a bound binds
     if not np.all(np.isfinite(y)) or np.any(y < lo * d) or np.any(y > hi * d):  # (near-singular: bounded too)
         y = lsq_linear(r, np.linalg.solve(r.T, h / d), bounds=(lo * d, hi * d), method="bvls").x
-    x = y / d
+    x = np.where(d > 1e-9 * d.max(), y / d, 0.0)  # a column the log leaves empty (L far under a sample): 0
     cost = float(design.c_train.sum() - 2 * h @ x + x @ g @ x)
     ms = np.array([(design.c_test[e] - 2 * design.h_test[e][idx] @ x + x @ design.g_test[e][np.ix_(idx, idx)] @ x)
                    / max(design.n_test[e], 1) for e in range(3)])
