@@ -202,8 +202,9 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
         z = np.zeros_like(s.w)
         return [(Column(name, "v_b", vb), np.vstack([z, np.clip(u, -vb, vb) / vb, z]))
                 for vb in _grid(0.005 * v_peak, 0.3 * v_peak)]
-    if name == "voltage_deadband":
-        return [(Column(name, "v_db", vd), _effect(name, {"v_db": vd}, p, s) / vd)
+    if name == "voltage_deadband":  # a driver's dead zone: no output below v_db, the drop clip(V, +-v_db)
+        z = np.zeros_like(s.w)  # (the catalogue's smooth V - v_db tanh(V / v_db) is for the optimiser)
+        return [(Column(name, "v_db", vd), np.vstack([z, np.clip(s.v, -vd, vd) / vd, z]))
                 for vd in _grid(0.005 * v_peak, 0.3 * v_peak)]
     if name == "thrust_lag":
         if log.kind is LogKind.STEADY_STATE:

@@ -11,7 +11,8 @@ Its score is the held-out RMS of the three
 weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise).
 
 Forward selection adopts the item with the best held-out score while some equation's held-out RMS is
-above ``noise_floor`` and the score falls by at least ``min_improvement``. Then every adopted item is challenged: an
+above ``noise_floor`` and the score falls by at least ``min_improvement`` and beyond sampling noise (the
+pooled score's scatter, or one equation's own: :func:`_beyond_scatter`). Then every adopted item is challenged: an
 alternative that swaps it for another item and scores within ``ambiguity_margin`` makes the verdict
 ``ambiguous`` (both candidates and the reason are reported) instead of a confident wrong name.
 """
@@ -143,7 +144,8 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
         if progress is not None:
             progress((r + 1) / (max_items + 1))
         ok = bool(tried) and _worst(design, current) > noise_floor \
-            and tried[0][1].score <= (1 - max(min_improvement, _scatter(design, current))) * current.score
+            and tried[0][1].score <= (1 - min_improvement) * current.score \
+            and _beyond_scatter(design, current, tried[0][1])
         steps.append(Step(current, tried, tried[0][0] if ok else None))
         if not ok:
             break
@@ -152,20 +154,24 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
     return Selection(current, steps, _challenge(design, items, pool, current, tol, margin))
 
 
-def _scatter(design: Design, f: Fitted) -> float:
-    """Two standard errors of the held-out score of ``f`` (relative): a smaller fall of the score is sampling
-    noise. Each equation's mean square over ``n`` independent rows scatters by ``sqrt(2 / n)`` (relative);
-    the score ``sqrt(mean_e MS_e)`` by half the relative scatter of ``mean_e MS_e``, so the equation that
-    dominates the score sets it (low-passed rows are correlated: :attr:`Design.independence`)."""
+def _scatter(design: Design) -> float:
+    """Two standard errors of a held-out RMS over its independent rows, ``2 / sqrt(2 n)`` (relative), the rows of
+    all equations pooled at the torque rows' independence (the fewest): a smaller fall of the score is
+    sampling noise (low-passed rows are correlated, :attr:`Design.independence`)."""
     live = design.n_test > 0
-    ms = f.per_eq[live] ** 2
-    n = np.maximum(design.n_test[live] * design.independence[live], 1.0)
-    pooled = 2.0 / math.sqrt(2.0 * max(float(design.n_test[live].sum() * design.independence.min()), 1.0))
-    if not live.any() or ms.sum() <= 0:
-        return pooled
-    # (at most the count pooled over all equations at the torque rows' independence: the stopping rule's
-    # tuning on the torque equation, seeds 1000..1099, is kept)
-    return min(pooled, float(np.sqrt(np.sum(ms * ms * 2.0 / n)) / ms.sum()))
+    return 2.0 / math.sqrt(2.0 * max(float(design.n_test[live].sum() * design.independence.min()), 1.0))
+
+
+def _beyond_scatter(design: Design, before: Fitted, after: Fitted) -> bool:
+    """Whether ``after``'s held-out fit is better than ``before``'s beyond sampling noise: the score falls by more
+    than :func:`_scatter`, or one equation's held-out RMS falls by more than two standard errors over ITS
+    independent rows (``sqrt(2 / n_e)``): an electrical item need not clear the torque rows' scatter."""
+    if after.score <= (1.0 - _scatter(design)) * before.score:
+        return True
+    live = (design.n_test > 0) & (before.per_eq > 0)
+    n = np.maximum(design.n_test * design.independence, 1.0)
+    fall = 1.0 - after.per_eq[live] / before.per_eq[live]
+    return bool(np.any(fall >= np.sqrt(2.0 / n[live])))
 
 
 def _worst(design: Design, f: Fitted) -> float:
@@ -180,7 +186,7 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
     """Adopted items that another item explains as well on held-out data: within ``margin``, or within the
     held-out score's own sampling scatter (two standard errors of an RMS over the independent held-out
     rows, ``2 / sqrt(2 n)``), whichever is wider."""
-    margin = max(margin, _scatter(design, best))
+    margin = max(margin, _scatter(design))
     out = []
     for a, b in itertools.product(items, pool):
         if b in items:
