@@ -312,7 +312,10 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     # edge rows are zeroed on both sides first (still an equation), so their transients do not spread
     for y in (t, *(a for _, a in cols)):
         y[0] = speed_view(np.where(edge, 0.0, y[0]), s.dt, tau)
-    resid = np.vstack([_rich_residual(t[e], [a[e] for a in rich], train) for e in range(3)])
+    # (the armature and thrust equations keep the motor constant: their measured side does not scale)
+    k_col = [a for c, a in cols if c.item == "k"]
+    resid = np.vstack([_rich_residual(t[e], [a[e] for a in (rich if e == 0 else [*rich, *k_col])], train)
+                       for e in range(3)])
     sigma = np.array([max(float(np.sqrt(np.mean(resid[e][train] ** 2))), 1e-12 * (np.std(t[e]) + 1e-30))
                       for e in range(3)])
     if noise is not None and s.dt > 0:
