@@ -8,15 +8,18 @@ PWM period adds a fraction. The *alignment* is that lag, in samples, beyond the 
 Estimate: the armature equation over one held sample (eq. dc_electrical, exact under a zero-order
 hold) with free coefficients, so wrong nominal constants do not bias it, plus brush-drop, dead-band and
 offset terms: ``i[k+1] = a1 i[k] + a2 V[k - lag] + a3 w[k+1/2] + a4 sign(i) + a5 + a6 sign(V[k - lag])``,
-fitted by least squares (raw samples) for lags on a grid of 1/8 sample; the lag of the smallest residual,
-refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k command drives
-k -> k+1). A minimum that is not sharp (residual within 1 % one sample either side: slow, smooth
+fitted by least squares (raw samples) for whole-sample lags up to :func:`search_range` (24 samples or 5 ms,
+whichever is longer, at most 64 samples), then on a grid of 1/8 sample around the best; the lag of the
+smallest residual, refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k
+command drives k -> k+1). A minimum that is not sharp (residual within 1 % one sample either side: slow, smooth
 excitation) leaves the lag unidentifiable; none is assumed then, and none is called a delay.
 
 Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
 conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
 drive's update instant); it is removed from the log and reported as ``alignment``. Beyond that, the lag is
-a transport delay: ``input_delay`` enters the verdict with ``delay`` = the whole lag [s].
+a transport delay: ``input_delay`` enters the verdict with ``delay`` = the whole lag [s] -- when it predicts
+the held-out data better than the best lag within the conventions (:func:`within`; the test is the
+caller's, :mod:`.diagnose`).
 """
 
 from __future__ import annotations

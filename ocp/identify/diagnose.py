@@ -3,7 +3,8 @@
 Procedure:
 
 1. **Alignment** (:mod:`.align`): the command-to-sensor lag is estimated first and removed; only a lag
-   beyond what logging conventions explain (stated rule there) is called ``input_delay``.
+   beyond what logging conventions explain (stated rule there) is called ``input_delay``, and only when it
+   predicts the held-out speed and current better (by ``min_improvement``) than the best lag within them.
 2. Split the log into segments of ``segment_s`` seconds; every ``holdout_every``-th is held out
    (steady-state sweeps: rows).
 3. **Regression** (:mod:`.regression`): the nominal model's equation residuals against the columns of
