@@ -8,15 +8,18 @@ PWM period adds a fraction. The *alignment* is that lag, in samples, beyond the 
 Estimate: the armature equation over one held sample (eq. dc_electrical, exact under a zero-order
 hold) with free coefficients, so wrong nominal constants do not bias it, plus brush-drop, dead-band and
 offset terms: ``i[k+1] = a1 i[k] + a2 V[k - lag] + a3 w[k+1/2] + a4 sign(i) + a5 + a6 sign(V[k - lag])``,
-fitted by least squares (raw samples) for lags on a grid of 1/8 sample; the lag of the smallest residual,
-refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k command drives
-k -> k+1). A minimum that is not sharp (residual within 1 % one sample either side: slow, smooth
+fitted by least squares (raw samples) for whole-sample lags up to :func:`search_range` (24 samples or 5 ms,
+whichever is longer, at most 64 samples), then on a grid of 1/8 sample around the best; the lag of the
+smallest residual, refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k
+command drives k -> k+1). A minimum that is not sharp (residual within 1 % one sample either side: slow, smooth
 excitation) leaves the lag unidentifiable; none is assumed then, and none is called a delay.
 
 Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
 conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
 drive's update instant); it is removed from the log and reported as ``alignment``. Beyond that, the lag is
-a transport delay: ``input_delay`` enters the verdict with ``delay`` = the whole lag [s].
+a transport delay: ``input_delay`` enters the verdict with ``delay`` = the whole lag [s] -- when it predicts
+the held-out data better than the best lag within the conventions (:func:`within`; the test is the
+caller's, :mod:`.diagnose`).
 """
 
 from __future__ import annotations
@@ -30,9 +33,13 @@ from scipy import signal
 
 from ocp.logs import Log, LogKind
 
-#: finest lag step [samples] and the search range [samples]
+#: finest lag step [samples]; the search range: at least MIN_LAG samples and MIN_LAG_S seconds, at most MAX_LAG
 LAG_STEP = 0.125
-MAX_LAG = 24.0
+MIN_LAG = 24
+MIN_LAG_S = 0.005
+MAX_LAG = 64
+#: the fraction of a sample a drive's update instant adds to the logging skew (the rule, module doc)
+SKEW_FRACTION = 0.75
 
 
 @dataclass(frozen=True)
@@ -79,6 +86,12 @@ def cutoff_hz(log: Log, tau_m: float) -> float:
     return float(np.clip(4.0 / tau_m, 2.0, min(0.15 / log.dt, 400.0)))
 
 
+def search_range(dt: float) -> int:
+    """Longest lag searched [samples]: ``MIN_LAG`` samples or ``MIN_LAG_S`` seconds, whichever is longer, at
+    most ``MAX_LAG`` samples (a fast logger sees a transport delay of a few ms as tens of samples)."""
+    return int(min(max(MIN_LAG, math.ceil(MIN_LAG_S / dt)), MAX_LAG))
+
+
 def _residual(target: np.ndarray, gram: np.ndarray, cross: np.ndarray, cols: np.ndarray, v: np.ndarray) -> float:
     """RMS of the least-squares fit of ``target`` (M,) by ``cols`` (M, P) (Gram ``gram``, ``cross`` = cols' target),
     the command ``v`` (M,) and a dead-band term of it; normal equations (few columns, many rows)."""
@@ -98,34 +111,64 @@ def _residual(target: np.ndarray, gram: np.ndarray, cross: np.ndarray, cols: np.
 
 def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
     """Alignment of a time-series log (see module doc); steady-state sweeps have none."""
-    rule = (f"lags up to {max_logging_skew:g} + 0.75 samples are logging conventions, removed and reported; "
-            "a longer lag is an input_delay (the whole lag)")
+    rule = (f"lags up to {max_logging_skew:g} + {SKEW_FRACTION:g} samples are logging conventions, removed and "
+            "reported; a longer lag is an input_delay (the whole lag)")
     if log.kind is LogKind.STEADY_STATE:
         return Alignment(0.0, 0.0, False, rule)
-    dt = log.dt
     v, i, w = log.voltage, log.current, log.omega  # raw: the relation is exact per held sample
-    edge = int(MAX_LAG) + 10
-    k = np.arange(edge, max(edge + 10, log.n - 10))
+    top = min(search_range(log.dt), max(log.n // 4 - 12, 1))
+    k = np.arange(top + 10, max(top + 20, log.n - 10))
     ibar = 0.5 * (i[k] + i[k + 1])
     cols = np.column_stack([i[k], 0.5 * (w[k] + w[k + 1]), np.tanh(ibar / (0.05 * np.std(i) + 1e-12)),
                             np.ones(k.size)])
-    lags = np.arange(0.0, MAX_LAG + 1e-9, LAG_STEP)
     gram, cross = np.einsum("mp,mq->pq", cols, cols), np.einsum("mp,m->p", cols, i[k + 1])
-    res = np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k]) for lag in lags])
+
+    def curve(lags: np.ndarray) -> np.ndarray:
+        return np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k]) for lag in lags])
+
+    coarse = np.arange(0.0, top + 1e-9, 1.0)  # whole samples over the range, then 1/8 sample near the best
+    res = curve(coarse)
+    best = float(coarse[int(np.argmin(res))])
+    fine = np.setdiff1d(np.arange(max(best - 1.5, 0.0), min(best + 1.5, top) + 1e-9, LAG_STEP), coarse)
+    order = np.argsort(np.concatenate([coarse, fine]))
+    lags, res = np.concatenate([coarse, fine])[order], np.concatenate([res, curve(fine)])[order]
+    samples, sharp = _pick(lags, res)
+    if not sharp:
+        rule += "; here the lag is not identifiable (flat residual), none is assumed"
+    plot = (tuple(float(x) for x in lags), tuple(float(x / (np.std(i) or 1.0)) for x in res))
+    return Alignment(float(samples), float(samples * log.dt), bool(samples > max_logging_skew + SKEW_FRACTION), rule,
+                     plot)
+
+
+def _pick(lags: np.ndarray, res: np.ndarray) -> tuple[float, bool]:
+    """The lag [samples] of the smallest residual on the increasing grid ``lags`` (K,), refined by a parabola
+    through its neighbours, and whether the minimum is sharp (the residual rises by >= 1 % one sample either
+    side); 0 when it is not."""
     j = int(np.argmin(res))
     lag = float(lags[j])
-    if 0 < j < lags.size - 1:  # parabola through the neighbours
-        den = res[j - 1] - 2 * res[j] + res[j + 1]
-        if den > 0:
-            lag += 0.5 * LAG_STEP * (res[j - 1] - res[j + 1]) / den
-    samples = max(lag, 0.0)
-    one = round(1.0 / LAG_STEP)  # a sharp minimum: the residual rises by >= 1 % one sample either side
-    side = [res[x] for x in (j - one, j + one) if 0 <= x < lags.size]
-    if not (side and min(side) >= 1.01 * res[j]):
-        samples = 0.0
-        rule += "; here the lag is not identifiable (flat residual), none is assumed"
-    curve = (tuple(float(x) for x in lags), tuple(float(x / (np.std(i) or 1.0)) for x in res))
-    return Alignment(float(samples), float(samples * dt), bool(samples > max_logging_skew + 0.75), rule, curve)
+    if 0 < j < lags.size - 1:  # the vertex of the parabola through the neighbours
+        x0, x1, x2 = lags[j - 1:j + 2] - lag
+        y0, y1, y2 = res[j - 1:j + 2]
+        den = x0 * (y1 - y2) + x1 * (y2 - y0) + x2 * (y0 - y1)
+        if den != 0:
+            shift = 0.5 * (x0**2 * (y1 - y2) + x1**2 * (y2 - y0) + x2**2 * (y0 - y1)) / den
+            lag += float(np.clip(shift, x0, x2))
+    side = [float(np.interp(lags[j] + d, lags, res)) for d in (-1.0, 1.0) if lags[0] <= lags[j] + d <= lags[-1]]
+    sharp = bool(side and min(side) >= 1.01 * res[j])
+    return (max(lag, 0.0) if sharp else 0.0), sharp
+
+
+def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
+    """``align`` restricted to what logging conventions explain (lags up to ``max_logging_skew`` + 0.75
+    samples): the best lag of its search curve there, never a delay (a longer lag was not confirmed)."""
+    lags, res = (np.asarray(x, float) for x in align.curve)
+    keep = lags <= max_logging_skew + SKEW_FRACTION + 1e-9
+    if not keep.any():
+        return Alignment(0.0, 0.0, False, align.rule, align.curve)
+    samples, _ = _pick(lags[keep], res[keep])
+    return Alignment(samples, samples * dt, False, align.rule + f"; the {align.samples:.2f}-sample lag of the "
+                     "search did not predict the held-out data better than one within the conventions, so the "
+                     "best lag within them is used and no input_delay is called", align.curve)
 
 
 def realign(log: Log, samples: float) -> Log:

@@ -3,7 +3,8 @@
 Procedure:
 
 1. **Alignment** (:mod:`.align`): the command-to-sensor lag is estimated first and removed; only a lag
-   beyond what logging conventions explain (stated rule there) is called ``input_delay``.
+   beyond what logging conventions explain (stated rule there) is called ``input_delay``, and only when it
+   predicts the held-out speed and current better (by ``min_improvement``) than the best lag within them.
 2. Split the log into segments of ``segment_s`` seconds; every ``holdout_every``-th is held out
    (steady-state sweeps: rows).
 3. **Regression** (:mod:`.regression`): the nominal model's equation residuals against the columns of
@@ -29,7 +30,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from ocp.identify.align import Alignment, estimate, realign
+from ocp.identify.align import Alignment, estimate, realign, within
 from ocp.identify.candidates import candidate
 from ocp.identify.explain import (
     KEYS,
@@ -219,15 +220,18 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
 
         return diagnose_points(plant, log, opt)
     effects, pool = _pool(plant, opt)
-    own_delay = sum(float(getattr(e, "delay", 0.0)) for e in plant.effects if e.name == "input_delay")
-    align = estimate(log, opt.max_logging_skew + own_delay / log.dt if log.kind is LogKind.TIME_SERIES else 0.0)
-    delay = align.seconds - own_delay if align.delay and "input_delay" in _allowed(opt) else None
-    work = log if delay is not None else realign(log, align.samples - own_delay / log.dt)
-    seg = min(opt.segment_s, work.n * work.dt / (3 * opt.holdout_every)) if work.kind is LogKind.TIME_SERIES \
+    own = sum(float(getattr(e, "delay", 0.0)) for e in plant.effects if e.name == "input_delay") / log.dt
+    align = estimate(log, opt.max_logging_skew + own if log.kind is LogKind.TIME_SERIES else 0.0)
+    seg = min(opt.segment_s, log.n * log.dt / (3 * opt.holdout_every)) if log.kind is LogKind.TIME_SERIES \
         else opt.segment_s  # short logs: shorter segments, so that some are held out
-    sp = split(work, seg, opt.holdout_every)
-    noise = noise_levels(work)
-    design, sel = _explain(plant, work, sp, effects, pool, noise, opt, delay is not None, progress)
+    sp = split(log, seg, opt.holdout_every)
+    noise = noise_levels(log)
+    if align.delay and "input_delay" in _allowed(opt) and not _delay_wins(plant, log, align, own, opt, sp, noise, seg):
+        align = within(align, opt.max_logging_skew + own, log.dt)  # a longer lag predicts no better: not a delay
+    delay = (align.samples - own) * log.dt if align.delay and "input_delay" in _allowed(opt) else None
+    aligned = realign(log, align.samples - own)  # the equations always see the command when it acts
+    work = log if delay is not None else aligned  # free runs: the delay, if called, is in the plant
+    design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress)
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:
@@ -272,6 +276,19 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
     return design, select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor,
                           opt.max_effects - delayed, opt.ambiguity_margin,
                           None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
+
+
+def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt: DiagnoseOptions, sp: Split,
+                noise: dict[str, float], seg: float) -> bool:
+    """Whether a lag beyond the logging conventions predicts the held-out speed and current (what the
+    armature voltage drives first; free run, in noise units) better by the selection's ``min_improvement``
+    than the best lag within them: only then is it an ``input_delay``."""
+    lag = make_effect("input_delay", {"delay": (align.samples - own) * log.dt})
+    short = within(align, opt.max_logging_skew + own, log.dt).samples - own
+    err = [score(p, x, sp.test, noise, seg).rms for p, x in
+           ((DCMotorPlant(plant.params, (*plant.effects, lag)), log), (plant, realign(log, short)))]
+    longer, conv = (math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"]) for e in err)
+    return longer <= (1.0 - opt.min_improvement) * conv
 
 
 def _allowed(opt: DiagnoseOptions) -> set[str]:

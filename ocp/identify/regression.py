@@ -103,7 +103,9 @@ class Design:
     unresolved: dict[str, str] = field(default_factory=dict)
     angle: dict[str, object] = field(default_factory=dict)  # how far the log resolves the ripple (angle_limits)
     raw_torque: bool = False  # eq. dc_mechanical written on the raw rows (module doc)
-    independence: float = 1.0  # fraction of rows that are independent (low-passed rows are correlated)
+    #: (3,) per equation, the fraction of rows that are independent (low-passed rows are correlated; the
+    #: torque rows' speed view remembers a rotor time constant)
+    independence: np.ndarray = field(default_factory=lambda: np.ones(3))
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
@@ -223,8 +225,14 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
     if name == "stribeck":
         return [(Column(name, "tau_s", ws), _effect(name, {"tau_s": 1.0, "omega_s": ws}, p, s))
                 for ws in _grid(0.003 * w_peak, 0.15 * w_peak)]
-    if name == "voltage_deadband":
-        return [(Column(name, "v_db", vd), _effect(name, {"v_db": vd}, p, s) / vd)
+    if name == "brush_drop":  # the drop follows the current's sign, and while |V - k_e w| < v_b no current
+        u = s.v - p.k_e * s.w  # flows: the drop is V - k_e w there, so clip(V - k_e w, +-v_b) (quasi-static)
+        z = np.zeros_like(s.w)
+        return [(Column(name, "v_b", vb), np.vstack([z, np.clip(u, -vb, vb) / vb, z]))
+                for vb in _grid(0.005 * v_peak, 0.3 * v_peak)]
+    if name == "voltage_deadband":  # a driver's dead zone: no output below v_db, the drop clip(V, +-v_db)
+        z = np.zeros_like(s.w)  # (the catalogue's smooth V - v_db tanh(V / v_db) is for the optimiser)
+        return [(Column(name, "v_db", vd), np.vstack([z, np.clip(s.v, -vd, vd) / vd, z]))
                 for vd in _grid(0.005 * v_peak, 0.3 * v_peak)]
     if name == "thrust_lag":
         if log.kind is LogKind.STEADY_STATE:
@@ -336,7 +344,10 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         cols += cogging
         rich += [a for _, a in cogging]
         angle = angle_limits(raw.theta, periods, log.theta is not None)
-    resid = np.vstack([_rich_residual(t[e], [a[e] for a in rich], train) for e in range(3)])
+    # (the armature and thrust equations keep the motor constant: their measured side does not scale)
+    k_col = [a for c, a in cols if c.item == "k"]
+    resid = np.vstack([_rich_residual(t[e], [a[e] for a in (rich if e == 0 else [*rich, *k_col])], train)
+                       for e in range(3)])
     sigma = np.array([max(float(np.sqrt(np.mean(resid[e][train] ** 2))), 1e-12 * (np.std(t[e]) + 1e-30))
                       for e in range(3)])
     if noise is not None and s.dt > 0:
@@ -349,8 +360,16 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
     return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
                   sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
-                  1.0 if s.dt == 0 else min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt,
-                                            s.dt / (2.0 * tau) if tau > 0 else 1.0))  # (speed view's memory)
+                  _independence(p, log, s, tau))
+
+
+def _independence(p: MotorParams, log: Log, s: Signals, tau: float) -> np.ndarray:
+    """(3,) fraction of independent rows per equation: ``2 f_c dt`` after the low-pass (cutoff ``f_c`` [Hz]),
+    and for the torque rows at most ``dt / (2 tau)`` (the speed view's memory, ``tau`` [s]); 1 on a sweep."""
+    if s.dt == 0:
+        return np.ones(3)
+    low = min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt)
+    return np.array([min(low, s.dt / (2.0 * tau) if tau > 0 else 1.0), low, low])
 
 
 def _columns(p: MotorParams, s: Signals, raw: Signals, log: Log,

@@ -11,7 +11,8 @@ Its score is the held-out RMS of the three
 weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise).
 
 Forward selection adopts the item with the best held-out score while some equation's held-out RMS is
-above ``noise_floor`` and the score falls by at least ``min_improvement``. Then every adopted item is challenged: an
+above ``noise_floor`` and the score falls by at least ``min_improvement`` and beyond sampling noise (the
+pooled score's scatter, or one equation's own: :func:`_beyond_scatter`). Then every adopted item is challenged: an
 alternative that swaps it for another item and scores within ``ambiguity_margin`` makes the verdict
 ``ambiguous`` (both candidates and the reason are reported) instead of a confident wrong name.
 """
@@ -80,7 +81,7 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float) -> F
     y = np.linalg.solve(gs, h / d)  # unconstrained first; bounded only when a bound binds
     if not np.all(np.isfinite(y)) or np.any(y < lo * d) or np.any(y > hi * d):  # (near-singular: bounded too)
         y = lsq_linear(r, np.linalg.solve(r.T, h / d), bounds=(lo * d, hi * d), method="bvls").x
-    x = y / d
+    x = np.where(d > 1e-9 * d.max(), y / d, 0.0)  # a column the log leaves empty (L far under a sample): 0
     cost = float(design.c_train.sum() - 2 * h @ x + x @ g @ x)
     ms = np.array([(design.c_test[e] - 2 * design.h_test[e][idx] @ x + x @ design.g_test[e][np.ix_(idx, idx)] @ x)
                    / max(design.n_test[e], 1) for e in range(3)])
@@ -143,7 +144,8 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
         if progress is not None:
             progress((r + 1) / (max_items + 1))
         ok = bool(tried) and _worst(design, current) > noise_floor \
-            and tried[0][1].score <= (1 - max(min_improvement, _scatter(design))) * current.score
+            and tried[0][1].score <= (1 - min_improvement) * current.score \
+            and _beyond_scatter(design, current, tried[0][1])
         steps.append(Step(current, tried, tried[0][0] if ok else None))
         if not ok:
             break
@@ -153,10 +155,23 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
 
 
 def _scatter(design: Design) -> float:
-    """Two standard errors of a held-out RMS over its independent rows, ``2 / sqrt(2 n)`` (relative): a
-    smaller fall of the score is sampling noise (low-passed rows are correlated, :attr:`Design.independence`)."""
+    """Two standard errors of a held-out RMS over its independent rows, ``2 / sqrt(2 n)`` (relative), the rows of
+    all equations pooled at the torque rows' independence (the fewest): a smaller fall of the score is
+    sampling noise (low-passed rows are correlated, :attr:`Design.independence`)."""
     live = design.n_test > 0
-    return 2.0 / math.sqrt(2.0 * max(float(design.n_test[live].sum()) * design.independence, 1.0))
+    return 2.0 / math.sqrt(2.0 * max(float(design.n_test[live].sum() * design.independence.min()), 1.0))
+
+
+def _beyond_scatter(design: Design, before: Fitted, after: Fitted) -> bool:
+    """Whether ``after``'s held-out fit is better than ``before``'s beyond sampling noise: the score falls by more
+    than :func:`_scatter`, or one equation's held-out RMS falls by more than two standard errors over ITS
+    independent rows (``sqrt(2 / n_e)``): an electrical item need not clear the torque rows' scatter."""
+    if after.score <= (1.0 - _scatter(design)) * before.score:
+        return True
+    live = (design.n_test > 0) & (before.per_eq > 0)
+    n = np.maximum(design.n_test * design.independence, 1.0)
+    fall = 1.0 - after.per_eq[live] / before.per_eq[live]
+    return bool(np.any(fall >= np.sqrt(2.0 / n[live])))
 
 
 def _worst(design: Design, f: Fitted) -> float:

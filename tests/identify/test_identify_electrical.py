@@ -1,0 +1,89 @@
+"""Model check, the armature side and timing (issue #11): brush drop told from a driver dead band by the rows
+where the current and the command differ in sign, the alignment search scaled with the sample rate, and a
+lag beyond the logging conventions called ``input_delay`` only when it predicts the held-out data better.
+
+Rigs come from the independent proving ground (``tests/proving_ground``, seeds outside the benchmark's
+0..199 and the tuning sets 1000..1299) and from the synthetic rig."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from ocp.identify import DiagnoseOptions, diagnose
+from ocp.identify.align import Alignment, estimate, search_range, within
+from ocp.identify.diagnose import _delay_wins, split
+from ocp.identify.predict import noise_levels
+from ocp.logs import Log, log_from_arrays
+from ocp.model.params import MotorParams
+from ocp.model.plant import DCMotorPlant
+from tests.proving_ground.experiment import Rig, draw, run_command
+from tests.synthetic_rig import RigSpec, generate
+
+
+def _excite(rig: Rig, seconds: float) -> tuple[np.ndarray, np.ndarray]:
+    """A slow triangle through zero, then a staircase that also steps DOWN within one sign (the rotor brakes:
+    current and command differ in sign), 6 time constants per level [s, V]."""
+    t = np.arange(0.0, seconds, rig.logger.dt)
+    a = 0.8 * rig.truth.v_max
+    tri = a * (1 - 4 * np.abs(((t / seconds * 2 + 0.25) % 1.0) - 0.5))
+    levels = np.array([0.8, 0.3, -0.3, -0.8, -0.3, 0.3])
+    steps = a * levels[(t // (6 * rig.tau_m)).astype(int) % levels.size]
+    return t, np.where(t < seconds / 2, tri, steps)
+
+
+def _log(c: dict[str, np.ndarray]) -> Log:
+    return log_from_arrays(c["t"], c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+
+
+@pytest.mark.parametrize(("seed", "effect"), [(3012, "brush_drop"), (3000, "voltage_deadband")])
+def test_brush_drop_and_dead_band_are_told_apart(seed: int, effect: str) -> None:
+    """Brush drop follows the current's sign (and the drive ``V - k_e w`` while no current flows), a dead band
+    the command's: on a log with braking rows each is named, not the other (the old current-sign column
+    with a fixed 20 mA smoothing named a dead band on rig 3012)."""
+    rig = draw(seed, effect)
+    seconds = min(max(60 * rig.tau_m, 2.0), 6000 * rig.logger.dt)
+    log = _log(run_command(rig, *_excite(rig, seconds), seed))
+    res = diagnose(DCMotorPlant(MotorParams(**rig.nominal)), log)
+    assert res.verdict == [effect]
+    size = next(iter(rig.truth.effects[effect].values()))
+    fitted = next(iter(res.ranking[0].parameters.values()))
+    assert fitted == pytest.approx(size, rel=0.35), (fitted, size)
+
+
+def test_the_lag_search_scales_with_the_rate() -> None:
+    """24 samples or 5 ms, whichever is longer, at most 64 samples; a 4 ms transport delay on a 10 kHz logger
+    (40 samples, beyond a fixed 24-sample search) is found and called an input delay."""
+    assert search_range(1e-3) == 24 and search_range(1e-4) == 50 and search_range(2e-5) == 64
+    rig = draw(3010, "coulomb_friction")
+    rig = replace(rig, logger=replace(rig.logger, rate=10000.0, skew=40.0))
+    t = np.arange(0.0, 0.6, rig.logger.dt)
+    levels = np.random.default_rng(3010).choice([-1.0, 1.0], size=t.size // 20 + 1)  # PRBS, 2 ms holds
+    v = 0.6 * rig.truth.v_max * np.repeat(levels, 20)[:t.size]
+    al = estimate(_log(run_command(rig, t, v, 3010)))
+    assert al.samples == pytest.approx(40.0, abs=1.0) and al.delay
+
+
+def test_a_longer_lag_is_a_delay_only_when_it_predicts_better(rig: MotorParams) -> None:
+    """On a log with a one-sample logging skew, a 12-sample lag (as a search misled by noise might return) does
+    not predict the held-out speed and current better than the best lag within the conventions: no
+    ``input_delay``, and the fallback is the one-sample skew. A real 4-sample lag does predict better."""
+    base = generate(rig, RigSpec(seconds=1.5, seed=11))
+
+    def skewed(rows: int) -> Log:
+        v = np.concatenate([base.voltage[rows:], np.repeat(base.voltage[-1], rows)])
+        return Log(base.t, v, base.current, base.omega, base.theta, base.thrust, base.kind, base.source)
+
+    opt, plant = DiagnoseOptions(), DCMotorPlant(rig)
+    for rows, lag, wins in ((1, 12.0, False), (4, None, True)):
+        log = skewed(rows)
+        true = estimate(log)
+        al = Alignment(lag, lag * log.dt, True, true.rule, true.curve) if lag is not None else true
+        assert al.delay
+        seg = 0.5
+        assert _delay_wins(plant, log, al, 0.0, opt, split(log, seg, opt.holdout_every), noise_levels(log),
+                           seg) is wins
+        if not wins:
+            assert within(al, opt.max_logging_skew, log.dt).samples == pytest.approx(1.0, abs=0.2)
