@@ -83,7 +83,31 @@ def _source(body: bytes) -> str | None:
     return m.group(1).decode() if m else None
 
 
-async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, total: int) -> dict[str, Any]:
+def _proc_stat(pid: int) -> tuple[float, int]:
+    """CPU seconds (user + system) a process used so far, and its nice value (Linux ``/proc``)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK"), int(fields[16])
+
+
+def _cpu(server: int | None) -> dict[str, float]:
+    """CPU seconds so far of this client process, the server process and its worker processes (solver workers
+    run niced, ``SOLVER_NICENESS``; the fallback workers do not), for a per-request CPU breakdown."""
+    out = {"client": time.process_time(), "server": 0.0, "solver workers": 0.0, "fallback workers": 0.0}
+    if server is None or not Path(f"/proc/{server}").exists():
+        return out
+    out["server"] = _proc_stat(server)[0]
+    for pid in _workers(server):
+        with contextlib.suppress(OSError):
+            cpu, nice = _proc_stat(pid)
+            out["solver workers" if nice > _proc_stat(server)[1] else "fallback workers"] += cpu
+    return out
+
+
+async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, total: int,
+                 server: int | None = None) -> dict[str, Any]:
+    """``total`` requests from ``concurrency`` clients; with the ``server`` pid, the CPU each process spent per
+    answered request [ms] (client, server, solver and fallback workers)."""
+    cpu0 = _cpu(server)
     latencies: list[float] = []
     codes: Counter[int] = Counter()
     sources: Counter[str] = Counter()
@@ -104,10 +128,12 @@ async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, to
     async with httpx.AsyncClient(base_url=url, timeout=120, limits=limits) as http:
         await asyncio.gather(*(client(http) for _ in range(concurrency)))
     wall = time.perf_counter() - t0
+    cpu1 = _cpu(server)
+    cpu_ms = {k: 1e3 * (cpu1[k] - cpu0[k]) / max(codes[200], 1) for k in cpu0}
     q = statistics.quantiles(latencies, n=20) if len(latencies) >= 2 else [float("nan")] * 19
     return {"concurrency": concurrency, "requests": total, "ok": codes[200], "wall_s": wall,
             "throughput_rps": codes[200] / wall, "p50_ms": 1e3 * statistics.median(latencies) if latencies else None,
-            "p95_ms": 1e3 * q[18], "codes": dict(codes), "sources": dict(sources)}
+            "p95_ms": 1e3 * q[18], "codes": dict(codes), "sources": dict(sources), "cpu_ms_per_ok": cpu_ms}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -268,7 +294,7 @@ def _rounds(code: Path, label: str, workers: int, queue: int, requests: int,
                 asyncio.run(_round(url, path, body, workers, 2 * workers))  # warm every worker's cache
                 for mult in (1, 2, 4):
                     n = requests if mult < 4 else 2 * requests
-                    row = asyncio.run(_round(url, path, body, mult * workers, n))
+                    row = asyncio.run(_round(url, path, body, mult * workers, n, proc.pid))
                     rows.append({"code": label or "this", "kind": kind,
                                  "load": f"{mult}x" if mult < 4 else "overload 4x",
                                  "loadavg": " ".join(f"{x:.1f}" for x in os.getloadavg()), **row})
@@ -309,6 +335,11 @@ def main(argv: list[str] | None = None) -> int:
         for r in rows:
             print(f"{r['code']:<7} {r['kind']:<9} {r['load']:<12} {r['throughput_rps']:>7.1f} {r['p50_ms'] or 0:>8.1f} "
                   f"{r['p95_ms']:>8.1f}  {r['codes']} {r['sources'] or ''}; {r['loadavg']}")
+        print("CPU per answered request [ms] (user + system, /proc; 2 cores give 2,000 ms per second of wall):")
+        print(f"{'code':<7} {'kind':<9} {'load':<12} " + " ".join(f"{k:>16}" for k in rows[0]["cpu_ms_per_ok"]))
+        for r in rows:
+            print(f"{r['code']:<7} {r['kind']:<9} {r['load']:<12} "
+                  + " ".join(f"{v:>16.1f}" for v in r["cpu_ms_per_ok"].values()))
     if bad:
         print("FAIL: unexpected status codes", file=sys.stderr)
     return 1 if bad else 0

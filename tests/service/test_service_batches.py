@@ -102,6 +102,98 @@ def test_dispatcher_lets_no_call_starve_behind_better_matches() -> None:
     asyncio.run(main())
 
 
+class _BruteForce:
+    """The dispatcher's rule written out the slow way, as its oracle: every waiting call ranked against every
+    idle worker at every pairing (no candidate shortcut, no shared code)."""
+
+    def __init__(self, workers: list[str], slots: int, patience: int, crowd: int) -> None:
+        self.idle, self.waiting = list(workers), []  # waiting: [call, key, urgent, skipped], oldest first
+        self.held: dict[str, list[Any]] = {w: [] for w in workers}  # least recently used first
+        self.running: dict[str, Any] = {}
+        self.slots, self.patience, self.crowd = slots, patience, crowd
+
+    def arrive(self, call: int, key: Any, urgent: bool) -> list[tuple[int, str]]:
+        self.waiting.append([call, key, urgent, 0])
+        return self.match()
+
+    def finish(self, worker: str, key: Any) -> list[tuple[int, str]]:
+        if key is not None:
+            held = [k for k in self.held[worker] if k != key] + [key]
+            self.held[worker] = held[-self.slots:]
+        self.running.pop(worker)
+        self.idle.append(worker)
+        return self.match()
+
+    def rank(self, w: str, call: list[Any]) -> int | None:
+        _, key, urgent, skipped = call
+        if urgent:
+            return 0
+        if skipped >= self.patience:
+            return 1
+        if key is None:
+            return 3
+        if key in self.held[w]:
+            return 2
+        holders = [v for v in self.held if key in self.held[v] or self.running.get(v, object()) == key]
+        if not holders:
+            return 3
+        queue = {v: sum(1 for c in self.waiting if c[1] in self.held[v] or c[1] == self.running.get(v, object()))
+                 for v in holders}
+        return 4 if min(queue.values()) > self.crowd else None
+
+    def match(self) -> list[tuple[int, str]]:
+        out = []
+        while True:
+            pairs = [(r, pos, len(self.held[w]), i) for i, w in enumerate(self.idle)
+                     for pos, c in enumerate(self.waiting) if (r := self.rank(w, c)) is not None]
+            if not pairs:
+                return out
+            _, pos, _, i = min(pairs)
+            for c in self.waiting[:pos]:
+                c[3] += 1
+            call = self.waiting.pop(pos)
+            worker = self.idle.pop(i)
+            self.running[worker] = call[1]
+            out.append((call[0], worker))
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_dispatcher_pairs_as_the_brute_force_rule_does_with_many_calls_waiting(seed: int) -> None:
+    """Random arrivals (keys, none, urgent) and finishes: every pairing equals the brute-force rule's."""
+    import random
+
+    rng = random.Random(seed)
+    workers = ["w1", "w2", "w3"]
+
+    async def main() -> None:
+        d: Dispatcher[str] = Dispatcher(workers, slots=2, patience=5, crowd=3)
+        oracle = _BruteForce(workers, slots=2, patience=5, crowd=3)
+        made: list[tuple[int, str]] = []
+        keys: dict[int, Any] = {}
+        busy: dict[str, int] = {}
+        for step in range(600):
+            if rng.random() < 0.55 or not busy:
+                key = rng.choice(["A", "B", "C", "D", "E", None])
+                urgent = rng.random() < 0.08
+                keys[step] = key
+                t = asyncio.ensure_future(d.get(key, urgent=urgent))
+                t.add_done_callback(lambda t, c=step: made.append((c, t.result())))
+                want = oracle.arrive(step, key, urgent)
+            else:
+                w = rng.choice(sorted(busy))
+                key = keys[busy.pop(w)]
+                d.remember(w, key)
+                d.put(w)
+                want = oracle.finish(w, key)
+            await _settled()
+            assert made == want, f"step {step}"
+            busy.update({w: c for c, w in made})
+            made.clear()
+        assert d.waiting == len(oracle.waiting) > 50  # many calls were waiting: the shortcut was exercised
+
+    asyncio.run(main())
+
+
 # -- real worker processes, real solves --------------------------------------------------------------------
 
 
