@@ -66,13 +66,15 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         fallback_pool = WorkerPool(settings.fallback_workers, settings.queue_size + settings.workers,
                                    settings.retry_after_s,
                                    preload=("ocp.reference.analytic", "ocp.reference.fallback",
-                                            "ocp.reference.fallback_answer", "service.tasks"))
+                                            "ocp.reference.fallback_answer", "service.tasks",
+                                            *(("ocp.optimize.problem",) if tasks.batch_key else ())))
         dask = await DaskRunner.connect(settings.dask_address) if settings.dask_address else None
         runner: Runner = dask if dask is not None else pool
         logged = cast(Runner, TaskLog(runner, tasks))  # one log line per batch item, like every request's task
         batch_runner = None if tasks.batch_item is None else BatchRunner(
             store, logged, tasks.batch_item, concurrency=settings.workers, timeout=settings.batch_item_timeout_s,
-            attempts=settings.batch_attempts, key=tasks.batch_key, lookahead=settings.batch_lookahead,
+            attempts=settings.batch_attempts, key=tasks.batch_key, key_runner=fallback_pool,
+            lookahead=settings.batch_lookahead,
             group_s=settings.batch_write_group_s)
         check_jobs = None if tasks.model_check is None else CheckJobRunner(  # model checks as jobs (progress)
             CheckJobStore(store), cast(Runner, TaskLog(pool, tasks)), tasks.model_check,

@@ -127,6 +127,20 @@ def structure_key(payload: Payload) -> str | None:
     return f"{st.n_phases}x{st.intervals}/chain{st.chain}/{plant}"
 
 
+def affinity_keys(payload: Payload) -> Payload:
+    """``{"key": KeyFn, "missions": [...]}`` -> ``{"keys": [{"key": ...} | {"error": [type, field, reason]}]}``:
+    each mission's affinity key (e.g. :func:`structure_key`), or the core error that refuses the mission, computed
+    in a worker process for a batch runner (the server process computes nothing of a request)."""
+    key: KeyFn = payload["key"]
+    out: list[Payload] = []
+    for mission in payload["missions"]:
+        try:
+            out.append({"key": key(mission)})
+        except ThrustshapeError as exc:
+            out.append({"error": [type(exc).__name__, exc.field, exc.reason]})
+    return {"keys": out}
+
+
 def _has(module: str, *names: str) -> bool:
     try:
         if importlib.util.find_spec(module) is None:

@@ -95,12 +95,16 @@ def unwrap(outcome: Outcome) -> Payload:
     if kind == "ok":
         return value
     if kind == "user-error":
-        name, field, reason = value
-        cls = getattr(errors, name, errors.ThrustshapeError)
-        if not (isinstance(cls, type) and issubclass(cls, errors.ThrustshapeError)):
-            cls = errors.ThrustshapeError
-        raise cls(field, reason)
+        raise user_error(*value)
     raise TaskFailed(str(value))
+
+
+def user_error(name: str, field: str, reason: str) -> errors.ThrustshapeError:
+    """The core error a worker reported as data (its class by name, a plain ThrustshapeError if unknown)."""
+    cls = getattr(errors, name, errors.ThrustshapeError)
+    if not (isinstance(cls, type) and issubclass(cls, errors.ThrustshapeError)):
+        cls = errors.ThrustshapeError
+    return cls(field, reason)
 
 
 def _worker_main(conn: Connection, preload: Sequence[str], niceness: int = 0) -> None:

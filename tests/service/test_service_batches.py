@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 import sqlite3
 import time
 from collections import Counter
@@ -23,7 +24,7 @@ from service.jobs import JobStore
 from service.schemas import MissionRequest
 from service.tasks import available_tasks, optimize_mission, structure_key
 from service.workers import WorkerPool
-from tests.service.test_service_support import ROOT, digest, mission, slow_item, start_server
+from tests.service.test_service_support import ROOT, digest, mission, slow_item, start_server, structure_key_noting_pid
 
 needs_optimize = pytest.mark.skipif(available_tasks().optimize is None, reason="ocp.optimize.solve is not installed")
 PARAMS_FILE = str(ROOT / "examples" / "params.yaml")  # a real file on this machine: never to be read
@@ -234,6 +235,7 @@ def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path
     each structure all run in one process, outcomes land in fewer transactions than items, and a mission naming
     a file fails at once, naming ``params``, without reaching a worker."""
     monkeypatch.setenv("TS_TEST_ITEM_SECONDS", "0.3")
+    monkeypatch.setenv("TS_TEST_KEY_PIDS", str(tmp_path / "key-pids"))
     missions = [mission(f"{'ab'[i % 2]}{i}", collocation={"intervals": 40 if i % 2 == 0 else 60}) for i in range(8)]
     missions.append(mission("file", params=PARAMS_FILE))
 
@@ -241,9 +243,10 @@ def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path
         store = JobStore(tmp_path / "jobs.sqlite3")
         batch_id, _ = store.create_batch(missions, None)
         pool = WorkerPool(2, 0, 1, preload=("tests.service.test_service_support",))
+        keys = WorkerPool(1, 0, 1, preload=("tests.service.test_service_support",))  # as the server's fallbacks
         # every item claimed at once (lookahead): each free worker has the whole choice
-        runner = BatchRunner(store, pool, slow_item, concurrency=2, timeout=60, attempts=1, key=structure_key,
-                             lookahead=len(missions), group_s=1.0)
+        runner = BatchRunner(store, pool, slow_item, concurrency=2, timeout=60, attempts=1,
+                             key=structure_key_noting_pid, key_runner=keys, lookahead=len(missions), group_s=1.0)
         runner.start()
         try:
             end = time.monotonic() + 120
@@ -253,6 +256,9 @@ def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path
         finally:
             await runner.close()
             pool.close()
+            key_pids = set((tmp_path / "key-pids").read_text().split())
+            assert key_pids == {str(keys.pids()[0])} and str(os.getpid()) not in key_pids  # no key computed here
+            keys.close()
         return batch_id, store, runner.groups
 
     batch_id, store, groups = asyncio.run(main())
