@@ -32,6 +32,8 @@ Payload = dict[str, Any]
 KeyFn = Callable[[Payload], Hashable | None]
 #: kept between IPOPT's stop and the worker's deadline, for verifying the result (or the in-worker fallback) [s]
 SOLVE_MARGIN_S = 1.0
+#: the one key of a task's answer that was checked against its public model and rendered to JSON in the worker
+RENDERED = "rendered_json"
 
 
 def untrusted_mission(data: Any) -> Mission:
@@ -88,6 +90,28 @@ def optimize_mission(payload: Payload) -> Payload:
     # warm=None: start from the worker's last solution of the same structure when it is plausibly close
     # (repeated requests, batch items; ocp.optimize.warm), else cold
     return module.optimize(untrusted_mission(payload), warm=None, context=context).to_dict()
+
+
+def _rendered(data: Payload) -> Payload:
+    """``data`` checked against the optimise answer's public model and rendered to JSON bytes here, in the
+    worker: the server sends the bytes as they are (:func:`service.api.answers.json_answer`), its event loop
+    neither unpickles 16,000 numbers nor validates and renders them."""
+    import pydantic_core
+
+    from service.schemas import OptimizePublic
+
+    OptimizePublic.model_validate(data)
+    return {RENDERED: pydantic_core.to_json(data)}
+
+
+def optimize_answer(payload: Payload) -> Payload:
+    """:func:`optimize_mission`, its answer checked and rendered (``{RENDERED: bytes}``), for the HTTP route."""
+    return _rendered(optimize_mission(payload))
+
+
+def fallback_answer(payload: Payload) -> Payload:
+    """:func:`fallback_mission`, its answer checked and rendered (``{RENDERED: bytes}``), for the HTTP route."""
+    return _rendered(fallback_mission(payload))
 
 
 def fallback_mission(payload: Payload) -> Payload:
@@ -177,12 +201,13 @@ def available_tasks() -> TaskSet:
     from service.modelcheck import model_check
 
     return TaskSet(
-        optimize=optimize_mission if has_opt else None,
-        fallback=fallback_mission if has_opt else None,
+        optimize=optimize_answer if has_opt else None,
+        fallback=fallback_answer if has_opt else None,
         compare=compare_mission if has_cmp else None,
         batch_item=optimize_mission if has_opt else None,
         batch_key=structure_key if has_opt else None,
         model_check=model_check if has_mc else None,
-        extra_preload=tuple(m for m, ok in (("ocp.optimize.solve", has_opt), ("ocp.optimize.compare", has_cmp),
+        extra_preload=tuple(m for m, ok in (("ocp.optimize.solve", has_opt), ("service.schemas", has_opt),
+                                            ("ocp.optimize.compare", has_cmp),
                                             ("ocp.identify", has_mc)) if ok),
     )

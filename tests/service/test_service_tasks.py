@@ -50,3 +50,19 @@ def test_task_answers_are_plain_json(task, payload):
     out = task(payload)
     _plain(out)
     json.dumps(out, allow_nan=False)
+
+
+def test_route_tasks_answer_the_batch_tasks_content_checked_and_rendered_in_the_worker() -> None:
+    """The optimise route's tasks answer ``{RENDERED: bytes}``: the same content as the dict tasks (the analytic
+    fallback is deterministic), checked against the public model before rendering (a malformed answer fails in
+    the worker, not as a 200)."""
+    import pydantic
+
+    from service import tasks
+
+    payload = {"mission": EXAMPLE, "reason": "test"}
+    out = tasks.fallback_answer(payload)
+    assert set(out) == {tasks.RENDERED} and isinstance(out[tasks.RENDERED], bytes)
+    assert json.loads(out[tasks.RENDERED]) == fallback_mission(payload)
+    with pytest.raises(pydantic.ValidationError):
+        tasks._rendered({**fallback_mission(payload), "t": "not a list"})
