@@ -92,16 +92,23 @@ def optimize_mission(payload: Payload) -> Payload:
     return module.optimize(untrusted_mission(payload), warm=None, context=context).to_dict()
 
 
-def _rendered(data: Payload) -> Payload:
-    """``data`` checked against the optimise answer's public model and rendered to JSON bytes here, in the
-    worker: the server sends the bytes as they are (:func:`service.api.answers.json_answer`), its event loop
-    neither unpickles 16,000 numbers nor validates and renders them."""
+def _rendered(data: Payload, check: bool = True) -> Payload:
+    """``data`` checked against the optimise answer's public model (``check``) and rendered to JSON bytes here,
+    in the worker: the server sends or stores the bytes as they are (:func:`service.api.answers.json_answer`,
+    :func:`service.jobs.result_text`), its event loop neither unpickles 16,000 numbers nor validates and renders
+    them."""
     import pydantic_core
 
-    from service.schemas import OptimizePublic
+    if check:
+        from service.schemas import OptimizePublic
 
-    OptimizePublic.model_validate(data)
+        OptimizePublic.model_validate(data)
     return {RENDERED: pydantic_core.to_json(data)}
+
+
+def batch_answer(payload: Payload) -> Payload:
+    """:func:`optimize_mission` for a stored batch item, its answer rendered to JSON (``{RENDERED: bytes}``)."""
+    return _rendered(optimize_mission(payload), check=False)
 
 
 def optimize_answer(payload: Payload) -> Payload:
@@ -204,7 +211,7 @@ def available_tasks() -> TaskSet:
         optimize=optimize_answer if has_opt else None,
         fallback=fallback_answer if has_opt else None,
         compare=compare_mission if has_cmp else None,
-        batch_item=optimize_mission if has_opt else None,
+        batch_item=batch_answer if has_opt else None,
         batch_key=structure_key if has_opt else None,
         model_check=model_check if has_mc else None,
         extra_preload=tuple(m for m, ok in (("ocp.optimize.solve", has_opt), ("service.schemas", has_opt),
