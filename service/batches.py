@@ -44,7 +44,9 @@ if TYPE_CHECKING:
 log = logging.getLogger("thrustshape.batches")
 
 RunnerState = Literal["running", "retrying", "stopped"]
-_KEYS_TIMEOUT_S = 30.0  # a keys call's hard timeout, plus 10 ms per mission [s]
+#: a keys call's hard timeout, plus 10 ms per mission [s]; it covers the start-up of a process that is still
+#: importing (a batch submitted right after the server started), which a miss would cost the group its affinity
+_KEYS_TIMEOUT_S = 120.0
 
 
 @dataclass(frozen=True)
