@@ -233,6 +233,31 @@ def print_breakdown(b: dict[str, Any], workers: int) -> None:
     print("slowest items [s]: " + ", ".join(f"{i['task']:.2f} ({i['source']})" for i in slow))
 
 
+def dispatch_cost(n: int, keys: int = 12, seed: int = 7) -> float:
+    """Event-loop time per item [ms] of :class:`service.dispatch.Dispatcher` pairing ``n`` calls queued at once
+    (as ``batch --local`` queues them) with 2 workers that finish at once (no process, no solve)."""
+    import asyncio
+
+    from service.dispatch import Dispatcher
+
+    rng = random.Random(seed)
+
+    async def go() -> float:
+        d: Dispatcher[str] = Dispatcher(["w1", "w2"])
+
+        async def one(key: str) -> None:
+            w = await d.get(key)
+            await asyncio.sleep(0)
+            d.remember(w, key)
+            d.put(w)
+
+        t0 = time.perf_counter()
+        await asyncio.gather(*(one(f"k{rng.randrange(keys)}") for _ in range(n)))
+        return 1e3 * (time.perf_counter() - t0) / n
+
+    return asyncio.run(go())
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--n", type=int, default=1000)
@@ -247,7 +272,14 @@ def main(argv: list[str] | None = None) -> int:
                     help="instead: the steps of a local batch timed apart in this process (parent validation and "
                          "keys, worker start-up, per-item worker time split into solve, verification, encoding, "
                          "pipe)")
+    ap.add_argument("--dispatch", action="store_true",
+                    help="instead: the dispatcher's cost per item with 100, 1,000 and 3,000 items queued")
     args = ap.parse_args(argv)
+    if args.dispatch:
+        sys.path.insert(0, str(ROOT))
+        for n in (100, 1000, 3000):
+            print(f"{n:>5} items queued: {dispatch_cost(n):.3f} ms of the event loop per item")
+        return 0
     if args.breakdown:
         sys.path.insert(0, str(ROOT))
         print(f"load average before: {_load()}")
