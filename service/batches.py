@@ -184,11 +184,11 @@ class BatchRunner:
             out = await self._key_runner.run(affinity_keys, {"key": self._key, "missions": [items[i].mission
                                                                                               for i in todo]},
                                              _KEYS_TIMEOUT_S + 0.01 * len(todo), wait=True)
-        except (TaskTimeout, TaskFailed, ThrustshapeError) as exc:
+            for i, k in zip(todo, out["keys"], strict=True):
+                keys[i] = user_error(*k["error"]) if "error" in k else k["key"]
+        except Exception as exc:  # claimed items must run whatever happened here: without affinity then
             log.warning("affinity keys of %d items not computed (%s); they run without affinity", len(todo), exc)
-            return keys
-        for i, k in zip(todo, out["keys"], strict=True):
-            keys[i] = user_error(*k["error"]) if "error" in k else k["key"]
+            return [None] * len(items)
         return keys
 
     def _keyed(self, item: Item) -> Hashable | ThrustshapeError | None:

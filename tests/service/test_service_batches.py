@@ -24,7 +24,15 @@ from service.jobs import JobStore
 from service.schemas import MissionRequest
 from service.tasks import available_tasks, optimize_mission, structure_key
 from service.workers import WorkerPool
-from tests.service.test_service_support import ROOT, digest, mission, slow_item, start_server, structure_key_noting_pid
+from tests.service.test_service_support import (
+    ROOT,
+    broken_key,
+    digest,
+    mission,
+    slow_item,
+    start_server,
+    structure_key_noting_pid,
+)
 
 needs_optimize = pytest.mark.skipif(available_tasks().optimize is None, reason="ocp.optimize.solve is not installed")
 PARAMS_FILE = str(ROOT / "examples" / "params.yaml")  # a real file on this machine: never to be read
@@ -274,6 +282,39 @@ def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path
     with sqlite3.connect(store.path) as con:  # one transaction stamps one time on its group
         stamps = Counter(t for (t,) in con.execute("SELECT finished_at FROM items WHERE batch_id = ?", (batch_id,)))
     assert len(stamps) == groups and max(stamps.values()) >= 2
+    store.close()
+
+
+def test_items_run_without_affinity_when_their_keys_call_fails(tmp_path: Path,
+                                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """A keys call that fails in its worker (a broken key function) costs the group its affinity, never its
+    items: every claimed item still runs and lands once."""
+    monkeypatch.setenv("TS_TEST_ITEM_SECONDS", "0.05")
+    missions = [mission(f"k{i}") for i in range(4)]
+
+    async def main() -> JobStore:
+        store = JobStore(tmp_path / "jobs.sqlite3")
+        batch_id, _ = store.create_batch(missions, None)
+        pool = WorkerPool(1, 0, 1, preload=("tests.service.test_service_support",))
+        keys = WorkerPool(1, 0, 1, preload=("tests.service.test_service_support",))
+        runner = BatchRunner(store, pool, slow_item, concurrency=1, timeout=60, attempts=1, key=broken_key,
+                             key_runner=keys, group_s=0.0)
+        runner.start()
+        try:
+            end = time.monotonic() + 120
+            while (c := store.counts(batch_id)) is not None and c.finished < len(missions):
+                assert time.monotonic() < end, "batch did not finish"
+                await asyncio.sleep(0.05)
+        finally:
+            await runner.close()
+            pool.close()
+            keys.close()
+        return store
+
+    store = asyncio.run(main())
+    with sqlite3.connect(store.path) as con:
+        states = [s for (s,) in con.execute("SELECT state FROM items ORDER BY idx")]
+    assert states == ["done"] * len(missions)
     store.close()
 
 

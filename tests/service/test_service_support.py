@@ -75,6 +75,11 @@ def structure_key_noting_pid(mission: dict[str, Any]) -> str | None:
     return structure_key(mission)
 
 
+def broken_key(mission: dict[str, Any]) -> str:
+    """An affinity key function that fails as a bug would (not a core error)."""
+    raise RuntimeError("key function broken")
+
+
 def task_set(kind: str) -> TaskSet:
     """Task sets the factory can serve: ``real`` (installed backends), ``slow-batch``, ``hang-optimize``,
     ``hang-both`` (solver and fallback never return)."""
