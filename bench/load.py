@@ -76,6 +76,17 @@ def _start(workers: int, queue: int, db: Path, code: Path = ROOT, **extra: str) 
 _SOURCE = re.compile(rb'"source":\s*"([a-z-]+)"')
 
 
+_TIMES = {k: re.compile(rb'"' + k.encode() + rb'":\s*([0-9.eE+-]+)') for k in ("total_time_s", "solve_time_s",
+                                                                               "verify_time_s", "build_time_s")}
+
+
+def _times(body: bytes) -> dict[str, float]:
+    """The answer's own timing (``total_time_s``, the solver's IPOPT, verification and build times) from its
+    head, without decoding the whole answer."""
+    head = body[:1500]
+    return {k: float(m.group(1)) for k, rx in _TIMES.items() if (m := rx.search(head))}
+
+
 def _source(body: bytes) -> str | None:
     """The answer's ``source`` from the head of its JSON (the client's CPU is the server's on a small machine:
     no 200 kB decode per answer)."""
@@ -83,8 +94,33 @@ def _source(body: bytes) -> str | None:
     return m.group(1).decode() if m else None
 
 
-async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, total: int) -> dict[str, Any]:
+def _proc_stat(pid: int) -> tuple[float, int]:
+    """CPU seconds (user + system) a process used so far, and its nice value (Linux ``/proc``)."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK"), int(fields[16])
+
+
+def _cpu(server: int | None) -> dict[str, float]:
+    """CPU seconds so far of this client process, the server process and its worker processes (solver workers
+    run niced, ``SOLVER_NICENESS``; the fallback workers do not), for a per-request CPU breakdown."""
+    out = {"client": time.process_time(), "server": 0.0, "solver workers": 0.0, "fallback workers": 0.0}
+    if server is None or not Path(f"/proc/{server}").exists():
+        return out
+    out["server"] = _proc_stat(server)[0]
+    for pid in _workers(server):
+        with contextlib.suppress(OSError):
+            cpu, nice = _proc_stat(pid)
+            out["solver workers" if nice > _proc_stat(server)[1] else "fallback workers"] += cpu
+    return out
+
+
+async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, total: int,
+                 server: int | None = None) -> dict[str, Any]:
+    """``total`` requests from ``concurrency`` clients; with the ``server`` pid, the CPU each process spent per
+    answered request [ms] (client, server, solver and fallback workers)."""
+    cpu0 = _cpu(server)
     latencies: list[float] = []
+    times: list[dict[str, float]] = []
     codes: Counter[int] = Counter()
     sources: Counter[str] = Counter()
     todo = iter(range(total))
@@ -98,16 +134,34 @@ async def _round(url: str, path: str, body: dict[str, Any], concurrency: int, to
                 latencies.append(time.perf_counter() - t0)
                 if (source := _source(r.content)) is not None:
                     sources[source] += 1
+                times.append({**_times(r.content), "latency": latencies[-1]})
 
     limits = httpx.Limits(max_connections=concurrency + 2)
     t0 = time.perf_counter()
     async with httpx.AsyncClient(base_url=url, timeout=120, limits=limits) as http:
         await asyncio.gather(*(client(http) for _ in range(concurrency)))
     wall = time.perf_counter() - t0
+    cpu1 = _cpu(server)
+    cpu_ms = {k: 1e3 * (cpu1[k] - cpu0[k]) / max(codes[200], 1) for k in cpu0}
     q = statistics.quantiles(latencies, n=20) if len(latencies) >= 2 else [float("nan")] * 19
     return {"concurrency": concurrency, "requests": total, "ok": codes[200], "wall_s": wall,
             "throughput_rps": codes[200] / wall, "p50_ms": 1e3 * statistics.median(latencies) if latencies else None,
-            "p95_ms": 1e3 * q[18], "codes": dict(codes), "sources": dict(sources)}
+            "p95_ms": 1e3 * q[18], "codes": dict(codes), "sources": dict(sources), "cpu_ms_per_ok": cpu_ms,
+            "wall_ms": _wall_split(times)}
+
+
+def _wall_split(times: list[dict[str, float]]) -> dict[str, float]:
+    """Medians [ms] of the answers' latency split: IPOPT, verification, the rest of the worker's ``optimize``
+    (setup, builds, evaluation, packaging), and everything around it (queue wait, the task's validation and
+    rendering, the pipe, the server, HTTP, this client)."""
+    rows = [t for t in times if "total_time_s" in t]
+    if not rows:
+        return {}
+    parts = {"ipopt": [t.get("solve_time_s", 0.0) for t in rows], "verify": [t.get("verify_time_s", 0.0) for t in rows],
+             "rest of optimize": [t["total_time_s"] - t.get("solve_time_s", 0.0) - t.get("verify_time_s", 0.0)
+                                  for t in rows],
+             "around the solve": [t["latency"] - t["total_time_s"] for t in rows]}
+    return {k: 1e3 * statistics.median(v) for k, v in parts.items()}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -268,7 +322,7 @@ def _rounds(code: Path, label: str, workers: int, queue: int, requests: int,
                 asyncio.run(_round(url, path, body, workers, 2 * workers))  # warm every worker's cache
                 for mult in (1, 2, 4):
                     n = requests if mult < 4 else 2 * requests
-                    row = asyncio.run(_round(url, path, body, mult * workers, n))
+                    row = asyncio.run(_round(url, path, body, mult * workers, n, proc.pid))
                     rows.append({"code": label or "this", "kind": kind,
                                  "load": f"{mult}x" if mult < 4 else "overload 4x",
                                  "loadavg": " ".join(f"{x:.1f}" for x in os.getloadavg()), **row})
@@ -309,6 +363,19 @@ def main(argv: list[str] | None = None) -> int:
         for r in rows:
             print(f"{r['code']:<7} {r['kind']:<9} {r['load']:<12} {r['throughput_rps']:>7.1f} {r['p50_ms'] or 0:>8.1f} "
                   f"{r['p95_ms']:>8.1f}  {r['codes']} {r['sources'] or ''}; {r['loadavg']}")
+        print("CPU per answered request [ms] (user + system, /proc; 2 cores give 2,000 ms per second of wall):")
+        print(f"{'code':<7} {'kind':<9} {'load':<12} " + " ".join(f"{k:>16}" for k in rows[0]["cpu_ms_per_ok"]))
+        for r in rows:
+            print(f"{r['code']:<7} {r['kind']:<9} {r['load']:<12} "
+                  + " ".join(f"{v:>16.1f}" for v in r["cpu_ms_per_ok"].values()))
+        split = [r for r in rows if r["wall_ms"]]
+        if split:
+            print("Latency split, medians [ms] (from the answers' own times; 'around' = queue wait, pipe, server, "
+                  "HTTP, client):")
+            print(f"{'code':<7} {'kind':<9} {'load':<12} " + " ".join(f"{k:>17}" for k in split[0]["wall_ms"]))
+            for r in split:
+                print(f"{r['code']:<7} {r['kind']:<9} {r['load']:<12} "
+                      + " ".join(f"{v:>17.1f}" for v in r["wall_ms"].values()))
     if bad:
         print("FAIL: unexpected status codes", file=sys.stderr)
     return 1 if bad else 0

@@ -47,6 +47,8 @@ def jsonable(obj: Any) -> Any:
     if isinstance(obj, int | np.integer):
         return int(obj)
     if isinstance(obj, np.ndarray):
+        if obj.dtype.kind in "fiub" and (obj.dtype.kind != "f" or bool(np.isfinite(obj).all())):
+            return obj.tolist()  # every element already a finite float, an int or a bool: nothing to spell
         return [jsonable(v) for v in obj.tolist()]
     if isinstance(obj, dict):
         return {str(k): jsonable(v) for k, v in obj.items()}

@@ -35,7 +35,7 @@ from service.checkjobs import CheckJobRunner, CheckJobStore
 from service.dask_runner import DaskRunner
 from service.jobs import JobStore, StoreLocked, lock_store
 from service.settings import Settings
-from service.tasks import TaskSet, available_tasks, fallback_mission
+from service.tasks import TaskSet, available_tasks
 from service.workers import Runner, WorkerPool
 
 log = logging.getLogger("thrustshape.service")
@@ -66,13 +66,15 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         fallback_pool = WorkerPool(settings.fallback_workers, settings.queue_size + settings.workers,
                                    settings.retry_after_s,
                                    preload=("ocp.reference.analytic", "ocp.reference.fallback",
-                                            "ocp.reference.fallback_answer", "service.tasks"))
+                                            "ocp.reference.fallback_answer", "service.tasks",
+                                            *(("ocp.optimize.problem",) if tasks.batch_key else ())))
         dask = await DaskRunner.connect(settings.dask_address) if settings.dask_address else None
         runner: Runner = dask if dask is not None else pool
         logged = cast(Runner, TaskLog(runner, tasks))  # one log line per batch item, like every request's task
         batch_runner = None if tasks.batch_item is None else BatchRunner(
             store, logged, tasks.batch_item, concurrency=settings.workers, timeout=settings.batch_item_timeout_s,
-            attempts=settings.batch_attempts, key=tasks.batch_key, lookahead=settings.batch_lookahead,
+            attempts=settings.batch_attempts, key=tasks.batch_key, key_runner=fallback_pool,
+            lookahead=settings.batch_lookahead,
             group_s=settings.batch_write_group_s)
         check_jobs = None if tasks.model_check is None else CheckJobRunner(  # model checks as jobs (progress)
             CheckJobStore(store), cast(Runner, TaskLog(pool, tasks)), tasks.model_check,
@@ -83,7 +85,7 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         app.state.pool, app.state.batches, app.state.fallback_pool = pool, batch_runner, fallback_pool
         # start-up off the first requests; a fallback worker also runs one small fallback (imports, caches)
         warming = [asyncio.create_task(pool.warm()),
-                   asyncio.create_task(fallback_pool.warm(fallback_mission, _WARM_FALLBACK) if tasks.fallback
+                   asyncio.create_task(fallback_pool.warm(tasks.fallback, _WARM_FALLBACK) if tasks.fallback
                                        else fallback_pool.warm())]
         if batch_runner is not None:
             batch_runner.start()

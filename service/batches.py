@@ -3,8 +3,10 @@
 Runs as one asyncio task in the app lifespan. It claims up to ``concurrency + lookahead`` items: ``concurrency``
 run on the :class:`~service.workers.Runner` (local worker processes or Dask) with a hard timeout, the lookahead
 waits in the pool so that a worker coming free can pick the item whose *structure* it already built (each item's
-affinity key, e.g. :func:`service.tasks.structure_key`, is computed here from the mission, validated with the
-untrusted rule: a bad mission fails at once, naming the field, without taking a worker). A core error (bad
+affinity key, e.g. :func:`service.tasks.structure_key`, is computed from the mission, validated with the
+untrusted rule: a bad mission fails at once, naming the field, without taking a solver worker). In the server the
+keys of each claimed group are computed in one call on ``key_runner`` (the fallback workers' processes:
+:func:`service.tasks.affinity_keys`), never in the server process. A core error (bad
 mission, infeasible problem) fails the item at once; a timeout or a crashed worker is retried up to ``attempts``
 times (a worker that died before reaching the item costs no attempt).
 
@@ -33,7 +35,8 @@ from typing import TYPE_CHECKING, Any, Literal
 
 from ocp.errors import ThrustshapeError
 from service.jobs import Item, JobStore, Outcome
-from service.workers import Runner, TaskFailed, TaskFn, TaskTimeout
+from service.tasks import affinity_keys
+from service.workers import Runner, TaskFailed, TaskFn, TaskTimeout, user_error
 
 if TYPE_CHECKING:
     from service.tasks import KeyFn
@@ -41,6 +44,9 @@ if TYPE_CHECKING:
 log = logging.getLogger("thrustshape.batches")
 
 RunnerState = Literal["running", "retrying", "stopped"]
+#: a keys call's hard timeout, plus 10 ms per mission [s]; it covers the start-up of a process that is still
+#: importing (a batch submitted right after the server started), which a miss would cost the group its affinity
+_KEYS_TIMEOUT_S = 120.0
 
 
 @dataclass(frozen=True)
@@ -56,13 +62,17 @@ class RunnerHealth:
 
 class BatchRunner:
     def __init__(self, store: JobStore, runner: Runner, task: TaskFn, *, concurrency: int, timeout: float,
-                 attempts: int, key: KeyFn | None = None, lookahead: int | None = None, group_s: float = 0.05,
-                 backoff_s: float = 0.05, max_backoff_s: float = 5.0) -> None:
+                 attempts: int, key: KeyFn | None = None, key_runner: Runner | None = None,
+                 lookahead: int | None = None, group_s: float = 0.05, backoff_s: float = 0.05,
+                 max_backoff_s: float = 5.0) -> None:
         """``key``: an item's affinity key from its mission (raising a ThrustshapeError fails the item);
+        ``key_runner``: where the keys are computed (one background call per claimed group; default: a thread of
+        this process); a keys call that fails leaves the group without affinity (its workers validate anyway);
         ``lookahead``: items claimed beyond ``concurrency`` so that a free worker has a choice (used with a
         ``key`` only; default ``concurrency``); ``group_s`` [s]: how long a finished outcome may wait for others
         to share its transaction while items are still running."""
         self._store, self._runner, self._task, self._key = store, runner, task, key
+        self._key_runner = key_runner
         self._concurrency, self._timeout, self._attempts = concurrency, timeout, attempts
         self._window = concurrency + (0 if key is None else concurrency if lookahead is None else lookahead)
         self._group_s = group_s
@@ -124,7 +134,7 @@ class BatchRunner:
                 continue
             delay, self._last_error = self._backoff[0], None
             # keys in claim order, so the items reach the pool in that order
-            keys = await asyncio.to_thread(self._keys, items)
+            keys = await self._keys(items)
             for item, key in zip(items, keys, strict=True):
                 t = asyncio.create_task(self._run_item(item, key))
                 self._inflight.add(t)
@@ -162,9 +172,24 @@ class BatchRunner:
         self._inflight.discard(t)
         self._wake.set()
 
-    def _keys(self, items: list[Item]) -> list[Hashable | ThrustshapeError | None]:
-        """Each item's affinity key, or the error that refuses its mission (runs in a thread)."""
-        return [self._keyed(item) for item in items]
+    async def _keys(self, items: list[Item]) -> list[Hashable | ThrustshapeError | None]:
+        """Each item's affinity key, or the error that refuses its mission (on ``key_runner``, or in a thread)."""
+        if self._key is None or not items:
+            return [None] * len(items)
+        if self._key_runner is None:
+            return await asyncio.to_thread(lambda: [self._keyed(item) for item in items])
+        todo = [i for i, item in enumerate(items) if item.mission is not None]
+        keys: list[Hashable | ThrustshapeError | None] = [None] * len(items)
+        try:
+            out = await self._key_runner.run(affinity_keys, {"key": self._key, "missions": [items[i].mission
+                                                                                              for i in todo]},
+                                             _KEYS_TIMEOUT_S + 0.01 * len(todo), wait=True)
+            for i, k in zip(todo, out["keys"], strict=True):
+                keys[i] = user_error(*k["error"]) if "error" in k else k["key"]
+        except Exception as exc:  # claimed items must run whatever happened here: without affinity then
+            log.warning("affinity keys of %d items not computed (%s); they run without affinity", len(todo), exc)
+            return [None] * len(items)
+        return keys
 
     def _keyed(self, item: Item) -> Hashable | ThrustshapeError | None:
         if self._key is None or item.mission is None:

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import IO, Any, Literal
 
 from service.errors import IdempotencyConflict, StoreUnavailable
+from service.tasks import RENDERED
 
 ItemState = Literal["queued", "running", "done", "failed"]
 BatchState = Literal["queued", "running", "done", "failed"]
@@ -138,6 +139,13 @@ class Outcome:
     result: dict[str, Any] | None = None
     error: dict[str, Any] | None = None
     retry: bool = False
+
+
+def result_text(result: dict[str, Any]) -> str:
+    """A result as the JSON text stored: rendered already by the worker (``{RENDERED: bytes}``,
+    :func:`service.tasks.batch_answer`; no 16,000-number ``json.dumps`` in the server process) or rendered here."""
+    rendered = result.get(RENDERED) if len(result) == 1 else None
+    return rendered.decode() if isinstance(rendered, bytes) else json.dumps(result, allow_nan=False)
 
 
 def body_digest(missions: Sequence[dict[str, Any]]) -> str:
@@ -273,7 +281,7 @@ class JobStore:
                 cur = db.execute(
                     "UPDATE items SET state = ?, result = ?, error = ?, finished_at = ? "
                     "WHERE batch_id = ? AND idx = ? AND state = 'running'",
-                    (state, None if o.result is None else json.dumps(o.result, allow_nan=False),
+                    (state, None if o.result is None else result_text(o.result),
                      None if o.error is None else json.dumps(o.error, allow_nan=False),
                      None if state == "queued" else now, o.batch_id, o.index))
                 written.append(state if cur.rowcount == 1 else None)

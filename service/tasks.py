@@ -32,6 +32,8 @@ Payload = dict[str, Any]
 KeyFn = Callable[[Payload], Hashable | None]
 #: kept between IPOPT's stop and the worker's deadline, for verifying the result (or the in-worker fallback) [s]
 SOLVE_MARGIN_S = 1.0
+#: the one key of a task's answer that was checked against its public model and rendered to JSON in the worker
+RENDERED = "rendered_json"
 
 
 def untrusted_mission(data: Any) -> Mission:
@@ -90,6 +92,35 @@ def optimize_mission(payload: Payload) -> Payload:
     return module.optimize(untrusted_mission(payload), warm=None, context=context).to_dict()
 
 
+def _rendered(data: Payload, check: bool = True) -> Payload:
+    """``data`` checked against the optimise answer's public model (``check``) and rendered to JSON bytes here,
+    in the worker: the server sends or stores the bytes as they are (:func:`service.api.answers.json_answer`,
+    :func:`service.jobs.result_text`), its event loop neither unpickles 16,000 numbers nor validates and renders
+    them."""
+    import pydantic_core
+
+    if check:
+        from service.schemas import OptimizePublic
+
+        OptimizePublic.model_validate(data)
+    return {RENDERED: pydantic_core.to_json(data)}
+
+
+def batch_answer(payload: Payload) -> Payload:
+    """:func:`optimize_mission` for a stored batch item, its answer rendered to JSON (``{RENDERED: bytes}``)."""
+    return _rendered(optimize_mission(payload), check=False)
+
+
+def optimize_answer(payload: Payload) -> Payload:
+    """:func:`optimize_mission`, its answer checked and rendered (``{RENDERED: bytes}``), for the HTTP route."""
+    return _rendered(optimize_mission(payload))
+
+
+def fallback_answer(payload: Payload) -> Payload:
+    """:func:`fallback_mission`, its answer checked and rendered (``{RENDERED: bytes}``), for the HTTP route."""
+    return _rendered(fallback_mission(payload))
+
+
 def fallback_mission(payload: Payload) -> Payload:
     """``{"mission": ..., "reason": ...}`` -> the analytic fallback answer (cheap, no IPOPT; within the limits or
     :class:`~ocp.errors.InfeasibleError`)."""
@@ -125,6 +156,20 @@ def structure_key(payload: Payload) -> str | None:
         return None
     plant = hashlib.sha256(st.plant_key.encode()).hexdigest()[:16]
     return f"{st.n_phases}x{st.intervals}/chain{st.chain}/{plant}"
+
+
+def affinity_keys(payload: Payload) -> Payload:
+    """``{"key": KeyFn, "missions": [...]}`` -> ``{"keys": [{"key": ...} | {"error": [type, field, reason]}]}``:
+    each mission's affinity key (e.g. :func:`structure_key`), or the core error that refuses the mission, computed
+    in a worker process for a batch runner (the server process computes nothing of a request)."""
+    key: KeyFn = payload["key"]
+    out: list[Payload] = []
+    for mission in payload["missions"]:
+        try:
+            out.append({"key": key(mission)})
+        except ThrustshapeError as exc:
+            out.append({"error": [type(exc).__name__, exc.field, exc.reason]})
+    return {"keys": out}
 
 
 def _has(module: str, *names: str) -> bool:
@@ -163,12 +208,13 @@ def available_tasks() -> TaskSet:
     from service.modelcheck import model_check
 
     return TaskSet(
-        optimize=optimize_mission if has_opt else None,
-        fallback=fallback_mission if has_opt else None,
+        optimize=optimize_answer if has_opt else None,
+        fallback=fallback_answer if has_opt else None,
         compare=compare_mission if has_cmp else None,
-        batch_item=optimize_mission if has_opt else None,
+        batch_item=batch_answer if has_opt else None,
         batch_key=structure_key if has_opt else None,
         model_check=model_check if has_mc else None,
-        extra_preload=tuple(m for m, ok in (("ocp.optimize.solve", has_opt), ("ocp.optimize.compare", has_cmp),
+        extra_preload=tuple(m for m, ok in (("ocp.optimize.solve", has_opt), ("service.schemas", has_opt),
+                                            ("ocp.optimize.compare", has_cmp),
                                             ("ocp.identify", has_mc)) if ok),
     )

@@ -95,12 +95,16 @@ def unwrap(outcome: Outcome) -> Payload:
     if kind == "ok":
         return value
     if kind == "user-error":
-        name, field, reason = value
-        cls = getattr(errors, name, errors.ThrustshapeError)
-        if not (isinstance(cls, type) and issubclass(cls, errors.ThrustshapeError)):
-            cls = errors.ThrustshapeError
-        raise cls(field, reason)
+        raise user_error(*value)
     raise TaskFailed(str(value))
+
+
+def user_error(name: str, field: str, reason: str) -> errors.ThrustshapeError:
+    """The core error a worker reported as data (its class by name, a plain ThrustshapeError if unknown)."""
+    cls = getattr(errors, name, errors.ThrustshapeError)
+    if not (isinstance(cls, type) and issubclass(cls, errors.ThrustshapeError)):
+        cls = errors.ThrustshapeError
+    return cls(field, reason)
 
 
 def _worker_main(conn: Connection, preload: Sequence[str], niceness: int = 0) -> None:
@@ -267,6 +271,7 @@ class WorkerPool:
         self._dispatch: Dispatcher[_Worker] = Dispatcher(self._workers, slots=affinity_slots)
         self._pending = 0
         self._background = 0  # background calls (``wait=True``) waiting for a worker: not counted against capacity
+        self._warm_up: tuple[TaskFn, Payload] | None = None  # what a (re)started process runs before its first call
 
     @property
     def pending(self) -> int:
@@ -334,9 +339,12 @@ class WorkerPool:
         except BaseException as exc:  # handed to the awaiting request (a TaskTimeout, TaskFailed, ...)
             settle(None, exc)
         finally:
-            # a respawned process re-enters the pool once started: no request waits for a start-up it could skip
+            # a respawned process re-enters the pool once started (and warmed up, as at the pool's start): no
+            # request waits for a start-up or a first-call cost it could skip
             with contextlib.suppress(TaskFailed, TaskTimeout, OSError, EOFError):
                 worker._await_ready()
+                if worker.proc.pid != pid and self._warm_up is not None:
+                    self._run_warm_up(worker)
             if not loop.is_closed():
                 loop.call_soon_threadsafe(self._release, worker, affinity if worker.proc.pid == pid else _REPLACED)
 
@@ -351,18 +359,33 @@ class WorkerPool:
     async def warm(self, task: TaskFn | None = None, payload: Payload | None = None) -> None:
         """Wait for every process to finish starting (one at a time, each taken off the idle queue meanwhile,
         so a request never shares a worker with its start-up); with ``task``, run it once on each with
-        ``payload`` so its first real call finds its imports and caches ready."""
+        ``payload`` so its first real call finds its imports and caches ready, and again on every process that
+        replaces one (killed after a timeout, or dead) before it takes a call."""
         loop = asyncio.get_running_loop()
+        if task is not None:
+            self._warm_up = (task, payload or {})
         for _ in range(self.size):
             worker = await self._dispatch.get(urgent=True)
             try:
                 await loop.run_in_executor(self._threads, worker._await_ready)
                 if task is not None:
-                    await loop.run_in_executor(self._threads, worker.call, task, payload or {}, _WARM_UP_TIMEOUT_S)
+                    await loop.run_in_executor(self._threads, self._run_warm_up, worker)
             except (TaskFailed, TaskTimeout) as exc:
                 log.error("worker did not start: %s", exc)
             finally:
                 self._dispatch.put(worker)
+
+    def _run_warm_up(self, worker: _Worker) -> None:
+        """The pool's warm-up task on ``worker`` (blocking; its outcome is dropped, a timeout kills the process
+        like any call's)."""
+        if self._warm_up is not None:
+            fn, payload = self._warm_up
+            outcome = worker.call(fn, payload, _WARM_UP_TIMEOUT_S)
+            if outcome[0] != "ok":
+                log.warning("worker %s: warm-up %s answered %s", worker.proc.pid, getattr(fn, "__name__", fn),
+                            outcome[0])
+            else:
+                log.info("worker %s warmed up", worker.proc.pid)
 
     def ready(self) -> int:
         """Worker processes that finished starting (imports done, answering)."""

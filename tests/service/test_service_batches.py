@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import os
 import sqlite3
 import time
 from collections import Counter
@@ -23,7 +24,15 @@ from service.jobs import JobStore
 from service.schemas import MissionRequest
 from service.tasks import available_tasks, optimize_mission, structure_key
 from service.workers import WorkerPool
-from tests.service.test_service_support import ROOT, digest, mission, slow_item, start_server
+from tests.service.test_service_support import (
+    ROOT,
+    broken_key,
+    digest,
+    mission,
+    slow_item,
+    start_server,
+    structure_key_noting_pid,
+)
 
 needs_optimize = pytest.mark.skipif(available_tasks().optimize is None, reason="ocp.optimize.solve is not installed")
 PARAMS_FILE = str(ROOT / "examples" / "params.yaml")  # a real file on this machine: never to be read
@@ -102,6 +111,98 @@ def test_dispatcher_lets_no_call_starve_behind_better_matches() -> None:
     asyncio.run(main())
 
 
+class _BruteForce:
+    """The dispatcher's rule written out the slow way, as its oracle: every waiting call ranked against every
+    idle worker at every pairing (no candidate shortcut, no shared code)."""
+
+    def __init__(self, workers: list[str], slots: int, patience: int, crowd: int) -> None:
+        self.idle, self.waiting = list(workers), []  # waiting: [call, key, urgent, skipped], oldest first
+        self.held: dict[str, list[Any]] = {w: [] for w in workers}  # least recently used first
+        self.running: dict[str, Any] = {}
+        self.slots, self.patience, self.crowd = slots, patience, crowd
+
+    def arrive(self, call: int, key: Any, urgent: bool) -> list[tuple[int, str]]:
+        self.waiting.append([call, key, urgent, 0])
+        return self.match()
+
+    def finish(self, worker: str, key: Any) -> list[tuple[int, str]]:
+        if key is not None:
+            held = [k for k in self.held[worker] if k != key] + [key]
+            self.held[worker] = held[-self.slots:]
+        self.running.pop(worker)
+        self.idle.append(worker)
+        return self.match()
+
+    def rank(self, w: str, call: list[Any]) -> int | None:
+        _, key, urgent, skipped = call
+        if urgent:
+            return 0
+        if skipped >= self.patience:
+            return 1
+        if key is None:
+            return 3
+        if key in self.held[w]:
+            return 2
+        holders = [v for v in self.held if key in self.held[v] or self.running.get(v, object()) == key]
+        if not holders:
+            return 3
+        queue = {v: sum(1 for c in self.waiting if c[1] in self.held[v] or c[1] == self.running.get(v, object()))
+                 for v in holders}
+        return 4 if min(queue.values()) > self.crowd else None
+
+    def match(self) -> list[tuple[int, str]]:
+        out = []
+        while True:
+            pairs = [(r, pos, len(self.held[w]), i) for i, w in enumerate(self.idle)
+                     for pos, c in enumerate(self.waiting) if (r := self.rank(w, c)) is not None]
+            if not pairs:
+                return out
+            _, pos, _, i = min(pairs)
+            for c in self.waiting[:pos]:
+                c[3] += 1
+            call = self.waiting.pop(pos)
+            worker = self.idle.pop(i)
+            self.running[worker] = call[1]
+            out.append((call[0], worker))
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_dispatcher_pairs_as_the_brute_force_rule_does_with_many_calls_waiting(seed: int) -> None:
+    """Random arrivals (keys, none, urgent) and finishes: every pairing equals the brute-force rule's."""
+    import random
+
+    rng = random.Random(seed)
+    workers = ["w1", "w2", "w3"]
+
+    async def main() -> None:
+        d: Dispatcher[str] = Dispatcher(workers, slots=2, patience=5, crowd=3)
+        oracle = _BruteForce(workers, slots=2, patience=5, crowd=3)
+        made: list[tuple[int, str]] = []
+        keys: dict[int, Any] = {}
+        busy: dict[str, int] = {}
+        for step in range(600):
+            if rng.random() < 0.55 or not busy:
+                key = rng.choice(["A", "B", "C", "D", "E", None])
+                urgent = rng.random() < 0.08
+                keys[step] = key
+                t = asyncio.ensure_future(d.get(key, urgent=urgent))
+                t.add_done_callback(lambda t, c=step: made.append((c, t.result())))
+                want = oracle.arrive(step, key, urgent)
+            else:
+                w = rng.choice(sorted(busy))
+                key = keys[busy.pop(w)]
+                d.remember(w, key)
+                d.put(w)
+                want = oracle.finish(w, key)
+            await _settled()
+            assert made == want, f"step {step}"
+            busy.update({w: c for c, w in made})
+            made.clear()
+        assert d.waiting == len(oracle.waiting) > 50  # many calls were waiting: the shortcut was exercised
+
+    asyncio.run(main())
+
+
 # -- real worker processes, real solves --------------------------------------------------------------------
 
 
@@ -142,6 +243,7 @@ def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path
     each structure all run in one process, outcomes land in fewer transactions than items, and a mission naming
     a file fails at once, naming ``params``, without reaching a worker."""
     monkeypatch.setenv("TS_TEST_ITEM_SECONDS", "0.3")
+    monkeypatch.setenv("TS_TEST_KEY_PIDS", str(tmp_path / "key-pids"))
     missions = [mission(f"{'ab'[i % 2]}{i}", collocation={"intervals": 40 if i % 2 == 0 else 60}) for i in range(8)]
     missions.append(mission("file", params=PARAMS_FILE))
 
@@ -149,9 +251,10 @@ def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path
         store = JobStore(tmp_path / "jobs.sqlite3")
         batch_id, _ = store.create_batch(missions, None)
         pool = WorkerPool(2, 0, 1, preload=("tests.service.test_service_support",))
+        keys = WorkerPool(1, 0, 1, preload=("tests.service.test_service_support",))  # as the server's fallbacks
         # every item claimed at once (lookahead): each free worker has the whole choice
-        runner = BatchRunner(store, pool, slow_item, concurrency=2, timeout=60, attempts=1, key=structure_key,
-                             lookahead=len(missions), group_s=1.0)
+        runner = BatchRunner(store, pool, slow_item, concurrency=2, timeout=60, attempts=1,
+                             key=structure_key_noting_pid, key_runner=keys, lookahead=len(missions), group_s=1.0)
         runner.start()
         try:
             end = time.monotonic() + 120
@@ -161,6 +264,9 @@ def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path
         finally:
             await runner.close()
             pool.close()
+            key_pids = set((tmp_path / "key-pids").read_text().split())
+            assert key_pids == {str(keys.pids()[0])} and str(os.getpid()) not in key_pids  # no key computed here
+            keys.close()
         return batch_id, store, runner.groups
 
     batch_id, store, groups = asyncio.run(main())
@@ -176,6 +282,39 @@ def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path
     with sqlite3.connect(store.path) as con:  # one transaction stamps one time on its group
         stamps = Counter(t for (t,) in con.execute("SELECT finished_at FROM items WHERE batch_id = ?", (batch_id,)))
     assert len(stamps) == groups and max(stamps.values()) >= 2
+    store.close()
+
+
+def test_items_run_without_affinity_when_their_keys_call_fails(tmp_path: Path,
+                                                                 monkeypatch: pytest.MonkeyPatch) -> None:
+    """A keys call that fails in its worker (a broken key function) costs the group its affinity, never its
+    items: every claimed item still runs and lands once."""
+    monkeypatch.setenv("TS_TEST_ITEM_SECONDS", "0.05")
+    missions = [mission(f"k{i}") for i in range(4)]
+
+    async def main() -> JobStore:
+        store = JobStore(tmp_path / "jobs.sqlite3")
+        batch_id, _ = store.create_batch(missions, None)
+        pool = WorkerPool(1, 0, 1, preload=("tests.service.test_service_support",))
+        keys = WorkerPool(1, 0, 1, preload=("tests.service.test_service_support",))
+        runner = BatchRunner(store, pool, slow_item, concurrency=1, timeout=60, attempts=1, key=broken_key,
+                             key_runner=keys, group_s=0.0)
+        runner.start()
+        try:
+            end = time.monotonic() + 120
+            while (c := store.counts(batch_id)) is not None and c.finished < len(missions):
+                assert time.monotonic() < end, "batch did not finish"
+                await asyncio.sleep(0.05)
+        finally:
+            await runner.close()
+            pool.close()
+            keys.close()
+        return store
+
+    store = asyncio.run(main())
+    with sqlite3.connect(store.path) as con:
+        states = [s for (s,) in con.execute("SELECT state FROM items ORDER BY idx")]
+    assert states == ["done"] * len(missions)
     store.close()
 
 

@@ -65,6 +65,21 @@ def slow_item(mission: dict[str, Any]) -> dict[str, Any]:
             "pid": os.getpid(), "finished_at": time.time()}
 
 
+def structure_key_noting_pid(mission: dict[str, Any]) -> str | None:
+    """:func:`service.tasks.structure_key`, appending the pid of the process that computed it to the file
+    ``TS_TEST_KEY_PIDS`` names (where a batch runner's keys were computed)."""
+    from service.tasks import structure_key
+
+    with open(os.environ["TS_TEST_KEY_PIDS"], "a", encoding="utf-8") as fh:
+        fh.write(f"{os.getpid()}\n")
+    return structure_key(mission)
+
+
+def broken_key(mission: dict[str, Any]) -> str:
+    """An affinity key function that fails as a bug would (not a core error)."""
+    raise RuntimeError("key function broken")
+
+
 def task_set(kind: str) -> TaskSet:
     """Task sets the factory can serve: ``real`` (installed backends), ``slow-batch``, ``hang-optimize``,
     ``hang-both`` (solver and fallback never return)."""

@@ -50,3 +50,39 @@ def test_task_answers_are_plain_json(task, payload):
     out = task(payload)
     _plain(out)
     json.dumps(out, allow_nan=False)
+
+
+def test_route_tasks_answer_the_batch_tasks_content_checked_and_rendered_in_the_worker() -> None:
+    """The optimise route's tasks answer ``{RENDERED: bytes}``: the same content as the dict tasks (the analytic
+    fallback is deterministic), checked against the public model before rendering (a malformed answer fails in
+    the worker, not as a 200)."""
+    import pydantic
+
+    from service import tasks
+
+    payload = {"mission": EXAMPLE, "reason": "test"}
+    out = tasks.fallback_answer(payload)
+    assert set(out) == {tasks.RENDERED} and isinstance(out[tasks.RENDERED], bytes)
+    assert json.loads(out[tasks.RENDERED]) == fallback_mission(payload)
+    with pytest.raises(pydantic.ValidationError):
+        tasks._rendered({**fallback_mission(payload), "t": "not a list"})
+
+
+def test_a_batch_answer_rendered_in_the_worker_is_stored_as_its_json(tmp_path) -> None:
+    """A result the worker rendered (``{RENDERED: bytes}``) lands in the job store as that JSON text and reads
+    back as the same content as the unrendered dict."""
+    from service import tasks
+    from service.jobs import JobStore, Outcome
+
+    answer = fallback_mission({"mission": EXAMPLE, "reason": "test"})
+    store = JobStore(tmp_path / "jobs.sqlite3")
+    try:
+        batch_id, _ = store.create_batch([EXAMPLE, EXAMPLE], None)
+        assert len(store.claim(2)) == 2
+        rendered = tasks._rendered(answer, check=False)
+        assert store.record([Outcome(batch_id, 0, result=rendered), Outcome(batch_id, 1, result=answer)]) == \
+            ["done", "done"]
+        first, second = store.items(batch_id)
+        assert first.result == answer == second.result
+    finally:
+        store.close()

@@ -80,6 +80,35 @@ def test_deadline_during_build_keeps_the_worker_and_its_build() -> None:
     asyncio.run(scenario())
 
 
+def note_pid(payload: dict[str, object]) -> dict[str, object]:
+    """A warm-up task: appends this process's pid to the file ``payload["file"]`` names."""
+    with open(str(payload["file"]), "a", encoding="utf-8") as fh:
+        fh.write(f"{os.getpid()}\n")
+    return {}
+
+
+def test_a_process_that_replaces_a_killed_one_is_warmed_up_before_its_first_call(tmp_path: object) -> None:
+    """The pool's warm-up task runs on each process at the start and again on the process that replaces one
+    killed at its timeout, before that process takes a call."""
+    noted = os.path.join(str(tmp_path), "warmed")
+
+    async def scenario() -> None:
+        pool = WorkerPool(1, queue_size=0, retry_after=1, preload=("tests.service.test_service_workers",))
+        try:
+            await pool.warm(note_pid, {"file": noted})
+            first = pool.pids()[0]
+            with pytest.raises(TaskTimeout):
+                await pool.run(hang, {}, timeout=1.0)
+            out = await pool.run(spin, {"seconds": 0.01}, timeout=60)
+            assert out["pid"] != first
+            with open(noted, encoding="utf-8") as fh:
+                assert fh.read().split() == [str(first), str(out["pid"])]  # warmed before the call it served
+        finally:
+            pool.close()
+
+    asyncio.run(scenario())
+
+
 def test_pool_runs_timeouts_restarts_and_refuses() -> None:
     async def scenario() -> None:
         pool = WorkerPool(1, queue_size=1, retry_after=3, preload=())
