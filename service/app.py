@@ -35,7 +35,7 @@ from service.checkjobs import CheckJobRunner, CheckJobStore
 from service.dask_runner import DaskRunner
 from service.jobs import JobStore, StoreLocked, lock_store
 from service.settings import Settings
-from service.tasks import TaskSet, available_tasks
+from service.tasks import TaskSet, available_tasks, fallback_mission
 from service.workers import Runner, WorkerPool
 
 log = logging.getLogger("thrustshape.service")
@@ -85,7 +85,8 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         app.state.pool, app.state.batches, app.state.fallback_pool = pool, batch_runner, fallback_pool
         # start-up off the first requests; a fallback worker also runs one small fallback (imports, caches)
         warming = [asyncio.create_task(pool.warm()),
-                   asyncio.create_task(fallback_pool.warm(tasks.fallback, _WARM_FALLBACK) if tasks.fallback
+                   # (the real fallback, not the task set's: a test's hanging task must not hang the warm-up)
+                   asyncio.create_task(fallback_pool.warm(fallback_mission, _WARM_FALLBACK) if tasks.fallback
                                        else fallback_pool.warm())]
         if batch_runner is not None:
             batch_runner.start()
