@@ -44,7 +44,6 @@ from scipy import signal
 
 from ocp.identify.align import cutoff_hz, smooth
 from ocp.identify.angle import angle_limits, angle_spectrum, instant_spectrum, interval_ripple
-from ocp.identify.scatter import independence
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE, ThrustLag, make_effect
 from ocp.model.params import MotorParams
@@ -104,10 +103,9 @@ class Design:
     unresolved: dict[str, str] = field(default_factory=dict)
     angle: dict[str, object] = field(default_factory=dict)  # how far the log resolves the ripple (angle_limits)
     raw_torque: bool = False  # eq. dc_mechanical written on the raw rows (module doc)
-    #: (2, 3) per equation, the fraction of rows that are independent (low-passed rows are correlated; the
-    #: torque rows' speed view remembers a rotor time constant), measured from the noise (:mod:`.scatter`):
-    #: for its mean square (row 0) and for its cross term with an unexplained signal (row 1)
-    independence: np.ndarray = field(default_factory=lambda: np.ones((2, 3)))
+    #: (3,) per equation, the fraction of rows that are independent (low-passed rows are correlated; the
+    #: torque rows' speed view remembers a rotor time constant)
+    independence: np.ndarray = field(default_factory=lambda: np.ones(3))
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
@@ -362,7 +360,16 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
     return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
                   sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
-                  independence(resid, train) if s.dt > 0 else np.ones((2, 3)))  # (a sweep's rows: independent)
+                  _independence(p, log, s, tau))
+
+
+def _independence(p: MotorParams, log: Log, s: Signals, tau: float) -> np.ndarray:
+    """(3,) fraction of independent rows per equation: ``2 f_c dt`` after the low-pass (cutoff ``f_c`` [Hz]),
+    and for the torque rows at most ``dt / (2 tau)`` (the speed view's memory, ``tau`` [s]); 1 on a sweep."""
+    if s.dt == 0:
+        return np.ones(3)
+    low = min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt)
+    return np.array([min(low, s.dt / (2.0 * tau) if tau > 0 else 1.0), low, low])
 
 
 def _columns(p: MotorParams, s: Signals, raw: Signals, log: Log,

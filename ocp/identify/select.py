@@ -12,7 +12,7 @@ weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a mo
 
 Forward selection adopts the item with the best held-out score while some equation's held-out RMS is
 above ``noise_floor`` and the score falls by at least ``min_improvement`` and beyond sampling noise (the
-pooled score's scatter, or one equation's own: :func:`_beyond_scatter`, :func:`_ms_sd`). A constant that
+pooled score's scatter, or one equation's own: :func:`_beyond_scatter`). A constant that
 would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` yields to an effect that fits as well (a prior on
 constant errors: :func:`_prefer_effects`). Then every adopted item is challenged: an
 alternative that swaps it for another item and scores within ``ambiguity_margin`` makes the verdict
@@ -168,42 +168,31 @@ def _prefer_effects(design: Design, tried: list[tuple[str, Fitted]], margin: flo
     if not tried or _factor(design, tried[0][1], tried[0][0]) is None:
         return tried
     best = tried[0][1]
-    tie = max(margin, _scatter(design, best))
+    tie = max(margin, _scatter(design))
     for k, (other, f) in enumerate(tried[1:], 1):
         if other not in CONSTANTS and f.score <= best.score * (1.0 + tie):
             return [tried[k], *tried[:k], *tried[k + 1:]]
     return tried
 
 
-def _ms_sd(design: Design, f: Fitted) -> np.ndarray:
-    """(3,) standard deviation of ``f``'s held-out mean square per equation [noise units^2] from the noise alone.
-    A row's residual is the unexplained part ``s`` (the same on every model's rows: not sampling noise) plus
-    the noise ``eps`` (unit variance after the weighting), so ``var (s + eps)^2 = 2 + 4 s^2``: over the held-out
-    rows, each term at its own count of independent rows (:attr:`Design.independence`, measured),
-    ``var MS_e = 2 / n_e + 4 S_e / m_e`` with ``S_e = MS_e - 1`` (at the noise: the chi-square's ``2 / n_e``)."""
-    ms = f.per_eq ** 2
-    n, m = (np.maximum(design.n_test * w, 1.0) for w in design.independence)
-    return np.sqrt(2.0 / n + 4.0 * np.maximum(ms - 1.0, 0.0) / m)
-
-
-def _scatter(design: Design, f: Fitted) -> float:
-    """Two standard errors of ``f``'s held-out score, relative (a smaller fall of it is sampling noise): the score
-    ``S = sqrt(mean_e MS_e)`` averages the equations' mean squares (:func:`_ms_sd`), so
-    ``2 sd(S) / S = sqrt(sum_e var MS_e) / sum_e MS_e``."""
+def _scatter(design: Design) -> float:
+    """Two standard errors of a held-out RMS over its independent rows, ``2 / sqrt(2 n)`` (relative), the rows of
+    all equations pooled at the torque rows' independence (the fewest): a smaller fall of the score is
+    sampling noise (low-passed rows are correlated, :attr:`Design.independence`)."""
     live = design.n_test > 0
-    total = float(np.sum(f.per_eq[live] ** 2))
-    return float(np.sqrt(np.sum(_ms_sd(design, f)[live] ** 2)) / total) if total > 0 else 0.0
+    return 2.0 / math.sqrt(2.0 * max(float(design.n_test[live].sum() * design.independence.min()), 1.0))
 
 
 def _beyond_scatter(design: Design, before: Fitted, after: Fitted) -> bool:
     """Whether ``after``'s held-out fit is better than ``before``'s beyond sampling noise: the score falls by more
-    than :func:`_scatter` of ``before``, or one equation's held-out RMS falls by more than two of its standard
-    errors (``sd(MS_e) / MS_e``, :func:`_ms_sd`): an electrical item need not clear the torque rows' scatter."""
-    if after.score <= (1.0 - _scatter(design, before)) * before.score:
+    than :func:`_scatter`, or one equation's held-out RMS falls by more than two standard errors over ITS
+    independent rows (``sqrt(2 / n_e)``): an electrical item need not clear the torque rows' scatter."""
+    if after.score <= (1.0 - _scatter(design)) * before.score:
         return True
     live = (design.n_test > 0) & (before.per_eq > 0)
+    n = np.maximum(design.n_test * design.independence, 1.0)
     fall = 1.0 - after.per_eq[live] / before.per_eq[live]
-    return bool(np.any(fall >= _ms_sd(design, before)[live] / before.per_eq[live] ** 2))
+    return bool(np.any(fall >= np.sqrt(2.0 / n[live])))
 
 
 def _worst(design: Design, f: Fitted) -> float:
@@ -218,7 +207,7 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
     """Adopted items that another item explains as well on held-out data: within ``margin``, or within the
     held-out score's own sampling scatter (:func:`_scatter`), whichever is wider. Where the alternative is a
     constant off by more than :data:`IMPLAUSIBLE_FACTOR`, the reason says why the effect was preferred."""
-    margin = max(margin, _scatter(design, best))
+    margin = max(margin, _scatter(design))
     out = []
     for a, b in itertools.product(items, pool):
         if b in items:
@@ -229,7 +218,7 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
             out.append({"adopted": a, "alternative": b, "score": best.score, "alternative_score": alt.score,
                         "reason": f"replacing {na} by {nb} fits the held-out data as well "
                                   f"({alt.score:.3g} vs {best.score:.3g} noise units, within {100 * margin:.1f} %): "
-                                  f"this log cannot tell them apart{_prior_note(design, alt, b)}"})
+                                  f"this log cannot tell them apart{_prior_note(design, alt, a, b)}"})
     return out
 
 
@@ -241,9 +230,10 @@ def _factor(design: Design, f: Fitted, item: str) -> float | None:
     return factor if max(factor, 1.0 / max(factor, 1e-9)) > IMPLAUSIBLE_FACTOR else None
 
 
-def _prior_note(design: Design, alt: Fitted, const: str) -> str:
+def _prior_note(design: Design, alt: Fitted, adopted: str, const: str) -> str:
+    """Why the adopted effect beat the alternative constant ``const`` fitted in ``alt`` (:func:`_prefer_effects`)."""
     factor = _factor(design, alt, const)
-    if factor is None:
+    if factor is None or adopted in CONSTANTS:
         return ""
-    return (f"; the effect is preferred: {const} would have to be {factor:.2g} x its nominal, a less likely "
+    return (f"; {adopted} is preferred: param:{const} would have to be {factor:.2g} x its nominal, a less likely "
             f"error than a missing effect (beyond a factor {IMPLAUSIBLE_FACTOR:g})")
