@@ -12,7 +12,9 @@ weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a mo
 
 Forward selection adopts the item with the best held-out score while some equation's held-out RMS is
 above ``noise_floor`` and the score falls by at least ``min_improvement`` and beyond sampling noise (the
-pooled score's scatter, or one equation's own: :func:`_beyond_scatter`). Then every adopted item is challenged: an
+pooled score's scatter, or one equation's own: :func:`_beyond_scatter`). A constant that
+would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` yields to an effect that fits as well (a prior on
+constant errors: :func:`_prefer_effects`). Then every adopted item is challenged: an
 alternative that swaps it for another item and scores within ``ambiguity_margin`` makes the verdict
 ``ambiguous`` (both candidates and the reason are reported) instead of a confident wrong name.
 """
@@ -31,6 +33,9 @@ from ocp.identify.regression import CONSTANTS, NUISANCES, Design
 from ocp.model.effects import CATALOGUE
 
 NAMED_BOUNDS = (-0.8, 3.0)
+#: a constant off by more than this factor (either way) is a less likely error than a missing effect that fits
+#: the held-out data as well: the prior on constant errors behind :func:`_prefer_effects`
+IMPLAUSIBLE_FACTOR = 2.0
 
 
 @dataclass(frozen=True)
@@ -141,6 +146,7 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
     for r in range(max_items):
         tried = [(c, fit_model(design, [*items, c], tol)) for c in pool if c not in items]
         tried.sort(key=lambda e: e[1].score)
+        tried = _prefer_effects(design, tried, margin)
         if progress is not None:
             progress((r + 1) / (max_items + 1))
         ok = bool(tried) and _worst(design, current) > noise_floor \
@@ -152,6 +158,21 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
         items.append(tried[0][0])
         current = tried[0][1]
     return Selection(current, steps, _challenge(design, items, pool, current, tol, margin))
+
+
+def _prefer_effects(design: Design, tried: list[tuple[str, Fitted]], margin: float) -> list[tuple[str, Fitted]]:
+    """``tried`` (best first) with an effect moved first where the best item is a constant corrected beyond
+    :data:`IMPLAUSIBLE_FACTOR` of its nominal (x > 100 % or x < -50 %) and the effect's held-out score is as
+    good (within ``margin`` or :func:`_scatter`, as in the ambiguity challenge, which then reports the two):
+    a datasheet constant twice or half its value is a less likely error than a missing effect."""
+    if not tried or _factor(design, tried[0][1], tried[0][0]) is None:
+        return tried
+    best = tried[0][1]
+    tie = max(margin, _scatter(design))
+    for k, (other, f) in enumerate(tried[1:], 1):
+        if other not in CONSTANTS and f.score <= best.score * (1.0 + tie):
+            return [tried[k], *tried[:k], *tried[k + 1:]]
+    return tried
 
 
 def _scatter(design: Design) -> float:
@@ -184,8 +205,8 @@ def _worst(design: Design, f: Fitted) -> float:
 def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitted, tol: float,
                margin: float) -> list[dict[str, object]]:
     """Adopted items that another item explains as well on held-out data: within ``margin``, or within the
-    held-out score's own sampling scatter (two standard errors of an RMS over the independent held-out
-    rows, ``2 / sqrt(2 n)``), whichever is wider."""
+    held-out score's own sampling scatter (:func:`_scatter`), whichever is wider. Where the alternative is a
+    constant off by more than :data:`IMPLAUSIBLE_FACTOR`, the reason says why the effect was preferred."""
     margin = max(margin, _scatter(design))
     out = []
     for a, b in itertools.product(items, pool):
@@ -197,5 +218,22 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
             out.append({"adopted": a, "alternative": b, "score": best.score, "alternative_score": alt.score,
                         "reason": f"replacing {na} by {nb} fits the held-out data as well "
                                   f"({alt.score:.3g} vs {best.score:.3g} noise units, within {100 * margin:.1f} %): "
-                                  "this log cannot tell them apart"})
+                                  f"this log cannot tell them apart{_prior_note(design, alt, a, b)}"})
     return out
+
+
+def _factor(design: Design, f: Fitted, item: str) -> float | None:
+    """True / nominal of constant ``item`` in ``f`` where beyond :data:`IMPLAUSIBLE_FACTOR` either way, else None."""
+    if item not in CONSTANTS:
+        return None
+    factor = 1.0 + f.coefficient(design.index(item)[0])
+    return factor if max(factor, 1.0 / max(factor, 1e-9)) > IMPLAUSIBLE_FACTOR else None
+
+
+def _prior_note(design: Design, alt: Fitted, adopted: str, const: str) -> str:
+    """Why the adopted effect beat the alternative constant ``const`` fitted in ``alt`` (:func:`_prefer_effects`)."""
+    factor = _factor(design, alt, const)
+    if factor is None or adopted in CONSTANTS:
+        return ""
+    return (f"; {adopted} is preferred: param:{const} would have to be {factor:.2g} x its nominal, a less likely "
+            f"error than a missing effect (beyond a factor {IMPLAUSIBLE_FACTOR:g})")
