@@ -39,6 +39,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
@@ -286,19 +287,24 @@ _CACHE: dict[FlatStructure, FlatProgram] = {}
 _CACHE_LOCK = threading.Lock()
 
 
-def program_for(st: FlatStructure) -> tuple[FlatProgram, float]:
+def program_for(st: FlatStructure, on_build: Callable[[str], None] | None = None) -> tuple[FlatProgram, float]:
     """The cached flat program of ``st`` (built on first use; least recently used evicted) and the time [s]
-    this call spent building it (0 when cached)."""
+    this call spent building it (0 when cached); ``on_build`` hears of a build (``"build"``, then ``"built"``
+    once cached), as :func:`ocp.optimize.collocation.solver_for`'s does."""
     with _CACHE_LOCK:
         prog = _CACHE.pop(st, None)
         if prog is not None:
             _CACHE[st] = prog
             return prog, 0.0
+    if on_build is not None:
+        on_build("build")
     prog = build(st)
     with _CACHE_LOCK:
         while len(_CACHE) >= CACHE_SIZE:
             _CACHE.pop(next(iter(_CACHE)))
         _CACHE[st] = prog
+    if on_build is not None:
+        on_build("built")
     return prog, prog.build_s
 
 

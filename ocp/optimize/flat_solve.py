@@ -128,7 +128,7 @@ def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT) -> Optimize
     points is backed off by the excess (plus 20 %) and the program solved again from its answer, at most
     :data:`ROUNDS` times; the caller falls back to the Radau program when it still does."""
     st = structure_of(problem)
-    prog, build_s = flat.program_for(st)
+    prog, build_s = flat.program_for(st, context.on_build)
     data = flat_data(problem, prog)
     if data is None:
         return Unsolved("the initial thrust needs more than the limits")

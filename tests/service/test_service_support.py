@@ -156,6 +156,7 @@ def start_server(tmp: Path, env: dict[str, str], *, port: int | None = None, fac
                 return Server(proc, url, log)
         time.sleep(0.1)
     proc.kill()
+    proc.wait(10)  # reaped here: an unreaped Popen warns later, inside whichever test then runs
     raise RuntimeError(f"server did not come up in {timeout} s:\n{log.read_text()}")
 
 
