@@ -237,6 +237,14 @@ def test_a_structure_is_built_once_per_batch_not_per_item() -> None:
     assert refused.field == "params" and "files are not read" in refused.reason
 
 
+async def _finished(store: JobStore, batch_id: str, n: int, timeout: float = 120.0) -> None:
+    """Wait until ``n`` items of the batch finished (fails the test after ``timeout`` [s])."""
+    end = time.monotonic() + timeout
+    while (c := store.counts(batch_id)) is not None and c.finished < n:
+        assert time.monotonic() < end, "batch did not finish"
+        await asyncio.sleep(0.05)
+
+
 def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path: Path,
                                                                         monkeypatch: pytest.MonkeyPatch) -> None:
     """A real JobStore file and real worker processes (a CPU-bound test task that reports its pid): the items of
@@ -257,10 +265,7 @@ def test_the_runner_routes_by_structure_groups_writes_and_refuses_files(tmp_path
                              key=structure_key_noting_pid, key_runner=keys, lookahead=len(missions), group_s=1.0)
         runner.start()
         try:
-            end = time.monotonic() + 120
-            while (c := store.counts(batch_id)) is not None and c.finished < len(missions):
-                assert time.monotonic() < end, "batch did not finish"
-                await asyncio.sleep(0.05)
+            await _finished(store, batch_id, len(missions))
         finally:
             await runner.close()
             pool.close()
@@ -301,10 +306,7 @@ def test_items_run_without_affinity_when_their_keys_call_fails(tmp_path: Path,
                              key_runner=keys, group_s=0.0)
         runner.start()
         try:
-            end = time.monotonic() + 120
-            while (c := store.counts(batch_id)) is not None and c.finished < len(missions):
-                assert time.monotonic() < end, "batch did not finish"
-                await asyncio.sleep(0.05)
+            await _finished(store, batch_id, len(missions))
         finally:
             await runner.close()
             pool.close()
