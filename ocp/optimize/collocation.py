@@ -37,6 +37,7 @@ import numpy as np
 from ocp.model.plant import CASADI, Plant
 from ocp.optimize import path_limits
 from ocp.optimize import warm as warm_
+from ocp.optimize.program_cache import ProgramCache
 
 DEGREE = 3
 TAU = np.append(0.0, ca.collocation_points(DEGREE, "radau"))  # (DEGREE+1,) interval-local nodes
@@ -416,9 +417,8 @@ def layout(P: int, N: int, nx: int) -> Layout:
     return Layout(stretch=stretch, x0=x0, xc=xc, u=uu, n=k)
 
 
-_CACHE: dict[tuple[Structure, tuple[tuple[str, object], ...]], Program] = {}
-_CACHE_LOCK = threading.Lock()
 CACHE_SIZE = 8  # built programs kept per process (tens of MB each), least recently used evicted
+_CACHE: ProgramCache[Program] = ProgramCache(CACHE_SIZE)
 
 
 def solver_for(plant: Plant, st: Structure, ipopt_options: dict[str, object],
@@ -426,24 +426,9 @@ def solver_for(plant: Plant, st: Structure, ipopt_options: dict[str, object],
     """The cached :class:`Program` for this structure and options (built on first use; LRU of CACHE_SIZE);
     ``on_build`` (:attr:`SolveContext.on_build`) hears of a build."""
     key = (st, tuple(sorted((k, str(v)) for k, v in ipopt_options.items())))
-    with _CACHE_LOCK:
-        prog = _CACHE.pop(key, None)
-        if prog is not None:
-            _CACHE[key] = prog  # most recently used last
-    if prog is None:
-        if on_build is not None:
-            on_build("build")
-        prog = build(plant, st, ipopt_options)
-        with _CACHE_LOCK:
-            while len(_CACHE) >= CACHE_SIZE:
-                _CACHE.pop(next(iter(_CACHE)))
-            _CACHE[key] = prog
-        if on_build is not None:
-            on_build("built")
-    return prog
+    return _CACHE.get(key, lambda: build(plant, st, ipopt_options), on_build)[0]
 
 
 def clear_cache() -> None:
     """Forget every built program (used by benchmarks to measure build cost)."""
-    with _CACHE_LOCK:
-        _CACHE.clear()
+    _CACHE.clear()

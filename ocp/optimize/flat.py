@@ -49,6 +49,7 @@ import numpy as np
 from scipy.interpolate import BSpline
 
 from ocp.optimize import collocation as col
+from ocp.optimize.program_cache import ProgramCache
 
 DEGREE = 5  # omega: C^4 inside a phase, so the voltage is C^2 and its slew C^1
 CHECKS = 4  # limit check points per span (equally spaced)
@@ -283,35 +284,19 @@ def _continuity(st: FlatStructure, coef: list[ca.SX], h: ca.SX,
     return out
 
 
-_CACHE: dict[FlatStructure, FlatProgram] = {}
-_CACHE_LOCK = threading.Lock()
+_CACHE: ProgramCache[FlatProgram] = ProgramCache(CACHE_SIZE)
 
 
 def program_for(st: FlatStructure, on_build: Callable[[str], None] | None = None) -> tuple[FlatProgram, float]:
     """The cached flat program of ``st`` (built on first use; least recently used evicted) and the time [s]
-    this call spent building it (0 when cached); ``on_build`` hears of a build (``"build"``, then ``"built"``
-    once cached), as :func:`ocp.optimize.collocation.solver_for`'s does."""
-    with _CACHE_LOCK:
-        prog = _CACHE.pop(st, None)
-        if prog is not None:
-            _CACHE[st] = prog
-            return prog, 0.0
-    if on_build is not None:
-        on_build("build")
-    prog = build(st)
-    with _CACHE_LOCK:
-        while len(_CACHE) >= CACHE_SIZE:
-            _CACHE.pop(next(iter(_CACHE)))
-        _CACHE[st] = prog
-    if on_build is not None:
-        on_build("built")
-    return prog, prog.build_s
+    this call spent building it (0 when cached); ``on_build`` hears of a build (:class:`ProgramCache`)."""
+    prog, built = _CACHE.get(st, lambda: build(st), on_build)
+    return prog, prog.build_s if built else 0.0
 
 
 def clear_cache() -> None:
     """Forget every built flat program (benchmarks)."""
-    with _CACHE_LOCK:
-        _CACHE.clear()
+    _CACHE.clear()
 
 
 def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray,
