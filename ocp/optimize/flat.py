@@ -40,7 +40,7 @@ import math
 import threading
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
 
@@ -49,6 +49,7 @@ import numpy as np
 from scipy.interpolate import BSpline
 
 from ocp.optimize import collocation as col
+from ocp.optimize import warm as warm_
 from ocp.optimize.program_cache import ProgramCache
 
 DEGREE = 5  # omega: C^4 inside a phase, so the voltage is C^2 and its slew C^1
@@ -164,7 +165,8 @@ def param_slices(st: FlatStructure) -> dict[str, slice]:
 @dataclass
 class FlatProgram:
     """A built flat NLP: ``x = (stretch (P,), c (P * n_coef,))``; ``g = (current, voltage at the check points,
-    each (P * n_check,), scaled by the limits; continuity equalities)``."""
+    each (P * n_check,), scaled by the limits; continuity equalities)``. With its cold solver, the warm one
+    (built on the first warm start, :mod:`ocp.optimize.warm`) and the memory of its last successful solve."""
 
     structure: FlatStructure
     solver: ca.Function
@@ -174,6 +176,10 @@ class FlatProgram:
     deadline: col._Deadline
     build_s: float
     lock: threading.Lock
+    nlp: dict[str, ca.SX] = field(default_factory=dict, repr=False)  # for the warm solver's build
+    options: dict[str, object] = field(default_factory=dict, repr=False)  # the cold solver's options
+    warm_solver: ca.Function | None = field(default=None, repr=False)
+    last: warm_.Memory | None = field(default=None, repr=False)
 
     @property
     def n_x(self) -> int:
@@ -258,11 +264,11 @@ def build(st: FlatStructure) -> FlatProgram:
            + w_effort * ca.sumsqr(u_vec) / (P * st.spans))
     nlp = {"x": ca.vertcat(stretch, *coef), "f": obj, "g": ca.vertcat(*g_i, *g_v, *g_cont), "p": par}
     deadline = col._Deadline()
-    solver = ca.nlpsol("flat", "ipopt", nlp, {**col.solver_options(), **IPOPT_OPTIONS,  # type: ignore[dict-item]
-                                              "iteration_callback": deadline})
+    options = {**col.solver_options(), **IPOPT_OPTIONS}
+    solver = ca.nlpsol("flat", "ipopt", nlp, {**options, "iteration_callback": deadline})  # type: ignore[dict-item]
     return FlatProgram(structure=st, solver=solver, n_params=n_par, n_check=pts["check"].size,
                        n_cont=len(g_cont), deadline=deadline, build_s=time.perf_counter() - started,
-                       lock=threading.Lock())
+                       lock=threading.Lock(), nlp=nlp, options=options)
 
 
 def continuity_orders(st: FlatStructure) -> list[int]:
@@ -299,22 +305,48 @@ def clear_cache() -> None:
     _CACHE.clear()
 
 
+#: the flat program's parameter parts that must be equal / within ``warm.CLOSE`` for a start from its memory
+WARM_EXACT, WARM_NEAR = ("sigma", "weights"), ("constants", "scales", "dur")
+
+
 def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray,
-          g_bounds: tuple[np.ndarray, np.ndarray], until: float = math.inf) -> col.Solved:
-    """One IPOPT run of the flat program, stopped once ``perf_counter()`` passes ``until`` [s]. Thread-safe."""
+          g_bounds: tuple[np.ndarray, np.ndarray], until: float = math.inf, warm: bool | None = False) -> col.Solved:
+    """One IPOPT run of the flat program from ``x0`` (n_x,), or from its last successful solve (primal and dual,
+    the warm solver) when ``warm`` is True or, ``None``, when that solve is plausibly close
+    (:func:`ocp.optimize.warm.start_from`); stopped once ``perf_counter()`` passes ``until`` [s]. Thread-safe."""
+    args = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": g_bounds[0], "ubg": g_bounds[1]}
     with prog.lock:
+        solver, t_lock = prog.solver, time.perf_counter()
+        started_warm = warm_.start_from(prog.last, warm, p, lbx, ubx, param_slices(prog.structure), WARM_EXACT,
+                                        WARM_NEAR)
+        if started_warm and prog.last is not None:
+            args.update(warm_.warm_args(prog.last, lbx, ubx))
+            solver = _warm_solver(prog, until)
         prog.deadline.until = until
         t0 = time.perf_counter()
         try:
-            sol = prog.solver(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=g_bounds[0], ubg=g_bounds[1])
+            sol = solver(**args)
         finally:
             prog.deadline.until = math.inf
         solve_time = time.perf_counter() - t0
-        stats = prog.solver.stats()
-    status = str(stats.get("return_status", "unknown"))
+        stats = solver.stats()
+        status = str(stats.get("return_status", "unknown"))
+        success = bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level"
+        if success:  # a failed run is no start for the next call
+            prog.last = warm_.remember(sol, p, lbx, ubx)
     g = np.asarray(sol["g"]).ravel()
     viol = float(np.max(np.maximum(g - g_bounds[1], g_bounds[0] - g), initial=0.0))
-    return col.Solved(x=np.asarray(sol["x"]).ravel(), status=status,
-                      success=bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level",
+    return col.Solved(x=np.asarray(sol["x"]).ravel(), status=status, success=success,
                       iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]),
-                      constraint_violation=viol, solve_time_s=solve_time)
+                      constraint_violation=viol, solve_time_s=solve_time, warm=started_warm,
+                      warm_build_s=t0 - t_lock)
+
+
+def _warm_solver(prog: FlatProgram, until: float) -> ca.Function:
+    """The program's warm solver, built on first use (under its lock) when ``until`` leaves room for three cold
+    builds; else, until a roomier call builds it, the cold solver (started from the memory all the same)."""
+    if prog.warm_solver is None and (not prog.nlp or until - time.perf_counter() < 3.0 * prog.build_s):
+        return prog.solver
+    if prog.warm_solver is None:
+        prog.warm_solver = warm_.build_solver("flat_warm", prog.nlp, prog.options, prog.deadline, prog.solver)
+    return prog.warm_solver

@@ -15,8 +15,11 @@ anything else starts cold.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
+import casadi as ca
 import numpy as np
 
 #: IPOPT options of a program's warm solver (on top of the cold solver's)
@@ -85,13 +88,43 @@ def close(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: d
     return True
 
 
+#: the Radau program's parameter parts that must be equal / within CLOSE for a warm start (:func:`start_from`)
+RADAU_EXACT, RADAU_NEAR = ("sigma", "weights"), ("dur", "xscale", "uscale", "fscale")
+
+
 def start_from(mem: Memory | None, warm: bool | None, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
-               slices: dict[str, slice]) -> bool:
+               slices: Mapping[str, slice], exact: tuple[str, ...] = RADAU_EXACT,
+               near: tuple[str, ...] = RADAU_NEAR) -> bool:
     """Whether a solve starts from ``mem``: asked (``warm=True``, same size) or, ``warm=None``, when it is
-    plausibly close (:func:`close`; ``slices``: the program's parameter layout)."""
+    plausibly close (:func:`close`; ``slices``: the program's parameter layout, ``exact``/``near``: the names of
+    its parts that must be equal / within ``CLOSE``, ``slices["fd"]`` the desired thrust)."""
     if warm is False or mem is None or mem.x.size != lbx.size:
         return False
     if warm:
         return True
-    return close(mem, p, lbx, ubx, exact={k: slices[k] for k in ("sigma", "weights")},
-                 near={k: slices[k] for k in ("dur", "xscale", "uscale", "fscale")}, fd=slices["fd"])
+    return close(mem, p, lbx, ubx, exact={k: slices[k] for k in exact}, near={k: slices[k] for k in near},
+                 fd=slices["fd"])
+
+
+def warm_args(mem: Memory, lbx: np.ndarray, ubx: np.ndarray) -> dict[str, np.ndarray]:
+    """A solver call's start from ``mem``: its primal (clipped into the new bounds ``lbx``/``ubx``) and duals."""
+    return {"x0": np.clip(mem.x, lbx, ubx), "lam_x0": mem.lam_x, "lam_g0": mem.lam_g}
+
+
+def remember(sol: Mapping[str, Any], p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray) -> Memory:
+    """The memory of a solver call's result ``sol`` (CasADi's x, lam_x, lam_g) for parameters ``p`` and bounds."""
+    return Memory(x=np.asarray(sol["x"]).ravel(), lam_x=np.asarray(sol["lam_x"]).ravel(),
+                  lam_g=np.asarray(sol["lam_g"]).ravel(), p=p.copy(), lbx=lbx.copy(), ubx=ubx.copy())
+
+
+#: the derivative functions a warm solver takes from its program's cold solver instead of deriving them again
+#: (the flat program's symbolic Hessian is most of its ~2 s build; with them the warm build takes ~0.3 s)
+SHARED = {"hess_lag": "nlp_hess_l", "jac_g": "nlp_jac_g", "grad_f": "nlp_grad_f"}
+
+
+def build_solver(name: str, nlp: dict[str, ca.SX], options: Mapping[str, object], callback: object,
+                 cold: ca.Function | None = None) -> ca.Function:
+    """A program's warm solver: its cold ``options`` with :data:`WARM_OPTIONS`, the same iteration ``callback``;
+    the cold solver ``cold`` (built from the same ``nlp``) lends its derivative functions (:data:`SHARED`)."""
+    shared = {} if cold is None else {opt: cold.get_function(fn) for opt, fn in SHARED.items()}
+    return ca.nlpsol(name, "ipopt", nlp, {**options, **WARM_OPTIONS, **shared, "iteration_callback": callback})  # type: ignore[dict-item]
