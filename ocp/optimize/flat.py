@@ -166,7 +166,7 @@ def param_slices(st: FlatStructure) -> dict[str, slice]:
 class FlatProgram:
     """A built flat NLP: ``x = (stretch (P,), c (P * n_coef,))``; ``g = (current, voltage at the check points,
     each (P * n_check,), scaled by the limits; continuity equalities)``. With its cold solver, the warm one
-    (built on the first warm start, :mod:`ocp.optimize.warm`) and the memory of its last successful solve."""
+    (:mod:`ocp.optimize.warm`) and the memory of its last successful solve."""
 
     structure: FlatStructure
     solver: ca.Function
@@ -178,7 +178,7 @@ class FlatProgram:
     lock: threading.Lock
     nlp: dict[str, ca.SX] = field(default_factory=dict, repr=False)  # for the warm solver's build
     options: dict[str, object] = field(default_factory=dict, repr=False)  # the cold solver's options
-    warm_solver: ca.Function | None = field(default=None, repr=False)
+    warm_solver: ca.Function | None = field(default=None, repr=False)  # built by program_for
     last: warm_.Memory | None = field(default=None, repr=False)
 
     @property
@@ -296,7 +296,7 @@ _CACHE: ProgramCache[FlatProgram] = ProgramCache(CACHE_SIZE)
 def program_for(st: FlatStructure, on_build: Callable[[str], None] | None = None) -> tuple[FlatProgram, float]:
     """The cached flat program of ``st`` (built on first use; least recently used evicted) and the time [s]
     this call spent building it (0 when cached); ``on_build`` hears of a build (:class:`ProgramCache`)."""
-    prog, built = _CACHE.get(st, lambda: build(st), on_build)
+    prog, built = _CACHE.get(st, lambda: _with_warm_solver(build(st)), on_build)
     return prog, prog.build_s if built else 0.0
 
 
@@ -311,17 +311,18 @@ WARM_EXACT, WARM_NEAR = ("sigma", "weights"), ("constants", "scales", "dur")
 
 def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray,
           g_bounds: tuple[np.ndarray, np.ndarray], until: float = math.inf, warm: bool | None = False) -> col.Solved:
-    """One IPOPT run of the flat program from ``x0`` (n_x,), or from its last successful solve (primal and dual,
-    the warm solver) when ``warm`` is True or, ``None``, when that solve is plausibly close
-    (:func:`ocp.optimize.warm.start_from`); stopped once ``perf_counter()`` passes ``until`` [s]. Thread-safe."""
+    """One IPOPT run of the flat program from ``x0`` (n_x,), or from its last successful solve (primal and dual;
+    the warm solver, which :func:`program_for` builds with the program) when ``warm`` is True or, ``None``, when
+    that solve is plausibly close (:func:`ocp.optimize.warm.start_from`); stopped once ``perf_counter()`` passes
+    ``until`` [s]. Thread-safe."""
     args = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": g_bounds[0], "ubg": g_bounds[1]}
     with prog.lock:
-        solver, t_lock = prog.solver, time.perf_counter()
+        solver = prog.solver
         started_warm = warm_.start_from(prog.last, warm, p, lbx, ubx, param_slices(prog.structure), WARM_EXACT,
                                         WARM_NEAR)
         if started_warm and prog.last is not None:
             args.update(warm_.warm_args(prog.last, lbx, ubx))
-            solver = _warm_solver(prog, until)
+            solver = prog.warm_solver or solver
         prog.deadline.until = until
         t0 = time.perf_counter()
         try:
@@ -338,15 +339,13 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
     viol = float(np.max(np.maximum(g - g_bounds[1], g_bounds[0] - g), initial=0.0))
     return col.Solved(x=np.asarray(sol["x"]).ravel(), status=status, success=success,
                       iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]),
-                      constraint_violation=viol, solve_time_s=solve_time, warm=started_warm,
-                      warm_build_s=t0 - t_lock)
+                      constraint_violation=viol, solve_time_s=solve_time, warm=started_warm)
 
 
-def _warm_solver(prog: FlatProgram, until: float) -> ca.Function:
-    """The program's warm solver, built on first use (under its lock) when ``until`` leaves room for three cold
-    builds; else, until a roomier call builds it, the cold solver (started from the memory all the same)."""
-    if prog.warm_solver is None and (not prog.nlp or until - time.perf_counter() < 3.0 * prog.build_s):
-        return prog.solver
-    if prog.warm_solver is None:
-        prog.warm_solver = warm_.build_solver("flat_warm", prog.nlp, prog.options, prog.deadline, prog.solver)
-    return prog.warm_solver
+def _with_warm_solver(prog: FlatProgram) -> FlatProgram:
+    """``prog`` with its warm solver, built from the cold one's derivative functions (~15 % of the cold build, so
+    it comes with the program: a call's time limit never has to leave room for it)."""
+    started = time.perf_counter()
+    prog.warm_solver = warm_.build_solver("flat_warm", prog.nlp, prog.options, prog.deadline, prog.solver)
+    prog.build_s += time.perf_counter() - started
+    return prog

@@ -170,7 +170,6 @@ def _add_run(info: SolverStats, run: flat.col.Solved, rounds: int, backoff: floa
     info.solve_time_s += run.solve_time_s
     info.objective, info.constraint_violation = run.objective, run.constraint_violation
     info.backoff_rounds, info.limit_backoff = rounds, backoff
-    info.build_time_s += run.warm_build_s  # the warm solver's build, on its first use
     if rounds == 0:
         info.warm_start = run.warm
 
