@@ -39,6 +39,7 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -166,7 +167,7 @@ def param_slices(st: FlatStructure) -> dict[str, slice]:
 class FlatProgram:
     """A built flat NLP: ``x = (stretch (P,), c (P * n_coef,))``; ``g = (current, voltage at the check points,
     each (P * n_check,), scaled by the limits; continuity equalities)``. With its cold solver, the warm one
-    (:mod:`ocp.optimize.warm`) and the memory of its last successful solve."""
+    (:mod:`ocp.optimize.warm`) and the memory of its last few successful solves (oldest first)."""
 
     structure: FlatStructure
     solver: ca.Function
@@ -179,7 +180,7 @@ class FlatProgram:
     nlp: dict[str, ca.SX] = field(default_factory=dict, repr=False)  # for the warm solver's build
     options: dict[str, object] = field(default_factory=dict, repr=False)  # the cold solver's options
     warm_solver: ca.Function | None = field(default=None, repr=False)  # built by program_for
-    last: warm_.Memory | None = field(default=None, repr=False)
+    memory: deque[warm_.Memory] = field(default_factory=lambda: deque(maxlen=warm_.MEMORIES), repr=False)
 
     @property
     def n_x(self) -> int:
@@ -311,17 +312,16 @@ WARM_EXACT, WARM_NEAR = ("sigma", "weights"), ("constants", "scales", "dur")
 
 def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray,
           g_bounds: tuple[np.ndarray, np.ndarray], until: float = math.inf, warm: bool | None = False) -> col.Solved:
-    """One IPOPT run of the flat program from ``x0`` (n_x,), or from its last successful solve (primal and dual;
-    the warm solver, which :func:`program_for` builds with the program) when ``warm`` is True or, ``None``, when
-    that solve is plausibly close (:func:`ocp.optimize.warm.start_from`); stopped once ``perf_counter()`` passes
+    """One IPOPT run of the flat program from ``x0`` (n_x,), or from a remembered successful solve (primal and
+    dual; the warm solver, which :func:`program_for` builds with the program): the last when ``warm`` is True or,
+    ``None``, the nearest plausibly close one (:func:`ocp.optimize.warm.pick`); stopped once ``perf_counter()`` passes
     ``until`` [s]. Thread-safe."""
     args = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": g_bounds[0], "ubg": g_bounds[1]}
     with prog.lock:
         solver = prog.solver
-        started_warm = warm_.start_from(prog.last, warm, p, lbx, ubx, param_slices(prog.structure), WARM_EXACT,
-                                        WARM_NEAR)
-        if started_warm and prog.last is not None:
-            args.update(warm_.warm_args(prog.last, lbx, ubx))
+        start = warm_.pick(prog.memory, warm, p, lbx, ubx, param_slices(prog.structure), WARM_EXACT, WARM_NEAR)
+        if start is not None:
+            args.update(warm_.warm_args(start, lbx, ubx))
             solver = prog.warm_solver or solver
         prog.deadline.until = until
         t0 = time.perf_counter()
@@ -334,12 +334,12 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
         status = str(stats.get("return_status", "unknown"))
         success = bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level"
         if success:  # a failed run is no start for the next call
-            prog.last = warm_.remember(sol, p, lbx, ubx)
+            prog.memory.append(warm_.remember(sol, p, lbx, ubx))
     g = np.asarray(sol["g"]).ravel()
     viol = float(np.max(np.maximum(g - g_bounds[1], g_bounds[0] - g), initial=0.0))
     return col.Solved(x=np.asarray(sol["x"]).ravel(), status=status, success=success,
                       iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]),
-                      constraint_violation=viol, solve_time_s=solve_time, warm=started_warm)
+                      constraint_violation=viol, solve_time_s=solve_time, warm=start is not None)
 
 
 def _with_warm_solver(prog: FlatProgram) -> FlatProgram:

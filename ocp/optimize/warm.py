@@ -4,18 +4,21 @@ IPOPT ignores the multipliers it is given unless ``warm_start_init_point=yes``; 
 barrier (``mu_init``) and small pushes off the bounds keep a start that is already nearly optimal where it is.
 Those options are fixed when a solver is built, and they hurt a start from a rough guess (the
 continuous-voltage reversal did not converge in 1,000 iterations with them), so a program keeps two solvers:
-the cold one and, built on the first warm start, the warm one.
+the cold one and the warm one (the Radau program builds it on its first warm start; the flat program with the
+program, from the cold solver's derivative functions, :func:`build_solver`).
 
-A program remembers its last solution, primal and dual (:class:`Memory`). A later solve starts from it when
-asked (a back-off round of the same call, ``warm=True``) or, by default (``warm=None``), when the new call is
-plausibly close (:func:`close`): same phase signs and weights, desired thrust, durations and scales within
-``CLOSE`` relative, the same bound pattern. Batch items and repeated requests of one structure so start warm;
-anything else starts cold.
+A program remembers its last solution, primal and dual (:class:`Memory`; the flat program its last
+:data:`MEMORIES`). A later solve starts from it when asked (``warm=True``: the Radau program's back-off rounds)
+or, by default (``warm=None``), when the new call is plausibly close (:func:`close`, :func:`pick`: same phase
+signs and weights, desired thrust, durations, scales (and the flat program's plant constants) within ``CLOSE``
+relative, the same bound pattern). Batch items and repeated requests of one structure so start warm; anything
+else starts cold.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -39,6 +42,8 @@ WARM_OPTIONS: dict[str, object] = {
 #: largest relative change (max norm, against the larger magnitude) of the desired thrust, durations, scales
 #: and finite bounds for which a previous solution is taken as a start
 CLOSE = 0.25
+#: past solves a program remembers (:func:`pick`): batch items of one structure start from the nearest
+MEMORIES = 8
 
 
 @dataclass(frozen=True)
@@ -64,28 +69,32 @@ def _rel(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.max(np.abs(a - b) / scale))
 
 
-def close(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: dict[str, slice],
-          near: dict[str, slice], fd: slice) -> bool:
-    """Whether the solution in ``mem`` is a plausible start for parameters ``p`` and bounds ``lbx``/``ubx``.
-
-    ``exact``: parameter slices that must be equal (signs, weights); ``near``: slices within ``CLOSE``
-    relative (durations, scales); ``fd``: the desired thrust (scaled), within ``CLOSE`` of its largest value.
-    """
+def distance(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: dict[str, slice],
+             near: dict[str, slice], fd: slice) -> float:
+    """How far the solve in ``mem`` is from parameters ``p`` and bounds ``lbx``/``ubx``: the largest of the
+    relative changes of the ``near`` slices (durations, scales), of the desired thrust ``fd`` (scaled, against
+    its largest value) and of the finite bounds (scaled, absolute); ``inf`` when the sizes, an ``exact`` slice
+    (signs, weights) or the pattern of finite bounds differ."""
     if mem.p.shape != p.shape or mem.lbx.shape != lbx.shape:
-        return False
+        return math.inf
     if any(not np.array_equal(mem.p[s], p[s]) for s in exact.values()):
-        return False
-    if any(_rel(mem.p[s], p[s]) > CLOSE for s in near.values()):
-        return False
+        return math.inf
+    changes = [_rel(mem.p[s], p[s]) for s in near.values()]
     peak = max(float(np.max(np.abs(p[fd]))), 1e-12)
-    if float(np.max(np.abs(mem.p[fd] - p[fd]))) > CLOSE * peak:
-        return False
+    changes.append(float(np.max(np.abs(mem.p[fd] - p[fd]))) / peak)
     for old, new in ((mem.lbx, lbx), (mem.ubx, ubx)):
         finite = np.isfinite(new)
-        if not np.array_equal(np.isfinite(old), finite) or float(np.max(np.abs(old[finite] - new[finite]),
-                                                                        initial=0.0)) > CLOSE:
-            return False
-    return True
+        if not np.array_equal(np.isfinite(old), finite):
+            return math.inf
+        changes.append(float(np.max(np.abs(old[finite] - new[finite]), initial=0.0)))
+    return max(changes)
+
+
+def close(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: dict[str, slice],
+          near: dict[str, slice], fd: slice) -> bool:
+    """Whether the solution in ``mem`` is a plausible start for parameters ``p`` and bounds ``lbx``/``ubx``:
+    :func:`distance` at most ``CLOSE``."""
+    return distance(mem, p, lbx, ubx, exact, near, fd) <= CLOSE
 
 
 #: the Radau program's parameter parts that must be equal / within CLOSE for a warm start (:func:`start_from`)
@@ -98,12 +107,22 @@ def start_from(mem: Memory | None, warm: bool | None, p: np.ndarray, lbx: np.nda
     """Whether a solve starts from ``mem``: asked (``warm=True``, same size) or, ``warm=None``, when it is
     plausibly close (:func:`close`; ``slices``: the program's parameter layout, ``exact``/``near``: the names of
     its parts that must be equal / within ``CLOSE``, ``slices["fd"]`` the desired thrust)."""
-    if warm is False or mem is None or mem.x.size != lbx.size:
-        return False
+    return pick([] if mem is None else [mem], warm, p, lbx, ubx, slices, exact, near) is not None
+
+
+def pick(memories: Sequence[Memory], warm: bool | None, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
+         slices: Mapping[str, slice], exact: tuple[str, ...], near: tuple[str, ...]) -> Memory | None:
+    """The memory (of a program's last few solves, oldest first) a solve starts from: none (``warm=False``), the
+    latest of the right size (``warm=True``), or (``warm=None``) the nearest (:func:`distance`) within ``CLOSE``."""
+    sized = [m for m in memories if m.x.size == lbx.size]
+    if warm is False or not sized:
+        return None
     if warm:
-        return True
-    return close(mem, p, lbx, ubx, exact={k: slices[k] for k in exact}, near={k: slices[k] for k in near},
-                 fd=slices["fd"])
+        return sized[-1]
+    ex, nr = {k: slices[k] for k in exact}, {k: slices[k] for k in near}
+    far = [distance(m, p, lbx, ubx, ex, nr, slices["fd"]) for m in sized]
+    best = int(np.argmin(far))
+    return sized[best] if far[best] <= CLOSE else None
 
 
 def warm_args(mem: Memory, lbx: np.ndarray, ubx: np.ndarray) -> dict[str, np.ndarray]:

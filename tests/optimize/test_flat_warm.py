@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from scipy.interpolate import BSpline
 
-from ocp.optimize import flat, flat_solve
+from ocp.optimize import flat, flat_solve, warm
 from ocp.optimize.evaluate import objective_of
 from ocp.optimize.mission import mission_from_mapping
 from ocp.optimize.problem import problem_for
@@ -46,21 +46,47 @@ def test_a_repeated_or_nearby_request_starts_warm_and_answers_as_well(regularity
     assert not cold.solver.warm_start
     for previous in (nearby, m):
         optimize_mesh(previous, warm=False)
-        warm = optimize_mesh(m, warm=None)
-        _holds_limits(warm)
-        assert warm.solver.warm_start
-        assert warm.solver.iterations < cold.solver.iterations
-        assert objective_of(problem, warm) <= objective_of(problem, cold) * (1.0 + 1e-3)
+        again = optimize_mesh(m, warm=None)
+        _holds_limits(again)
+        assert again.solver.warm_start
+        assert again.solver.iterations < cold.solver.iterations
+        assert objective_of(problem, again) <= objective_of(problem, cold) * (1.0 + 1e-3)
 
 
-def test_a_distant_request_starts_cold():
-    """Twice the thrust (beyond ``warm.CLOSE``) or another motor's constants: no start from the memory."""
+def test_a_distant_request_starts_cold_and_an_older_near_one_warm():
+    """Half the thrust (beyond ``warm.CLOSE``) or another motor's constants: no start from the memory; a request
+    near an older solve than the last (a batch of mixed items of one structure) starts from that one."""
     optimize_mesh(mission_from_mapping(_ramp(0.3)), warm=False)
     assert not optimize_mesh(mission_from_mapping(_ramp(0.15)), warm=None).solver.warm_start
-    optimize_mesh(mission_from_mapping(_ramp(0.3)), warm=False)
     other = _ramp(0.3)
     other["params"] = {**SMALL_MOTOR, "R": 2.0 * SMALL_MOTOR["R"]}
     assert not optimize_mesh(mission_from_mapping(other), warm=None).solver.warm_start
+    back = optimize_mesh(mission_from_mapping(_ramp(0.31)), warm=None)
+    assert back.solver.warm_start and back.path_ok
+
+
+def _memory(level: float, size: int = 4) -> warm.Memory:
+    p = np.array([1.0, 2.0, level, level])  # sigma, dur, fd (2)
+    return warm.Memory(x=np.full(size, level), lam_x=np.zeros(size), lam_g=np.zeros(1), p=p, lbx=np.zeros(size),
+                       ubx=np.ones(size))
+
+
+def test_pick_takes_the_nearest_plausible_memory():
+    """``warm.pick``: the nearest remembered solve within CLOSE (``None`` beyond it, or with another exact part),
+    the latest when asked (``warm=True``), none when told not to or when the size differs."""
+    slices = {"sigma": slice(0, 1), "dur": slice(1, 2), "fd": slice(2, 4)}
+    mems = [_memory(1.0), _memory(2.0), _memory(5.0)]
+    lo, hi = np.zeros(4), np.ones(4)
+
+    def pick(level: float, how: bool | None = None, sigma: float = 1.0, size: int = 4) -> warm.Memory | None:
+        p = np.array([sigma, 2.0, level, level])
+        return warm.pick(mems, how, p, np.zeros(size), np.ones(size), slices, ("sigma",), ("dur",))
+
+    assert pick(1.9) is mems[1] and pick(1.05) is mems[0] and pick(4.5) is mems[2]
+    assert pick(3.5) is None  # 3.5 vs 2 and 5: 43 % and 30 % of the peak
+    assert pick(2.0, sigma=-1.0) is None and pick(2.0, how=False) is None and pick(2.0, size=3) is None
+    assert pick(100.0, how=True) is mems[2]
+    assert warm.start_from(mems[0], None, np.array([1.0, 2.0, 1.1, 1.1]), lo, hi, slices, ("sigma",), ("dur",))
 
 
 def test_a_backoff_round_starts_from_the_previous_round():
