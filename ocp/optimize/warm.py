@@ -61,33 +61,43 @@ class Memory:
     ubx: np.ndarray
 
 
-def _rel(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest relative difference of two arrays (0 for two empty ones)."""
-    if a.size == 0:
-        return 0.0
+def _rel(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Largest relative difference of each row of ``a`` (k, m) from ``b`` (m,): shape (k,) (0 for m = 0)."""
     scale = np.maximum(np.maximum(np.abs(a), np.abs(b)), 1e-12)
-    return float(np.max(np.abs(a - b) / scale))
+    return np.max(np.abs(a - b) / scale, axis=1, initial=0.0)
 
 
-def distance(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: dict[str, slice],
-             near: dict[str, slice], fd: slice) -> float:
-    """How far the solve in ``mem`` is from parameters ``p`` and bounds ``lbx``/``ubx``: the largest of the
-    relative changes of the ``near`` slices (durations, scales), of the desired thrust ``fd`` (scaled, against
-    its largest value) and of the finite bounds (scaled, absolute); ``inf`` when the sizes, an ``exact`` slice
-    (signs, weights) or the pattern of finite bounds differ."""
-    if mem.p.shape != p.shape or mem.lbx.shape != lbx.shape:
-        return math.inf
-    if any(not np.array_equal(mem.p[s], p[s]) for s in exact.values()):
-        return math.inf
-    changes = [_rel(mem.p[s], p[s]) for s in near.values()]
+def distances(memories: Sequence[Memory], p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
+              exact: Mapping[str, slice], near: Mapping[str, slice], fd: slice) -> np.ndarray:
+    """How far each solve in ``memories`` (k) is from parameters ``p`` and bounds ``lbx``/``ubx``, shape (k,): the
+    largest of the relative changes of the ``near`` slices (durations, scales), of the desired thrust ``fd``
+    (scaled, against its largest value) and of the finite bounds (scaled, absolute); ``inf`` where the sizes, an
+    ``exact`` slice (signs, weights) or the pattern of finite bounds differ."""
+    out = np.full(len(memories), math.inf)
+    ok = [k for k, m in enumerate(memories) if m.p.shape == p.shape and m.lbx.shape == lbx.shape]
+    if not ok:
+        return out
+    P = np.stack([memories[k].p for k in ok])  # (k, n_params)
+    admissible = np.ones(len(ok), bool)
+    for s in exact.values():
+        admissible &= np.all(P[:, s] == p[s], axis=1)
+    change = np.zeros(len(ok))
+    for s in near.values():
+        change = np.maximum(change, _rel(P[:, s], p[s]))
     peak = max(float(np.max(np.abs(p[fd]))), 1e-12)
-    changes.append(float(np.max(np.abs(mem.p[fd] - p[fd]))) / peak)
-    for old, new in ((mem.lbx, lbx), (mem.ubx, ubx)):
-        finite = np.isfinite(new)
-        if not np.array_equal(np.isfinite(old), finite):
-            return math.inf
-        changes.append(float(np.max(np.abs(old[finite] - new[finite]), initial=0.0)))
-    return max(changes)
+    change = np.maximum(change, np.max(np.abs(P[:, fd] - p[fd]), axis=1, initial=0.0) / peak)
+    for name, new in (("lbx", lbx), ("ubx", ubx)):
+        old, finite = np.stack([getattr(memories[k], name) for k in ok]), np.isfinite(new)
+        admissible &= np.all(np.isfinite(old) == finite, axis=1)
+        change = np.maximum(change, np.max(np.abs(old[:, finite] - new[finite]), axis=1, initial=0.0))
+    out[ok] = np.where(admissible, change, math.inf)
+    return out
+
+
+def distance(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: Mapping[str, slice],
+             near: Mapping[str, slice], fd: slice) -> float:
+    """:func:`distances` of one memory."""
+    return float(distances([mem], p, lbx, ubx, exact, near, fd)[0])
 
 
 def close(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: dict[str, slice],
@@ -119,8 +129,7 @@ def pick(memories: Sequence[Memory], warm: bool | None, p: np.ndarray, lbx: np.n
         return None
     if warm:
         return sized[-1]
-    ex, nr = {k: slices[k] for k in exact}, {k: slices[k] for k in near}
-    far = [distance(m, p, lbx, ubx, ex, nr, slices["fd"]) for m in sized]
+    far = distances(sized, p, lbx, ubx, {k: slices[k] for k in exact}, {k: slices[k] for k in near}, slices["fd"])
     best = int(np.argmin(far))
     return sized[best] if far[best] <= CLOSE else None
 
