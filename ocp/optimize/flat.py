@@ -306,8 +306,12 @@ def clear_cache() -> None:
     _CACHE.clear()
 
 
-#: the flat program's parameter parts that must be equal / within ``warm.CLOSE`` for a start from its memory
+#: the flat program's parameter parts that must be equal / within WARM_CLOSE for a start from its memory
 WARM_EXACT, WARM_NEAR = ("sigma", "weights"), ("constants", "scales", "dur")
+#: largest distance (:func:`ocp.optimize.warm.distance`) of a remembered solve the flat program starts from: on
+#: the first 150 items of ``bench/batch.py``'s mix (seed 7), IPOPT took 10 -> 2 iterations cold -> warm below
+#: 0.05, 13 -> 7.5 at 0.05-0.1, the same at 0.1-0.15 and 10 -> 12.5 at 0.15-0.2 (``warm.CLOSE`` is 0.25)
+WARM_CLOSE = 0.1
 
 
 def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray,
@@ -319,7 +323,8 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
     args = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": g_bounds[0], "ubg": g_bounds[1]}
     with prog.lock:
         solver = prog.solver
-        start = warm_.pick(prog.memory, warm, p, lbx, ubx, param_slices(prog.structure), WARM_EXACT, WARM_NEAR)
+        start = warm_.pick(prog.memory, warm, p, lbx, ubx, param_slices(prog.structure), WARM_EXACT, WARM_NEAR,
+                           WARM_CLOSE)
         if start is not None:
             args.update(warm_.warm_args(start, lbx, ubx))
             solver = prog.warm_solver or solver

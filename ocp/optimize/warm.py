@@ -121,9 +121,10 @@ def start_from(mem: Memory | None, warm: bool | None, p: np.ndarray, lbx: np.nda
 
 
 def pick(memories: Sequence[Memory], warm: bool | None, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
-         slices: Mapping[str, slice], exact: tuple[str, ...], near: tuple[str, ...]) -> Memory | None:
+         slices: Mapping[str, slice], exact: tuple[str, ...], near: tuple[str, ...],
+         limit: float = CLOSE) -> Memory | None:
     """The memory (of a program's last few solves, oldest first) a solve starts from: none (``warm=False``), the
-    latest of the right size (``warm=True``), or (``warm=None``) the nearest (:func:`distance`) within ``CLOSE``."""
+    latest of the right size (``warm=True``), or (``warm=None``) the nearest (:func:`distance`) within ``limit``."""
     sized = [m for m in memories if m.x.size == lbx.size]
     if warm is False or not sized:
         return None
@@ -131,7 +132,7 @@ def pick(memories: Sequence[Memory], warm: bool | None, p: np.ndarray, lbx: np.n
         return sized[-1]
     far = distances(sized, p, lbx, ubx, {k: slices[k] for k in exact}, {k: slices[k] for k in near}, slices["fd"])
     best = int(np.argmin(far))
-    return sized[best] if far[best] <= CLOSE else None
+    return sized[best] if far[best] <= limit else None
 
 
 def warm_args(mem: Memory, lbx: np.ndarray, ubx: np.ndarray) -> dict[str, np.ndarray]:
