@@ -793,8 +793,14 @@ def main(argv: list[str] | None = None) -> int:
                     help="classic missions, the user-like missions of issue 14, or both (default)")
     ap.add_argument("--json", type=Path, help="write all figures to this file")
     ap.add_argument("--repeats", type=int, help="repeats per measurement (default 5, quick 2)")
+    ap.add_argument("--warm", action="store_true", help="only the flat program's cold/warm table (bench/flat_warm.py)")
     args = ap.parse_args(argv)
     repeats = args.repeats or (2 if args.quick else 5)
+    if args.warm:  # the flat program's warm starts: cold, repeated and nearby missions, and the time split
+        from bench.flat_warm import warm_report
+
+        warm_report(repeats)
+        return 0
     names = {"all": CLASSIC + USER, "classic": CLASSIC, "user": USER}[args.suite]
     suite = [s for s in SUITE if s["name"] in (QUICK if args.quick else names)]
     from importlib.metadata import version

@@ -39,8 +39,9 @@ from __future__ import annotations
 import math
 import threading
 import time
+from collections import deque
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
 
@@ -49,6 +50,7 @@ import numpy as np
 from scipy.interpolate import BSpline
 
 from ocp.optimize import collocation as col
+from ocp.optimize import warm as warm_
 from ocp.optimize.program_cache import ProgramCache
 
 DEGREE = 5  # omega: C^4 inside a phase, so the voltage is C^2 and its slew C^1
@@ -164,7 +166,8 @@ def param_slices(st: FlatStructure) -> dict[str, slice]:
 @dataclass
 class FlatProgram:
     """A built flat NLP: ``x = (stretch (P,), c (P * n_coef,))``; ``g = (current, voltage at the check points,
-    each (P * n_check,), scaled by the limits; continuity equalities)``."""
+    each (P * n_check,), scaled by the limits; continuity equalities)``. With its cold solver, the warm one
+    (:mod:`ocp.optimize.warm`) and the memory of its last few successful solves (oldest first)."""
 
     structure: FlatStructure
     solver: ca.Function
@@ -174,6 +177,10 @@ class FlatProgram:
     deadline: col._Deadline
     build_s: float
     lock: threading.Lock
+    nlp: dict[str, ca.SX] = field(default_factory=dict, repr=False)  # for the warm solver's build
+    options: dict[str, object] = field(default_factory=dict, repr=False)  # the cold solver's options
+    warm_solver: ca.Function | None = field(default=None, repr=False)  # built by program_for
+    memory: deque[warm_.Memory] = field(default_factory=lambda: deque(maxlen=warm_.MEMORIES), repr=False)
 
     @property
     def n_x(self) -> int:
@@ -258,11 +265,11 @@ def build(st: FlatStructure) -> FlatProgram:
            + w_effort * ca.sumsqr(u_vec) / (P * st.spans))
     nlp = {"x": ca.vertcat(stretch, *coef), "f": obj, "g": ca.vertcat(*g_i, *g_v, *g_cont), "p": par}
     deadline = col._Deadline()
-    solver = ca.nlpsol("flat", "ipopt", nlp, {**col.solver_options(), **IPOPT_OPTIONS,  # type: ignore[dict-item]
-                                              "iteration_callback": deadline})
+    options = {**col.solver_options(), **IPOPT_OPTIONS}
+    solver = ca.nlpsol("flat", "ipopt", nlp, {**options, "iteration_callback": deadline})  # type: ignore[dict-item]
     return FlatProgram(structure=st, solver=solver, n_params=n_par, n_check=pts["check"].size,
                        n_cont=len(g_cont), deadline=deadline, build_s=time.perf_counter() - started,
-                       lock=threading.Lock())
+                       lock=threading.Lock(), nlp=nlp, options=options)
 
 
 def continuity_orders(st: FlatStructure) -> list[int]:
@@ -290,7 +297,7 @@ _CACHE: ProgramCache[FlatProgram] = ProgramCache(CACHE_SIZE)
 def program_for(st: FlatStructure, on_build: Callable[[str], None] | None = None) -> tuple[FlatProgram, float]:
     """The cached flat program of ``st`` (built on first use; least recently used evicted) and the time [s]
     this call spent building it (0 when cached); ``on_build`` hears of a build (:class:`ProgramCache`)."""
-    prog, built = _CACHE.get(st, lambda: build(st), on_build)
+    prog, built = _CACHE.get(st, lambda: _with_warm_solver(build(st)), on_build)
     return prog, prog.build_s if built else 0.0
 
 
@@ -299,22 +306,51 @@ def clear_cache() -> None:
     _CACHE.clear()
 
 
+#: the flat program's parameter parts that must be equal / within WARM_CLOSE for a start from its memory
+WARM_EXACT, WARM_NEAR = ("sigma", "weights"), ("constants", "scales", "dur")
+#: largest distance (:func:`ocp.optimize.warm.distance`) of a remembered solve the flat program starts from: on
+#: the first 150 items of ``bench/batch.py``'s mix (seed 7), IPOPT took 10 -> 2 iterations cold -> warm below
+#: 0.05, 13 -> 7.5 at 0.05-0.1, the same at 0.1-0.15 and 10 -> 12.5 at 0.15-0.2 (``warm.CLOSE`` is 0.25)
+WARM_CLOSE = 0.1
+
+
 def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray,
-          g_bounds: tuple[np.ndarray, np.ndarray], until: float = math.inf) -> col.Solved:
-    """One IPOPT run of the flat program, stopped once ``perf_counter()`` passes ``until`` [s]. Thread-safe."""
+          g_bounds: tuple[np.ndarray, np.ndarray], until: float = math.inf, warm: bool | None = False) -> col.Solved:
+    """One IPOPT run of the flat program from ``x0`` (n_x,), or from a remembered successful solve (primal and
+    dual; the warm solver, which :func:`program_for` builds with the program): the last when ``warm`` is True or,
+    ``None``, the nearest plausibly close one (:func:`ocp.optimize.warm.pick`); stopped once ``perf_counter()`` passes
+    ``until`` [s]. Thread-safe."""
+    args = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": g_bounds[0], "ubg": g_bounds[1]}
     with prog.lock:
+        solver = prog.solver
+        start = warm_.pick(prog.memory, warm, p, lbx, ubx, param_slices(prog.structure), WARM_EXACT, WARM_NEAR,
+                           WARM_CLOSE)
+        if start is not None:
+            args.update(warm_.warm_args(start, lbx, ubx))
+            solver = prog.warm_solver or solver
         prog.deadline.until = until
         t0 = time.perf_counter()
         try:
-            sol = prog.solver(x0=x0, p=p, lbx=lbx, ubx=ubx, lbg=g_bounds[0], ubg=g_bounds[1])
+            sol = solver(**args)
         finally:
             prog.deadline.until = math.inf
         solve_time = time.perf_counter() - t0
-        stats = prog.solver.stats()
-    status = str(stats.get("return_status", "unknown"))
+        stats = solver.stats()
+        status = str(stats.get("return_status", "unknown"))
+        success = bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level"
+        if success:  # a failed run is no start for the next call
+            prog.memory.append(warm_.remember(sol, p, lbx, ubx))
     g = np.asarray(sol["g"]).ravel()
     viol = float(np.max(np.maximum(g - g_bounds[1], g_bounds[0] - g), initial=0.0))
-    return col.Solved(x=np.asarray(sol["x"]).ravel(), status=status,
-                      success=bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level",
+    return col.Solved(x=np.asarray(sol["x"]).ravel(), status=status, success=success,
                       iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]),
-                      constraint_violation=viol, solve_time_s=solve_time)
+                      constraint_violation=viol, solve_time_s=solve_time, warm=start is not None)
+
+
+def _with_warm_solver(prog: FlatProgram) -> FlatProgram:
+    """``prog`` with its warm solver, built from the cold one's derivative functions (~15 % of the cold build, so
+    it comes with the program: a call's time limit never has to leave room for it)."""
+    started = time.perf_counter()
+    prog.warm_solver = warm_.build_solver("flat_warm", prog.nlp, prog.options, prog.deadline, prog.solver)
+    prog.build_s += time.perf_counter() - started
+    return prog

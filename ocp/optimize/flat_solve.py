@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from typing import cast
 
 import numpy as np
@@ -34,6 +35,7 @@ COMMAND_DV, SUBSTEPS = 2e-3, 4
 SPANS_PER_INTERVALS = 3  # one B-spline span per this many Radau intervals of a phase ...
 SPANS = (8, 20)  # ... between these (per phase)
 NO_CONTEXT = SolveContext()
+DERIVED = 2  # highest derivative of the speed a plan evaluates
 ROUNDS = 2  # back-off rounds of the flat program before the Radau program is asked
 
 
@@ -121,9 +123,12 @@ def _guess(problem: Problem, st: flat.FlatStructure, w2: np.ndarray, ws: float, 
     return np.clip(np.concatenate([np.ones(st.n_phases), coef.ravel()]), lbx, ubx)
 
 
-def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT) -> OptimizeResult | Unsolved:
+def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT,
+               warm: bool | None = False) -> OptimizeResult | Unsolved:
     """The flat program's verified answer to ``problem`` (:func:`applies` must be ``None``), or why not.
 
+    ``warm``: the first round starts from the cached program's last solve never (``False``: from the static
+    inverse), when it is plausibly close (``None``) or always (``True``) (:func:`ocp.optimize.flat.solve`).
     When the simulated response exceeds the current or the voltage limit, that channel's bound at the check
     points is backed off by the excess (plus 20 %) and the program solved again from its answer, at most
     :data:`ROUNDS` times; the caller falls back to the Radau program when it still does."""
@@ -137,7 +142,8 @@ def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT) -> Optimize
     bound = np.full(2, 1.0 - flat.MARGIN)  # current, voltage at the check points (fractions of the limits)
     x0, info = data.x0, SolverStats(build_time_s=build_s, program=SolverProgram.FLAT)
     for rounds in range(ROUNDS + 1):
-        run = flat.solve(prog, data.p, data.lbx, data.ubx, x0, prog.g_bounds(*bound), until)
+        first = warm if rounds == 0 else False
+        run = flat.solve(prog, data.p, data.lbx, data.ubx, x0, prog.g_bounds(*bound), until, first)
         _add_run(info, run, rounds, float(np.min(bound) / (1.0 - flat.MARGIN)))
         if not run.success:
             return Unsolved(f"flat program: IPOPT {run.status}", info)
@@ -149,6 +155,9 @@ def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT) -> Optimize
         if result.path_ok or not np.all(np.isfinite(excess)):
             return result if result.path_ok else Unsolved("flat program: the simulated response diverged", info)
         bound = np.where(excess > 1.0, bound / (1.0 + 1.2 * (excess - 1.0)), bound)
+        # a back-off round starts the cold solver from this round's primal: IPOPT's warm start (duals, small
+        # mu_init) took more iterations there, its active rows now infeasible (ramp, bounds 0.995 -> 0.965:
+        # 32 warm, 29 cold from the static inverse, 23 from the primal)
         x0 = run.x
     return Unsolved(f"flat program: a limit is exceeded between the check points after {ROUNDS} back-off rounds",
                     info)
@@ -161,6 +170,8 @@ def _add_run(info: SolverStats, run: flat.col.Solved, rounds: int, backoff: floa
     info.solve_time_s += run.solve_time_s
     info.objective, info.constraint_violation = run.objective, run.constraint_violation
     info.backoff_rounds, info.limit_backoff = rounds, backoff
+    if rounds == 0:
+        info.warm_start = run.warm
 
 
 @dataclass(frozen=True)
@@ -173,7 +184,8 @@ class FlatPlan:
     constants: dict[str, float]
 
     def derivatives(self, t: np.ndarray, upto: int = 2) -> tuple[list[np.ndarray], np.ndarray]:
-        """(omega and its first ``upto`` time derivatives at ``t`` (M,), each (M,); the speed sign (M,))."""
+        """(omega and its first ``upto`` (<= DERIVED) time derivatives at ``t`` (M,), each (M,); the speed sign
+        (M,))."""
         P = len(self.splines)
         j = np.clip(np.searchsorted(self.phase_edges, t, side="right") - 1, 0, P - 1)
         h = np.diff(self.phase_edges)
@@ -181,10 +193,22 @@ class FlatPlan:
         out = [np.zeros_like(t) for _ in range(upto + 1)]
         for k in range(P):
             sel = j == k
+            if not np.any(sel):
+                continue
             for r in range(upto + 1):
-                spline = self.splines[k].derivative(r) if r else self.splines[k]
-                out[r][sel] = spline(tau[sel]) / h[k] ** r
+                out[r][sel] = self._derived[k][r](tau[sel]) / h[k] ** r
         return out, self.signs[j]
+
+    @cached_property
+    def _derived(self) -> list[list[BSpline]]:
+        """Per phase the speed spline and its tau-derivatives of orders 1..DERIVED (derived once per plan)."""
+        out = []
+        for spline in self.splines:
+            chain = [spline]
+            for _ in range(DERIVED):
+                chain.append(chain[-1].derivative())  # the same arithmetic as derivative(r) (splder, order by order)
+            out.append(chain)
+        return out
 
     def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(states (omega [rad/s], current [A]) shape (2, M), voltage [V] (M,)) at ``t`` (M,)."""
@@ -237,12 +261,13 @@ def _crossings(plan: FlatPlan, data: FlatData) -> list[Crossing]:
     (below 1e-6 of their limits) just after the crossing; with the planned current and voltage there."""
     out = []
     scale = np.array([data.scales.x[1], data.scales.u_lim])  # the current and voltage limits [A], [V]
-    for ts in plan.phase_edges[1:-1]:
-        x, v = plan.states(np.array([ts]))  # at tau = 0 of the next phase
-        links = np.abs([x[1, 0], v[0]]) / scale
+    ts = plan.phase_edges[1:-1]
+    x, v = plan.states(ts)  # at tau = 0 of the next phase
+    for k in range(ts.size):
+        links = np.abs([x[1, k], v[k]]) / scale
         n = 0
         while n < 2 and links[n] <= 1e-6:
             n += 1
-        out.append(Crossing(t=float(ts), exponent=float(2 * n + 2), sign_change=True, current=float(x[1, 0]),
-                            voltage=float(v[0])))
+        out.append(Crossing(t=float(ts[k]), exponent=float(2 * n + 2), sign_change=True, current=float(x[1, k]),
+                            voltage=float(v[k])))
     return out

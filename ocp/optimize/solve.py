@@ -96,7 +96,7 @@ def _flat_or_radau(mission: Mission, warm: bool | None, previous: OptimizeResult
         if program == SolverProgram.FLAT:
             return Unsolved(f"flat program: {flat_solve.applies(problem) or 'not on a min-time refinement'}")
         return _optimize_mesh(problem, warm, previous, context, started)
-    answer = flat_solve.solve_flat(problem, context)
+    answer = flat_solve.solve_flat(problem, context, warm)
     if isinstance(answer, OptimizeResult) or program == SolverProgram.FLAT:
         answer.solver.setup_time_s = time.perf_counter() - started - _spent(answer.solver)
         return answer

@@ -4,19 +4,25 @@ IPOPT ignores the multipliers it is given unless ``warm_start_init_point=yes``; 
 barrier (``mu_init``) and small pushes off the bounds keep a start that is already nearly optimal where it is.
 Those options are fixed when a solver is built, and they hurt a start from a rough guess (the
 continuous-voltage reversal did not converge in 1,000 iterations with them), so a program keeps two solvers:
-the cold one and, built on the first warm start, the warm one.
+the cold one and the warm one (the Radau program builds it on its first warm start; the flat program with the
+program, from the cold solver's derivative functions, :func:`build_solver`).
 
-A program remembers its last solution, primal and dual (:class:`Memory`). A later solve starts from it when
-asked (a back-off round of the same call, ``warm=True``) or, by default (``warm=None``), when the new call is
-plausibly close (:func:`close`): same phase signs and weights, desired thrust, durations and scales within
-``CLOSE`` relative, the same bound pattern. Batch items and repeated requests of one structure so start warm;
-anything else starts cold.
+A program remembers its last solution, primal and dual (:class:`Memory`; the flat program its last
+:data:`MEMORIES`). A later solve starts from it when asked (``warm=True``: the Radau program's back-off rounds)
+or, by default (``warm=None``), when the new call is plausibly close (:func:`close`, :func:`pick`: same phase
+signs and weights, desired thrust, durations, scales (and the flat program's plant constants) within ``CLOSE``
+relative, the same bound pattern). Batch items and repeated requests of one structure so start warm; anything
+else starts cold.
 """
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
+import casadi as ca
 import numpy as np
 
 #: IPOPT options of a program's warm solver (on top of the cold solver's)
@@ -36,6 +42,8 @@ WARM_OPTIONS: dict[str, object] = {
 #: largest relative change (max norm, against the larger magnitude) of the desired thrust, durations, scales
 #: and finite bounds for which a previous solution is taken as a start
 CLOSE = 0.25
+#: past solves a program remembers (:func:`pick`): batch items of one structure start from the nearest
+MEMORIES = 8
 
 
 @dataclass(frozen=True)
@@ -53,45 +61,99 @@ class Memory:
     ubx: np.ndarray
 
 
-def _rel(a: np.ndarray, b: np.ndarray) -> float:
-    """Largest relative difference of two arrays (0 for two empty ones)."""
-    if a.size == 0:
-        return 0.0
+def _rel(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Largest relative difference of each row of ``a`` (k, m) from ``b`` (m,): shape (k,) (0 for m = 0)."""
     scale = np.maximum(np.maximum(np.abs(a), np.abs(b)), 1e-12)
-    return float(np.max(np.abs(a - b) / scale))
+    return np.max(np.abs(a - b) / scale, axis=1, initial=0.0)
+
+
+def distances(memories: Sequence[Memory], p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
+              exact: Mapping[str, slice], near: Mapping[str, slice], fd: slice) -> np.ndarray:
+    """How far each solve in ``memories`` (k) is from parameters ``p`` and bounds ``lbx``/``ubx``, shape (k,): the
+    largest of the relative changes of the ``near`` slices (durations, scales), of the desired thrust ``fd``
+    (scaled, against its largest value) and of the finite bounds (scaled, absolute); ``inf`` where the sizes, an
+    ``exact`` slice (signs, weights) or the pattern of finite bounds differ."""
+    out = np.full(len(memories), math.inf)
+    ok = [k for k, m in enumerate(memories) if m.p.shape == p.shape and m.lbx.shape == lbx.shape]
+    if not ok:
+        return out
+    P = np.stack([memories[k].p for k in ok])  # (k, n_params)
+    admissible = np.ones(len(ok), bool)
+    for s in exact.values():
+        admissible &= np.all(P[:, s] == p[s], axis=1)
+    change = np.zeros(len(ok))
+    for s in near.values():
+        change = np.maximum(change, _rel(P[:, s], p[s]))
+    peak = max(float(np.max(np.abs(p[fd]))), 1e-12)
+    change = np.maximum(change, np.max(np.abs(P[:, fd] - p[fd]), axis=1, initial=0.0) / peak)
+    for name, new in (("lbx", lbx), ("ubx", ubx)):
+        old, finite = np.stack([getattr(memories[k], name) for k in ok]), np.isfinite(new)
+        admissible &= np.all(np.isfinite(old) == finite, axis=1)
+        change = np.maximum(change, np.max(np.abs(old[:, finite] - new[finite]), axis=1, initial=0.0))
+    out[ok] = np.where(admissible, change, math.inf)
+    return out
+
+
+def distance(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: Mapping[str, slice],
+             near: Mapping[str, slice], fd: slice) -> float:
+    """:func:`distances` of one memory."""
+    return float(distances([mem], p, lbx, ubx, exact, near, fd)[0])
 
 
 def close(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: dict[str, slice],
           near: dict[str, slice], fd: slice) -> bool:
-    """Whether the solution in ``mem`` is a plausible start for parameters ``p`` and bounds ``lbx``/``ubx``.
+    """Whether the solution in ``mem`` is a plausible start for parameters ``p`` and bounds ``lbx``/``ubx``:
+    :func:`distance` at most ``CLOSE``."""
+    return distance(mem, p, lbx, ubx, exact, near, fd) <= CLOSE
 
-    ``exact``: parameter slices that must be equal (signs, weights); ``near``: slices within ``CLOSE``
-    relative (durations, scales); ``fd``: the desired thrust (scaled), within ``CLOSE`` of its largest value.
-    """
-    if mem.p.shape != p.shape or mem.lbx.shape != lbx.shape:
-        return False
-    if any(not np.array_equal(mem.p[s], p[s]) for s in exact.values()):
-        return False
-    if any(_rel(mem.p[s], p[s]) > CLOSE for s in near.values()):
-        return False
-    peak = max(float(np.max(np.abs(p[fd]))), 1e-12)
-    if float(np.max(np.abs(mem.p[fd] - p[fd]))) > CLOSE * peak:
-        return False
-    for old, new in ((mem.lbx, lbx), (mem.ubx, ubx)):
-        finite = np.isfinite(new)
-        if not np.array_equal(np.isfinite(old), finite) or float(np.max(np.abs(old[finite] - new[finite]),
-                                                                        initial=0.0)) > CLOSE:
-            return False
-    return True
+
+#: the Radau program's parameter parts that must be equal / within CLOSE for a warm start (:func:`start_from`)
+RADAU_EXACT, RADAU_NEAR = ("sigma", "weights"), ("dur", "xscale", "uscale", "fscale")
 
 
 def start_from(mem: Memory | None, warm: bool | None, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
-               slices: dict[str, slice]) -> bool:
+               slices: Mapping[str, slice], exact: tuple[str, ...] = RADAU_EXACT,
+               near: tuple[str, ...] = RADAU_NEAR) -> bool:
     """Whether a solve starts from ``mem``: asked (``warm=True``, same size) or, ``warm=None``, when it is
-    plausibly close (:func:`close`; ``slices``: the program's parameter layout)."""
-    if warm is False or mem is None or mem.x.size != lbx.size:
-        return False
+    plausibly close (:func:`close`; ``slices``: the program's parameter layout, ``exact``/``near``: the names of
+    its parts that must be equal / within ``CLOSE``, ``slices["fd"]`` the desired thrust)."""
+    return pick([] if mem is None else [mem], warm, p, lbx, ubx, slices, exact, near) is not None
+
+
+def pick(memories: Sequence[Memory], warm: bool | None, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray,
+         slices: Mapping[str, slice], exact: tuple[str, ...], near: tuple[str, ...],
+         limit: float = CLOSE) -> Memory | None:
+    """The memory (of a program's last few solves, oldest first) a solve starts from: none (``warm=False``), the
+    latest of the right size (``warm=True``), or (``warm=None``) the nearest (:func:`distance`) within ``limit``."""
+    sized = [m for m in memories if m.x.size == lbx.size]
+    if warm is False or not sized:
+        return None
     if warm:
-        return True
-    return close(mem, p, lbx, ubx, exact={k: slices[k] for k in ("sigma", "weights")},
-                 near={k: slices[k] for k in ("dur", "xscale", "uscale", "fscale")}, fd=slices["fd"])
+        return sized[-1]
+    far = distances(sized, p, lbx, ubx, {k: slices[k] for k in exact}, {k: slices[k] for k in near}, slices["fd"])
+    best = int(np.argmin(far))
+    return sized[best] if far[best] <= limit else None
+
+
+def warm_args(mem: Memory, lbx: np.ndarray, ubx: np.ndarray) -> dict[str, np.ndarray]:
+    """A solver call's start from ``mem``: its primal (clipped into the new bounds ``lbx``/``ubx``) and duals."""
+    return {"x0": np.clip(mem.x, lbx, ubx), "lam_x0": mem.lam_x, "lam_g0": mem.lam_g}
+
+
+def remember(sol: Mapping[str, Any], p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray) -> Memory:
+    """The memory of a solver call's result ``sol`` (CasADi's x, lam_x, lam_g) for parameters ``p`` and bounds."""
+    return Memory(x=np.asarray(sol["x"]).ravel(), lam_x=np.asarray(sol["lam_x"]).ravel(),
+                  lam_g=np.asarray(sol["lam_g"]).ravel(), p=p.copy(), lbx=lbx.copy(), ubx=ubx.copy())
+
+
+#: the derivative functions a warm solver takes from its program's cold solver instead of deriving them again
+#: (the flat program's symbolic Hessian is most of its ~2 s build; with them the warm build takes ~0.3 s)
+SHARED = {"hess_lag": "nlp_hess_l", "jac_g": "nlp_jac_g", "grad_f": "nlp_grad_f"}
+
+
+def build_solver(name: str, nlp: dict[str, ca.SX], options: Mapping[str, object], callback: object,
+                 cold: ca.Function | None = None) -> ca.Function:
+    """A program's warm solver: its cold ``options`` with :data:`WARM_OPTIONS`, the same iteration ``callback``;
+    the cold solver ``cold`` (built from the same ``nlp``) lends its derivative functions (:data:`SHARED`)."""
+    shared = {} if cold is None else {opt: cold.get_function(fn) for opt, fn in SHARED.items()}
+    return ca.nlpsol(name, "ipopt", nlp, {**options, **WARM_OPTIONS, **shared, "iteration_callback": callback})  # type: ignore[dict-item]

@@ -86,3 +86,22 @@ def test_a_batch_answer_rendered_in_the_worker_is_stored_as_its_json(tmp_path) -
         assert first.result == answer == second.result
     finally:
         store.close()
+
+
+def test_repeated_optimise_requests_start_warm() -> None:
+    """The worker's optimise task asks for warm starts: its second request of a mission (and one 5 % stronger)
+    starts from the first one's solution, with fewer IPOPT iterations, the same objective (rel 1e-3) or better and
+    the limits held. (In process: the worker process runs this same function.)"""
+    def mission(level: float) -> dict[str, Any]:
+        return {"name": "again", "limits": {"voltage": 12.0, "current": 1.0}, "collocation": {"intervals": 60},
+                "segments": [{"kind": "hold", "duration": 0.2, "thrust": level},
+                             {"kind": "reversal", "duration": 1.0, "to": -level},
+                             {"kind": "hold", "duration": 0.2, "thrust": -level}]}
+
+    first, again, nearby = (optimize_mission(mission(level)) for level in (0.3, 0.3, 0.315))
+    assert first["solver"]["program"] == "flat"
+    for answer in (again, nearby):
+        assert answer["source"] == "optimized" and answer["solver"]["warm_start"]
+        assert answer["verification"]["path_ok"]
+    assert again["solver"]["iterations"] < first["solver"]["iterations"] or first["solver"]["warm_start"]
+    assert again["solver"]["objective"] <= first["solver"]["objective"] * (1 + 1e-3)
