@@ -3,7 +3,7 @@
 A *model* is a set of items: catalogue effects and named constants. Fitting it is a bounded linear
 least-squares problem on the training rows: every constant is always refined (that is calibration),
 within ``+-tolerance`` of nominal unless the model *names* it (then within -80 % .. +300 %); effects
-in the model get their columns (the best shape on a grid by training cost), sign-bounded as the
+in the model get their columns (the best shape on a grid by training cost, mixed with a grid neighbour), sign-bounded as the
 catalogue's lower bounds say; effects outside it are zero. A constant the log cannot resolve
 (:attr:`.regression.Design.unresolved`, e.g. ``L`` under a current filter) is a free nuisance (-80 % .. any):
 boxed in, what it stands for would be explained by a wrong item (brush drop, dead band, ``R``).
@@ -97,7 +97,8 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float) -> F
 
 
 def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
-    """Fit a model (module doc): shaped effects take their best grid column by training cost."""
+    """Fit a model (module doc): shaped effects take their best grid column by training cost and its better
+    neighbour (:func:`_shape_columns`)."""
     base = [j for c in (*CONSTANTS, *NUISANCES) for j in design.index(c)]
     named = {i for i in items if i in CONSTANTS}
     chosen: list[int] = list(base)
@@ -109,14 +110,21 @@ def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
         if design.columns[js[0]].item == "cogging" or not shapes:
             chosen += js
             continue
-        best: Fitted | None = None
-        for j in js:
-            f = solve(design, [*chosen, j], named, tol)
-            if best is None or f.train_cost < best.train_cost:
-                best, pick = f, j
-        chosen.append(pick)
+        chosen += _shape_columns(design, chosen, js, named, tol)
     f = solve(design, chosen, named, tol)
     return Fitted(tuple(items), f.cols, f.x, f.train_cost, f.score, f.per_eq)
+
+
+def _shape_columns(design: Design, chosen: list[int], js: list[int], named: set[str], tol: float) -> list[int]:
+    """A shaped effect's columns: the best grid column ``js`` (ordered by shape) by training cost, with the better
+    of its grid neighbours (both coefficients sign-bounded): the true shape lies between grid points, and the
+    residual of one grid column mis-shaped by half a grid step (e.g. a wake lag 30 % off) would be explained by
+    a wrong constant instead."""
+    costs = [solve(design, [*chosen, j], named, tol).train_cost for j in js]
+    k = int(np.argmin(costs))
+    pairs = [[js[k], js[m]] for m in (k - 1, k + 1) if 0 <= m < len(js)]
+    fits = [(solve(design, [*chosen, *pr], named, tol).train_cost, pr) for pr in pairs]
+    return min(fits, key=lambda e: e[0])[1] if fits else [js[k]]
 
 
 @dataclass(frozen=True)
