@@ -39,6 +39,12 @@ NAMED_BOUNDS = (-0.8, 3.0)
 IMPLAUSIBLE_FACTOR = 2.0
 #: a pair of items is tried among this many best single challengers when none clears the test alone (:func:`_pair`)
 PAIR_TOP = 4
+#: effects whose columns are a saturation ``clip(x, +-w) / w`` (a driver dead band, a brush drop: no output or no
+#: current inside the band): physically the drop saturates at the band's width, so a column's amplitude is its
+#: width, within this factor (a grid step, ~1.45, and the calibration of the constants); a 0.3 V "dead band" of
+#: 1.4 V width is no dead band (it would explain a brush drop by a reduced gain at low voltage)
+SATURATING = frozenset({"brush_drop", "voltage_deadband"})
+SATURATION_SLACK = 1.5
 
 
 @dataclass(frozen=True)
@@ -67,6 +73,8 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float) ->
             # what it stands for (a current filter for L) to be explained by a wrong item
             a, b = (NAMED_BOUNDS[0], np.inf) if c.item in design.unresolved else \
                 NAMED_BOUNDS if c.item in named else (-tol, tol)
+        elif c.item in SATURATING:  # the drop saturates at its width: amplitude = width (module doc)
+            a, b = c.shape / SATURATION_SLACK, c.shape * SATURATION_SLACK
         else:
             a, b = (0.0 if CATALOGUE[c.item].bounds.get(c.key, (-1.0, 1.0))[0] >= 0 else -np.inf), np.inf
         lo.append(a)
@@ -113,19 +121,20 @@ def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
         if design.columns[js[0]].item == "cogging" or not shapes:
             chosen += js
             continue
-        chosen += _shape_columns(design, chosen, js, named, tol)
+        chosen += _shape_columns(design, chosen, js, named, tol, mix=item not in SATURATING)
     f = solve(design, chosen, named, tol)
     return Fitted(tuple(items), f.cols, f.x, f.train_cost, f.score, f.per_eq)
 
 
-def _shape_columns(design: Design, chosen: list[int], js: list[int], named: set[str], tol: float) -> list[int]:
-    """A shaped effect's columns: the best grid column ``js`` (ordered by shape) by training cost, with the better
-    of its grid neighbours (both coefficients sign-bounded): the true shape lies between grid points, and the
-    residual of one grid column mis-shaped by half a grid step (e.g. a wake lag 30 % off) would be explained by
-    a wrong constant instead."""
+def _shape_columns(design: Design, chosen: list[int], js: list[int], named: set[str], tol: float,
+                   mix: bool = True) -> list[int]:
+    """A shaped effect's columns: the best grid column ``js`` (ordered by shape) by training cost, with
+    (``mix``) the better of its grid neighbours (both coefficients sign-bounded): the true shape lies between grid
+    points, and the residual of one grid column mis-shaped by half a grid step (e.g. a wake lag 30 % off) would be
+    explained by a wrong constant instead. (A saturating effect's amplitude is bounded by its width instead.)"""
     costs = [solve(design, [*chosen, j], named, tol).train_cost for j in js]
     k = int(np.argmin(costs))
-    pairs = [[js[k], js[m]] for m in (k - 1, k + 1) if 0 <= m < len(js)]
+    pairs = [[js[k], js[m]] for m in (k - 1, k + 1) if mix and 0 <= m < len(js)]
     fits = [(solve(design, [*chosen, *pr], named, tol).train_cost, pr) for pr in pairs]
     return min(fits, key=lambda e: e[0])[1] if fits else [js[k]]
 
