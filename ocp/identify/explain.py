@@ -35,21 +35,32 @@ def relative(design: Design, f: Fitted, const: str) -> float:
 
 
 def effect_values(design: Design, f: Fitted, item: str) -> dict[str, float]:
-    """Catalogue parameters (SI) of an adopted effect from its fitted columns."""
+    """Catalogue parameters (SI) of an adopted effect from its fitted columns (a shaped effect fitted by two
+    neighbouring grid columns, :func:`.select.fit_model`: their sum, at their weighted geometric-mean shape)."""
     picked = [(design.columns[j], f.coefficient(j)) for j in f.cols if design.columns[j].item == item]
     if not picked:
         return {}
     col, x = picked[0]
-    if item == "stribeck":
-        return {"tau_s": max(x, 0.0), "omega_s": col.shape}
-    if item == "voltage_deadband":
-        return {"v_db": max(x, 0.0)}
-    if item == "thrust_lag":
-        return {"tau": col.shape}
     if item == "cogging":
         out = {c.key: x_ for c, x_ in picked}
         return {**out, "periods": col.shape}
+    shape, x = _blend([(c.shape, x_) for c, x_ in picked])
+    if item == "stribeck":
+        return {"tau_s": max(x, 0.0), "omega_s": shape}
+    if item == "voltage_deadband":
+        return {"v_db": max(x, 0.0)}
+    if item == "thrust_lag":
+        return {"tau": shape}
     return {col.key: x}
+
+
+def _blend(parts: list[tuple[float, float]]) -> tuple[float, float]:
+    """(shape, amplitude) of columns ``(shape, coefficient)``: one column as it is; two neighbouring grid columns
+    (non-negative coefficients) as their sum at the coefficient-weighted geometric mean of their shapes."""
+    total = sum(x for _, x in parts)
+    if len(parts) == 1 or math.isnan(parts[0][0]) or total <= 0:
+        return parts[0][0], total
+    return math.exp(sum(x * math.log(s) for s, x in parts) / total), total
 
 
 def params_of(p: MotorParams, design: Design, f: Fitted) -> MotorParams:

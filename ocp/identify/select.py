@@ -3,8 +3,8 @@
 A *model* is a set of items: catalogue effects and named constants. Fitting it is a bounded linear
 least-squares problem on the training rows: every constant is always refined (that is calibration),
 within ``+-tolerance`` of nominal unless the model *names* it (then within -80 % .. +300 %); effects
-in the model get their columns (the best shape on a grid by training cost), sign-bounded as the
-catalogue's lower bounds say; effects outside it are zero. A constant the log cannot resolve
+in the model get their columns (the best shape on a grid by training cost, mixed with a grid neighbour),
+sign-bounded as the catalogue's lower bounds say; effects outside it are zero. A constant the log cannot resolve
 (:attr:`.regression.Design.unresolved`, e.g. ``L`` under a current filter) is a free nuisance (-80 % .. any):
 boxed in, what it stands for would be explained by a wrong item (brush drop, dead band, ``R``).
 Its score is the held-out RMS of the three
@@ -12,7 +12,8 @@ weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a mo
 
 Forward selection adopts the item with the best held-out score while some equation's held-out RMS is
 above ``noise_floor`` and the score falls by at least ``min_improvement`` and beyond sampling noise (the
-pooled score's scatter, or one equation's own: :func:`_beyond_scatter`). A constant that
+pooled score's scatter, or one equation's own: :func:`_beyond_scatter`); where no item clears that alone, two
+that clear it only together (and each against the other alone) are adopted as a pair (:func:`_pair`). A constant that
 would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` yields to an effect that fits as well (a prior on
 constant errors: :func:`_prefer_effects`). Then every adopted item is challenged: an
 alternative that swaps it for another item and scores within ``ambiguity_margin`` makes the verdict
@@ -36,6 +37,14 @@ NAMED_BOUNDS = (-0.8, 3.0)
 #: a constant off by more than this factor (either way) is a less likely error than a missing effect that fits
 #: the held-out data as well: the prior on constant errors behind :func:`_prefer_effects`
 IMPLAUSIBLE_FACTOR = 2.0
+#: a pair of items is tried among this many best single challengers when none clears the test alone (:func:`_pair`)
+PAIR_TOP = 4
+#: effects whose columns are a saturation ``clip(x, +-w) / w`` (a driver dead band, a brush drop: no output or no
+#: current inside the band): physically the drop saturates at the band's width, so a column's amplitude is its
+#: width, within this factor (a grid step, ~1.45, and the calibration of the constants); a 0.3 V "dead band" of
+#: 1.4 V width is no dead band (it would explain a brush drop by a reduced gain at low voltage)
+SATURATING = frozenset({"brush_drop", "voltage_deadband"})
+SATURATION_SLACK = 1.5
 
 
 @dataclass(frozen=True)
@@ -64,6 +73,8 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float) ->
             # what it stands for (a current filter for L) to be explained by a wrong item
             a, b = (NAMED_BOUNDS[0], np.inf) if c.item in design.unresolved else \
                 NAMED_BOUNDS if c.item in named else (-tol, tol)
+        elif c.item in SATURATING:  # the drop saturates at its width: amplitude = width (module doc)
+            a, b = c.shape / SATURATION_SLACK, c.shape * SATURATION_SLACK
         else:
             a, b = (0.0 if CATALOGUE[c.item].bounds.get(c.key, (-1.0, 1.0))[0] >= 0 else -np.inf), np.inf
         lo.append(a)
@@ -97,7 +108,8 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float) -> F
 
 
 def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
-    """Fit a model (module doc): shaped effects take their best grid column by training cost."""
+    """Fit a model (module doc): shaped effects take their best grid column by training cost and its better
+    neighbour (:func:`_shape_columns`)."""
     base = [j for c in (*CONSTANTS, *NUISANCES) for j in design.index(c)]
     named = {i for i in items if i in CONSTANTS}
     chosen: list[int] = list(base)
@@ -109,14 +121,22 @@ def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
         if design.columns[js[0]].item == "cogging" or not shapes:
             chosen += js
             continue
-        best: Fitted | None = None
-        for j in js:
-            f = solve(design, [*chosen, j], named, tol)
-            if best is None or f.train_cost < best.train_cost:
-                best, pick = f, j
-        chosen.append(pick)
+        chosen += _shape_columns(design, chosen, js, named, tol, mix=item not in SATURATING)
     f = solve(design, chosen, named, tol)
     return Fitted(tuple(items), f.cols, f.x, f.train_cost, f.score, f.per_eq)
+
+
+def _shape_columns(design: Design, chosen: list[int], js: list[int], named: set[str], tol: float,
+                   mix: bool = True) -> list[int]:
+    """A shaped effect's columns: the best grid column ``js`` (ordered by shape) by training cost, with
+    (``mix``) the better of its grid neighbours (both coefficients sign-bounded): the true shape lies between grid
+    points, and the residual of one grid column mis-shaped by half a grid step (e.g. a wake lag 30 % off) would be
+    explained by a wrong constant instead. (A saturating effect's amplitude is bounded by its width instead.)"""
+    costs = [solve(design, [*chosen, j], named, tol).train_cost for j in js]
+    k = int(np.argmin(costs))
+    pairs = [[js[k], js[m]] for m in (k - 1, k + 1) if mix and 0 <= m < len(js)]
+    fits = [(solve(design, [*chosen, *pr], named, tol).train_cost, pr) for pr in pairs]
+    return min(fits, key=lambda e: e[0])[1] if fits else [js[k]]
 
 
 @dataclass(frozen=True)
@@ -143,21 +163,46 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
     items: list[str] = []
     current = fit_model(design, items, tol)
     steps: list[Step] = []
-    for r in range(max_items):
+    while len(items) < max_items:
         tried = [(c, fit_model(design, [*items, c], tol)) for c in pool if c not in items]
         tried.sort(key=lambda e: e[1].score)
         tried = _prefer_effects(design, tried, margin)
         if progress is not None:
-            progress((r + 1) / (max_items + 1))
+            progress((len(items) + 1) / (max_items + 1))
         ok = bool(tried) and _worst(design, current) > noise_floor \
             and tried[0][1].score <= (1 - min_improvement) * current.score \
             and _beyond_scatter(design, current, tried[0][1])
+        pair = None if ok or len(items) + 2 > max_items else \
+            _pair(design, items, tried, current, tol, min_improvement, noise_floor)
+        if pair is not None:  # two items that clear the test only together
+            steps += pair
+            items += [st.adopted for st in pair if st.adopted is not None]
+            current = pair[-1].tried[0][1]
+            continue
         steps.append(Step(current, tried, tried[0][0] if ok else None))
         if not ok:
             break
         items.append(tried[0][0])
         current = tried[0][1]
     return Selection(current, steps, _challenge(design, items, pool, current, tol, margin))
+
+
+def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], current: Fitted, tol: float,
+          min_improvement: float, noise_floor: float) -> list[Step] | None:
+    """Two of the :data:`PAIR_TOP` best challengers adopted together, where none clears the test alone: two effects
+    whose residuals overlap (an angle ripple beside Coulomb friction: each alone leaves the other's residual,
+    fitted into the wrong columns). The pair must clear the test against ``current`` (the score falling by
+    ``min_improvement`` and beyond sampling noise) and against either item alone (each is needed beside the
+    other). Returns the two forward steps (the better single first), or None."""
+    if len(tried) < 2 or _worst(design, current) <= noise_floor:
+        return None
+    single = dict(tried[:PAIR_TOP])
+    fits = [(a, b, fit_model(design, [*items, a, b], tol)) for a, b in itertools.combinations(single, 2)]
+    a, b, f = min(fits, key=lambda e: e[2].score)
+    for before in (current, single[a], single[b]):
+        if f.score > (1 - min_improvement) * before.score or not _beyond_scatter(design, before, f):
+            return None
+    return [Step(current, [(a, single[a]), *[e for e in tried if e[0] != a]], a), Step(single[a], [(b, f)], b)]
 
 
 def _prefer_effects(design: Design, tried: list[tuple[str, Fitted]], margin: float) -> list[tuple[str, Fitted]]:
