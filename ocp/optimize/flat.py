@@ -24,8 +24,8 @@ Everything the Radau program imposes is kept, as bounds where the B-spline's pro
   vanish there; order 2 keeps the current continuous (``omega'`` continuous in physical time), a continuous
   voltage also ``omega''``, a C^1 voltage ``omega'''`` (equalities across the two phases' lengths);
 * ``|i| <= I (1 - MARGIN)`` and ``|V| <= V (1 - MARGIN)`` at :data:`CHECKS` points per span (:data:`END_CHECKS`
-  near the phase ends); the verified answer (the command simulated on the integration grid) decides, with
-  back-off rounds (:mod:`ocp.optimize.flat_solve`) and then the Radau program (:mod:`ocp.optimize.solve`).
+  in the spans nearest the phase ends); the verified answer (the command simulated on the integration grid)
+  decides, with back-off rounds (:mod:`ocp.optimize.flat_solve`) and then the Radau program (:mod:`ocp.optimize.solve`).
 
 The objective is the Radau program's (``ocp.optimize.data.WEIGHTS``): tracking at the same normalised time of the
 desired phase (Gauss quadrature per span), stretch, and the smoothness and effort of the Radau program's control
@@ -54,18 +54,24 @@ from ocp.optimize import warm as warm_
 from ocp.optimize.program_cache import ProgramCache
 
 DEGREE = 5  # omega: C^4 inside a phase, so the voltage is C^2 and its slew C^1
-CHECKS = 4  # limit check points per span (equally spaced)
-#: ... in the END_SPANS first and last spans of a phase, where a reversal's held voltage may jump and the current
-#: turns fastest (with 1 end span of 16 checks the continuous-voltage user missions needed back-off rounds)
-END_CHECKS, END_SPANS = 3 * CHECKS, 3
+CHECKS = 3  # limit check points per span (equally spaced)
+#: ... in the first and last spans of a phase (outermost first), where a reversal's held voltage may jump and the
+#: current turns fastest. Every check is two rows of IPOPT's, and its time per iteration grows with the rows (rows
+#: with infinite bounds cost as much): 3 a span and (12, 8, 8) at the ends (98 rows a phase at 20 spans) took
+#: 30-40 % less time per iteration than 4 and 12 in 3 end spans (128 rows); with 8 in the 3 end spans the step
+#: reversal needed a back-off round (overshoot in the last span), with (12, 6, 6) the 1 Hz continuous-voltage sine
+END_CHECKS = (12, 8, 8)
 GAUSS = 4  # Gauss-Legendre points per span for the tracking integral
 #: knots graded towards the phase ends: a reversal with omega ~ s^3 needs fine spans there (the continuous-voltage
 #: reversal's tracking objective fell by 8x from uniform spans to GRADE 0.8 at 20 spans; 0.5 keeps the middle of
 #: a phase resolved for a ramp's corners)
 GRADE = 0.5
 #: IPOPT options of the flat program over the Radau program's: a monotone barrier (the adaptive one's mu oracle
-#: cost more than it saved on these small programs: 46 vs 79 ms on the 2 s reversal, 75 vs 124 ms on user-ramp-cv)
-IPOPT_OPTIONS = {"ipopt.mu_strategy": "monotone"}
+#: cost more than it saved on these small programs: 46 vs 79 ms on the 2 s reversal, 75 vs 124 ms on user-ramp-cv),
+#: started at mu 1e-3 (the guess is inside the current limit, :func:`ocp.optimize.flat_solve._guess`) and left as
+#: soon as its subproblem is solved to 100 mu (not 10): 6 to 23 iterations on the user missions instead of 10 to
+#: 28, the same optimum (relative 1e-3)
+IPOPT_OPTIONS = {"ipopt.mu_strategy": "monotone", "ipopt.mu_init": 1e-3, "ipopt.barrier_tol_factor": 100.0}
 MARGIN = 5e-3  # the current and voltage bounds at the check points are the limits times (1 - MARGIN)
 CACHE_SIZE = 16
 
@@ -119,8 +125,8 @@ def quad_basis(spans: int) -> np.ndarray:
 
 @lru_cache(maxsize=32)
 def points(spans: int) -> dict[str, np.ndarray]:
-    """Normalised times of one phase: limit checks ``check`` (CHECKS per span, END_CHECKS in the END_SPANS first
-    and last spans; the phase's end included),
+    """Normalised times of one phase: limit checks ``check`` (CHECKS per span, END_CHECKS in the first and last
+    spans, outermost first; the phase's end included),
     Gauss points ``quad`` (spans GAUSS,) with weights ``weight`` (sum 1), and ``mid`` (spans,) the spans'
     midpoints, where the smoothness and effort terms sample the control."""
     g, wg = np.polynomial.legendre.leggauss(GAUSS)
@@ -128,7 +134,8 @@ def points(spans: int) -> dict[str, np.ndarray]:
     width = np.diff(edges)
     quad = (edges[:-1, None] + 0.5 * (g[None, :] + 1.0) * width[:, None]).ravel()
     per = np.full(spans, CHECKS)
-    per[:END_SPANS] = per[-END_SPANS:] = END_CHECKS
+    ends = np.array(END_CHECKS[: spans // 2])
+    per[: ends.size], per[spans - ends.size:] = ends, ends[::-1]
     check = np.append(np.concatenate([a + np.arange(n) / n * w for a, n, w in zip(edges[:-1], per, width,
                                                                                   strict=True)]), 1.0)
     return {"check": check, "quad": quad, "weight": (0.5 * wg[None, :] * width[:, None]).ravel(),

@@ -36,6 +36,8 @@ SPANS_PER_INTERVALS = 3  # one B-spline span per this many Radau intervals of a 
 SPANS = (8, 20)  # ... between these (per phase)
 NO_CONTEXT = SolveContext()
 DERIVED = 2  # highest derivative of the speed a plan evaluates
+#: the initial guess changes the speed at most at this fraction of the rate the current limit allows (:func:`_guess`)
+GUESS_CURRENT = 0.6
 ROUNDS = 2  # back-off rounds of the flat program before the Radau program is asked
 
 
@@ -115,12 +117,38 @@ def _bounds(problem: Problem, st: flat.FlatStructure, ws: float, w0: float) -> t
 
 def _guess(problem: Problem, st: flat.FlatStructure, w2: np.ndarray, ws: float, lbx: np.ndarray,
            ubx: np.ndarray) -> np.ndarray:
-    """Static inverse: per phase the least-squares spline through sigma sqrt(|F_d| / c_f) at the Gauss points
-    (``w2`` (P, nq): desired thrust / c_f [rad^2/s^2]); stretch 1; clipped into the bounds."""
+    """Static inverse within the current limit: per phase the least-squares spline through the speed
+    sqrt(|F_d| / c_f) (``w2`` (P, nq): desired thrust / c_f [rad^2/s^2] at the Gauss points) slowed where it
+    changes faster than the current limit allows (:func:`_rate_limited`), with its sign; stretch
+    1; clipped into the bounds. A start inside the current limit spares IPOPT the iterations that only reach it
+    (6 to 8 of 20 to 28 on the user missions from the plain static inverse)."""
     quad = flat.quad_basis(st.spans)
-    speed = problem.phases.signs[:, None] * np.sqrt(np.abs(w2)) / ws
-    coef = np.linalg.lstsq(quad, speed.T, rcond=None)[0].T  # (P, nc)
+    speed = np.array([_rate_limited(problem, np.sqrt(np.abs(w2[j])), j) for j in range(st.n_phases)])
+    coef = np.linalg.lstsq(quad, (problem.phases.signs[:, None] * speed / ws).T, rcond=None)[0].T  # (P, nc)
     return np.clip(np.concatenate([np.ones(st.n_phases), coef.ravel()]), lbx, ubx)
+
+
+def _rate_limited(problem: Problem, speed: np.ndarray, j: int) -> np.ndarray:
+    """|omega| (nq,) [rad/s] at phase ``j``'s Gauss points, lowered so that it changes at most GUESS_CURRENT of the
+    rate the current limit allows (rising: against the drag, falling: with it; so the current stays inside the
+    limit wherever the drag alone is), and is zero at the phase's reversals (a forward and a backward pass)."""
+    mp, phases = problem.mission.motor(), problem.phases
+    torque = mp.k_t * problem.mission.limits.current  # [N m]
+    t = phases.bounds[j] + flat.points(speed.size // flat.GAUSS)["quad"] * phases.durations[j]  # (nq,) [s]
+    out = speed.copy()
+    prev_t, prev = (phases.bounds[j], 0.0) if j > 0 else (t[0], out[0])
+    for n in range(out.size):
+        # eq:dc_mechanical  J |w|' = k_t |i| - B |w| - c_tau w^2 (speeding up)
+        rate = GUESS_CURRENT * max(torque - mp.B * prev - mp.c_tau * prev**2, 0.0) / mp.J
+        prev = out[n] = min(out[n], prev + rate * (t[n] - prev_t))
+        prev_t = t[n]
+    nxt_t, nxt = (t[-1], out[-1]) if j == phases.signs.size - 1 else (phases.bounds[j + 1], 0.0)
+    for n in range(out.size - 1, -1, -1):
+        # eq:dc_mechanical  J |w|' = -(k_t |i| + B |w| + c_tau w^2) (slowing down)
+        rate = GUESS_CURRENT * (torque + mp.B * nxt + mp.c_tau * nxt**2) / mp.J
+        nxt = out[n] = min(out[n], nxt + rate * (nxt_t - t[n]))
+        nxt_t = t[n]
+    return out
 
 
 def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT,

@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
+from scipy.interpolate import BSpline
 
 from ocp.optimize import flat, flat_solve
 from ocp.optimize.evaluate import objective_of
@@ -147,3 +148,50 @@ def test_unsupported_plant_goes_to_the_radau_program():
     r = optimize(m)
     assert r.source == "optimized" and r.solver.program == "radau"
     assert r.to_dict()["solver"]["program"] == "radau"
+
+
+def test_check_points_are_densest_in_the_end_spans():
+    """CHECKS a span in the middle, END_CHECKS (outermost first) in the spans at either end, the phase end included;
+    strictly increasing in [0, 1]."""
+    spans = 8
+    pts = flat.points(spans)["check"]
+    edges = flat.knots(spans)[flat.DEGREE:-flat.DEGREE]
+    per_span = np.histogram(pts[:-1], bins=edges)[0]
+    ends = list(flat.END_CHECKS)
+    assert per_span.tolist() == ends + [flat.CHECKS] * (spans - 2 * len(ends)) + ends[::-1]
+    assert pts[-1] == 1.0 and pts[0] == 0.0 and np.all(np.diff(pts) > 0)
+
+
+def test_initial_guess_is_inside_the_current_limit_and_tracks_the_holds():
+    """The cold start's speed spline needs at most the current limit (eq. dc_mechanical written out here, omega' by
+    central differences of the guess, every 0.5 ms), where the plain static inverse needs several times it at the
+    reversal; on the holds (0.5 A of drag current) it is the static inverse sqrt(F / c_f) (within 1 %)."""
+    spec = _user_ramp("bounded")
+    problem = problem_for(mission_from_mapping(spec))
+    st = flat_solve.structure_of(problem)
+    prog, _ = flat.program_for(st)
+    data = flat_solve.flat_data(problem, prog)
+    assert data is not None
+    p, lim, P = SMALL_MOTOR, spec["limits"]["current"], st.n_phases
+    edges = problem.phases.bounds
+    for j in range(P):
+        spline = BSpline(flat.knots(st.spans), data.x0[P:].reshape(P, -1)[j] * data.scales.x[0], flat.DEGREE)
+        tau, d = np.arange(0.0, 1.0, 5e-4 / (edges[j + 1] - edges[j]))[1:], 1e-6
+        w = spline(tau)
+        dw = (spline(tau + d) - spline(tau - d)) / (2 * d) / (edges[j + 1] - edges[j])
+        cur = (p["J"] * dw + p["B"] * w + p["c_tau"] * w * np.abs(w)) / p["k_t"]
+        assert np.max(np.abs(cur)) <= lim
+        hold = np.abs(edges[j] + tau * (edges[j + 1] - edges[j]) - 1.0) > 0.6  # t < 0.4 s or t > 1.6 s
+        np.testing.assert_allclose(np.abs(w[hold]), math.sqrt(0.3 / p["c_f"]), rtol=1e-2)
+
+
+def test_user_sine_solves_without_a_backoff_round():
+    """The 1 Hz continuous-voltage sine of the user suite (5 phases, the current limit binding near every
+    reversal): the flat program's first answer keeps the limits on the integration grid (no back-off round)."""
+    t = np.linspace(0.0, 2.0, 401)
+    spec = {"name": "sine-cv", "params": SMALL_MOTOR, "limits": {"voltage": 6.0, "current": 1.0},
+            "regularity": "continuous-voltage",
+            "profile": {"t": t.tolist(), "thrust": (0.25 * np.cos(2 * np.pi * t)).tolist()}}
+    r = optimize(mission_from_mapping(spec))
+    assert r.source == "optimized" and r.solver.program == "flat"
+    assert r.path_ok and r.solver.backoff_rounds == 0
