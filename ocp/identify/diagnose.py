@@ -12,8 +12,9 @@ Procedure:
    count from the residual's spectrum against rotor angle) and relative errors of the constants.
 4. **Selection** (:mod:`.select`): every model refines all constants within ``tolerance`` of nominal
    (``calibration``); a constant is *named* (``param:<key>`` in the verdict) only when freeing it beyond
-   the tolerance wins on held-out data like an effect must: forward selection while the held-out score
-   is above ``noise_floor`` and falls by ``min_improvement``. Adopted items that another item explains
+   the tolerance wins on held-out data: forward selection while the held-out score is above ``noise_floor``
+   and falls beyond sampling noise (an effect: also by ``min_improvement``; a constant's materiality is the
+   tolerance). Adopted items that another item explains
    equally well (within ``ambiguity_margin``) are reported under ``ambiguous`` with the reason.
 5. The user's plant and each round's adopted model are simulated (free run under the measured voltage,
    :func:`ocp.identify.predict.free_run`) on the held-out segments: the per-channel errors reported.
@@ -58,7 +59,7 @@ class DiagnoseOptions(BaseModel):
 
     segment_s: float = Field(default=0.5, gt=0)
     holdout_every: int = Field(default=3, ge=2)
-    min_improvement: float = Field(default=0.12, gt=0, lt=1)  # held-out score must fall by this fraction
+    min_improvement: float = Field(default=0.12, gt=0, lt=1)  # an effect's held-out score must fall by this
     noise_floor: float = Field(default=1.15, gt=0)  # [noise units] a model this close to the noise is done
     max_effects: int = Field(default=3, ge=1, le=10)  # at most this many items in the verdict
     include_params: bool = True  # constants may be named beyond the tolerance (else: calibration only)
