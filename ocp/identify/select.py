@@ -10,8 +10,9 @@ boxed in, what it stands for would be explained by a wrong item (brush drop, dea
 Its score is the held-out RMS of the three
 weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise).
 
-Forward selection adopts the item with the best held-out score while some equation's held-out RMS is
-above ``noise_floor`` and the score falls beyond sampling noise (the pooled score's scatter, or one equation's
+Forward selection adopts, while some equation's held-out RMS is above ``noise_floor``, the best-scoring item
+whose win passes its test (the tests differ by item, so the best-scoring one may fail where the next passes):
+the score falls beyond sampling noise (the pooled score's scatter, or one equation's
 own: :func:`_beyond_scatter`) -- for an effect also by at least ``min_improvement`` (its materiality); a
 constant's materiality is the tolerance itself (calibration already takes the first ``tol`` of its error, and
 beyond it the user wants the name), so a constant freed beyond it needs only to win beyond sampling noise.
