@@ -12,14 +12,14 @@ import numpy as np
 import pytest
 
 from ocp.identify.align import estimate
-from ocp.logs import log_from_arrays
+from ocp.logs import Log, log_from_arrays
 from tests.proving_ground.cases import draw_motor
 from tests.proving_ground.excite import open_loop
 from tests.proving_ground.logger import Logger, record
 from tests.proving_ground.physics import run
 
 
-def _prbs_log(seed: int, rate: float, skew: float, alpha: float) -> tuple[object, float]:
+def _prbs_log(seed: int, rate: float, skew: float, alpha: float) -> tuple[Log, float]:
     """A log (0.8 s) of a drawn motor under a slow PRBS, the drive applying row k's command ``skew`` samples
     later; the logged current through a first-order filter ``alpha``."""
     rng = np.random.default_rng(seed)
@@ -40,6 +40,6 @@ def _prbs_log(seed: int, rate: float, skew: float, alpha: float) -> tuple[object
 @pytest.mark.parametrize(("seed", "rate", "skew", "alpha"), [(4101, 5000.0, 2.12, 1.0), (4102, 1000.0, 0.6, 0.9)])
 def test_a_slow_two_level_command_still_gives_the_lag(seed: int, rate: float, skew: float, alpha: float) -> None:
     log, true = _prbs_log(seed, rate, skew, alpha)
-    a = estimate(log)  # type: ignore[arg-type]
+    a = estimate(log)
     assert abs(a.samples - true) <= 0.5, (a.samples, true)
     assert "not identifiable" not in a.rule
