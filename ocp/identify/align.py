@@ -55,6 +55,7 @@ class Alignment:
         delay: True when the rule calls it an ``input_delay`` (then ``seconds`` is the delay)
         rule: the rule in words
         curve: (lags [samples], normalised residual RMS) of the search, for plots
+        identified: False when the search's residual is flat (then ``samples`` is 0 by assumption, not measured)
     """
 
     samples: float
@@ -62,10 +63,11 @@ class Alignment:
     delay: bool
     rule: str
     curve: tuple[tuple[float, ...], tuple[float, ...]] = ((), ())
+    identified: bool = True
 
     def to_dict(self) -> dict[str, Any]:
         return {"samples": round(self.samples, 3), "seconds": self.seconds,
-                "called_input_delay": self.delay, "rule": self.rule}
+                "called_input_delay": self.delay, "rule": self.rule, "identified": self.identified}
 
 
 def smooth(y: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
@@ -146,7 +148,7 @@ def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
         rule += "; here the lag is not identifiable (flat residual), none is assumed"
     plot = (tuple(float(x) for x in lags), tuple(float(x / (np.std(i) or 1.0)) for x in res))
     return Alignment(float(samples), float(samples * log.dt), bool(samples > max_logging_skew + SKEW_FRACTION), rule,
-                     plot)
+                     plot, sharp)
 
 
 def _pick(lags: np.ndarray, res: np.ndarray) -> tuple[float, bool]:
@@ -180,11 +182,11 @@ def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
     lags, res = (np.asarray(x, float) for x in align.curve)
     keep = lags <= max_logging_skew + SKEW_FRACTION + 1e-9
     if not keep.any():
-        return Alignment(0.0, 0.0, False, align.rule, align.curve)
-    samples, _ = _pick(lags[keep], res[keep])
+        return Alignment(0.0, 0.0, False, align.rule, align.curve, False)
+    samples, known = _pick(lags[keep], res[keep])
     return Alignment(samples, samples * dt, False, align.rule + f"; the {align.samples:.2f}-sample lag of the "
                      "search did not predict the held-out data better than one within the conventions, so the "
-                     "best lag within them is used and no input_delay is called", align.curve)
+                     "best lag within them is used and no input_delay is called", align.curve, known)
 
 
 def realign(log: Log, samples: float) -> Log:

@@ -232,7 +232,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     delay = (align.samples - own) * log.dt if align.delay and "input_delay" in _allowed(opt) else None
     aligned = realign(log, align.samples - own)  # the equations always see the command when it acts
     work = log if delay is not None else aligned  # free runs: the delay, if called, is in the plant
-    design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress)
+    design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align)
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:
@@ -268,10 +268,16 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],
              noise: dict[str, float], opt: DiagnoseOptions, delayed: bool,
-             progress: Callable[[float], None] | None) -> tuple[Design, Selection]:
+             progress: Callable[[float], None] | None, align: Alignment) -> tuple[Design, Selection]:
     """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
-    ripple faster than the low-pass kept, :mod:`.regression`)."""
+    ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
+    search residual), ``L`` is unresolved: a sub-sample command timing error looks like an inductance error
+    in the armature equation (eq. dc_electrical: a shift ``d`` of the command leaves ``-d dt R i'``)."""
     design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True)
+    if not align.identified and log.kind is LogKind.TIME_SERIES:
+        design.unresolved.setdefault("L", "the command timing is not identifiable in this log (flat alignment "
+                                          "residual): an inductance error cannot be told from a sub-sample "
+                                          "timing error")
     if progress is not None:
         progress(0.2)
     return design, select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor,

@@ -11,12 +11,18 @@ import math
 import numpy as np
 import pytest
 
-from ocp.identify.align import estimate
+from ocp.identify import DiagnoseOptions
+from ocp.identify.align import Alignment, _pick, estimate
+from ocp.identify.diagnose import _explain, _pool, split
+from ocp.identify.predict import noise_levels
 from ocp.logs import Log, log_from_arrays
+from ocp.model.params import MotorParams
+from ocp.model.plant import DCMotorPlant
 from tests.proving_ground.cases import draw_motor
 from tests.proving_ground.excite import open_loop
 from tests.proving_ground.logger import Logger, record
 from tests.proving_ground.physics import run
+from tests.synthetic_rig import RigSpec, generate
 
 
 def _prbs_log(seed: int, rate: float, skew: float, alpha: float) -> tuple[Log, float]:
@@ -43,3 +49,27 @@ def test_a_slow_two_level_command_still_gives_the_lag(seed: int, rate: float, sk
     a = estimate(log)
     assert abs(a.samples - true) <= 0.5, (a.samples, true)
     assert "not identifiable" not in a.rule
+
+
+def test_a_plateau_inside_the_search_gives_its_midpoint_and_a_flat_end_none() -> None:
+    lags = np.arange(0.0, 6.01, 0.125)
+    plateau = np.where((lags >= 2.0) & (lags <= 3.0), 1.0, 1.5)  # bounded: only "somewhere in 2..3" is known
+    assert _pick(lags, plateau) == (pytest.approx(2.5), True)
+    smooth = 1.0 + 0.001 * lags  # within 1 % up to the search's end: not identifiable
+    assert _pick(lags, smooth) == (0.0, False)
+    sharp = 1.0 + (lags - 1.3) ** 2
+    lag, known = _pick(lags, sharp)
+    assert known and lag == pytest.approx(1.3, abs=0.01)
+
+
+def test_an_unidentified_timing_leaves_the_inductance_unresolved(rig: MotorParams) -> None:
+    """A sub-sample timing error leaves ``-d dt R i'`` in the armature equation, like an ``L`` error: where the
+    alignment is not identified, ``L`` is calibrated as a nuisance and never named."""
+    log = generate(rig, RigSpec(seconds=0.3, rate=10000.0, seed=3))  # L/R = 4 samples: resolved when timed
+    opt = DiagnoseOptions()
+    sp = split(log, 0.1, opt.holdout_every)
+    effects, pool = _pool(DCMotorPlant(rig), opt)
+    noise = noise_levels(log)
+    known, flat = (_explain(DCMotorPlant(rig), log, sp, effects, pool, noise, opt, False, None,
+                            Alignment(0.0, 0.0, False, "rule", identified=ok))[0] for ok in (True, False))
+    assert "L" not in known.unresolved and "not identifiable" in flat.unresolved["L"]
