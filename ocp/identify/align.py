@@ -13,9 +13,10 @@ whichever is longer, at most 64 samples), then on a grid of 1/8 sample around th
 smallest residual, refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k
 command drives k -> k+1). The dead-band term is the held commands' dead band shifted (the drive's nonlinearity
 acts on each held level before two of them share a sample). A minimum that is not sharp (residual within 1 % one
-sample either side) is a plateau: bounded inside the search (a slow two-level command, whose rare level changes
-tell the lag only to within about a sample), its midpoint is the alignment; reaching an end of the search (slow,
-smooth excitation), the lag is unidentifiable: none is assumed then, and none is called a delay.
+sample either side) is a plateau: bounded inside the search and at most two samples wide (a slow two-level
+command, whose rare level changes tell the lag only to within about a sample), its midpoint is the alignment;
+wider or reaching an end of the search (slow, smooth excitation), the lag is unidentifiable: none is assumed
+then, and none is called a delay.
 
 Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
 conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
@@ -43,6 +44,9 @@ MIN_LAG_S = 0.005
 MAX_LAG = 64
 #: the fraction of a sample a drive's update instant adds to the logging skew (the rule, module doc)
 SKEW_FRACTION = 0.75
+#: widest flat minimum [samples] taken as a measured lag (its midpoint): a level change of a two-level command
+#: pins the lag to within about a sample on either side; a wider one is a smooth excitation's (no lag measured)
+PLATEAU = 2.0
 
 
 @dataclass(frozen=True)
@@ -154,7 +158,8 @@ def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
 def _pick(lags: np.ndarray, res: np.ndarray) -> tuple[float, bool]:
     """The lag [samples] of the smallest residual on the increasing grid ``lags`` (K,), refined by a parabola
     through its neighbours, and whether it is identified: a sharp minimum (the residual rises by >= 1 % one
-    sample either side), or a plateau within 1 % bounded inside the grid (then its midpoint); 0 when neither."""
+    sample either side), or a plateau within 1 % bounded inside the grid and at most :data:`PLATEAU` samples wide
+    (then its midpoint); 0 when neither."""
     j = int(np.argmin(res))
     lag = float(lags[j])
     if 0 < j < lags.size - 1:  # the vertex of the parabola through the neighbours
@@ -167,11 +172,11 @@ def _pick(lags: np.ndarray, res: np.ndarray) -> tuple[float, bool]:
     side = [float(np.interp(lags[j] + d, lags, res)) for d in (-1.0, 1.0) if lags[0] <= lags[j] + d <= lags[-1]]
     if side and min(side) >= 1.01 * res[j]:
         return max(lag, 0.0), True
-    # a flat minimum: the lags within 1 % of the smallest residual. Bounded on both sides inside the search (rare
-    # command changes, e.g. a slow PRBS: only its edges tell the lag, to within the plateau), its midpoint;
-    # reaching an end of the search (slow, smooth excitation), the lag is not identifiable: 0
+    # a flat minimum: the lags within 1 % of the smallest residual. Bounded on both sides inside the search and at
+    # most PLATEAU samples wide (rare level changes, e.g. a slow PRBS, pin the lag to within a sample or two), its
+    # midpoint; wider or reaching an end of the search (slow, smooth excitation), the lag is not identifiable: 0
     flat = lags[res <= 1.01 * res[j]]
-    if flat[0] > lags[0] and flat[-1] < lags[-1]:
+    if flat[0] > lags[0] and flat[-1] < lags[-1] and flat[-1] - flat[0] <= PLATEAU:
         return float(0.5 * (flat[0] + flat[-1])), True
     return 0.0, False
 
