@@ -11,8 +11,12 @@ offset terms: ``i[k+1] = a1 i[k] + a2 V[k - lag] + a3 w[k+1/2] + a4 sign(i) + a5
 fitted by least squares (raw samples) for whole-sample lags up to :func:`search_range` (24 samples or 5 ms,
 whichever is longer, at most 64 samples), then on a grid of 1/8 sample around the best; the lag of the
 smallest residual, refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k
-command drives k -> k+1). A minimum that is not sharp (residual within 1 % one sample either side: slow, smooth
-excitation) leaves the lag unidentifiable; none is assumed then, and none is called a delay.
+command drives k -> k+1). The dead-band term is the held commands' dead band shifted (the drive's nonlinearity
+acts on each held level before two of them share a sample). A minimum that is not sharp (residual within 1 % one
+sample either side) is a plateau: bounded inside the search and at most two samples wide (a slow two-level
+command, whose rare level changes tell the lag only to within about a sample), its midpoint is the alignment;
+wider or reaching an end of the search (slow, smooth excitation), the lag is unidentifiable: none is assumed
+then, and none is called a delay.
 
 Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
 conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
@@ -40,6 +44,9 @@ MIN_LAG_S = 0.005
 MAX_LAG = 64
 #: the fraction of a sample a drive's update instant adds to the logging skew (the rule, module doc)
 SKEW_FRACTION = 0.75
+#: widest flat minimum [samples] taken as a measured lag (its midpoint): a level change of a two-level command
+#: pins the lag to within about a sample on either side; a wider one is a smooth excitation's (no lag measured)
+PLATEAU = 2.0
 
 
 @dataclass(frozen=True)
@@ -52,6 +59,7 @@ class Alignment:
         delay: True when the rule calls it an ``input_delay`` (then ``seconds`` is the delay)
         rule: the rule in words
         curve: (lags [samples], normalised residual RMS) of the search, for plots
+        identified: False when the search's residual is flat (then ``samples`` is 0 by assumption, not measured)
     """
 
     samples: float
@@ -59,10 +67,11 @@ class Alignment:
     delay: bool
     rule: str
     curve: tuple[tuple[float, ...], tuple[float, ...]] = ((), ())
+    identified: bool = True
 
     def to_dict(self) -> dict[str, Any]:
         return {"samples": round(self.samples, 3), "seconds": self.seconds,
-                "called_input_delay": self.delay, "rule": self.rule}
+                "called_input_delay": self.delay, "rule": self.rule, "identified": self.identified}
 
 
 def smooth(y: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
@@ -92,10 +101,11 @@ def search_range(dt: float) -> int:
     return int(min(max(MIN_LAG, math.ceil(MIN_LAG_S / dt)), MAX_LAG))
 
 
-def _residual(target: np.ndarray, gram: np.ndarray, cross: np.ndarray, cols: np.ndarray, v: np.ndarray) -> float:
+def _residual(target: np.ndarray, gram: np.ndarray, cross: np.ndarray, cols: np.ndarray, v: np.ndarray,
+              band: np.ndarray) -> float:
     """RMS of the least-squares fit of ``target`` (M,) by ``cols`` (M, P) (Gram ``gram``, ``cross`` = cols' target),
-    the command ``v`` (M,) and a dead-band term of it; normal equations (few columns, many rows)."""
-    extra = np.column_stack([v, np.tanh(v / (0.05 * np.std(v) + 1e-12))])
+    the command ``v`` (M,) and its dead-band term ``band`` (M,); normal equations (few columns, many rows)."""
+    extra = np.column_stack([v, band])
     p = cols.shape[1]
     g = np.empty((p + 2, p + 2))
     g[:p, :p] = gram
@@ -122,9 +132,14 @@ def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
     cols = np.column_stack([i[k], 0.5 * (w[k] + w[k + 1]), np.tanh(ibar / (0.05 * np.std(i) + 1e-12)),
                             np.ones(k.size)])
     gram, cross = np.einsum("mp,mq->pq", cols, cols), np.einsum("mp,m->p", cols, i[k + 1])
+    # the drive's dead band acts on each held command, before the held commands share a sample: shifted after
+    # the nonlinearity (else, for a two-level command, it is a free column on the rows where the level changes,
+    # and absorbs any sub-sample lag there)
+    band = np.tanh(v / (0.05 * np.std(v) + 1e-12))
 
     def curve(lags: np.ndarray) -> np.ndarray:
-        return np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k]) for lag in lags])
+        return np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k], shifted(band, lag)[k])
+                         for lag in lags])
 
     coarse = np.arange(0.0, top + 1e-9, 1.0)  # whole samples over the range, then 1/8 sample near the best
     res = curve(coarse)
@@ -137,13 +152,14 @@ def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
         rule += "; here the lag is not identifiable (flat residual), none is assumed"
     plot = (tuple(float(x) for x in lags), tuple(float(x / (np.std(i) or 1.0)) for x in res))
     return Alignment(float(samples), float(samples * log.dt), bool(samples > max_logging_skew + SKEW_FRACTION), rule,
-                     plot)
+                     plot, sharp)
 
 
 def _pick(lags: np.ndarray, res: np.ndarray) -> tuple[float, bool]:
     """The lag [samples] of the smallest residual on the increasing grid ``lags`` (K,), refined by a parabola
-    through its neighbours, and whether the minimum is sharp (the residual rises by >= 1 % one sample either
-    side); 0 when it is not."""
+    through its neighbours, and whether it is identified: a sharp minimum (the residual rises by >= 1 % one
+    sample either side), or a plateau within 1 % bounded inside the grid and at most :data:`PLATEAU` samples wide
+    (then its midpoint); 0 when neither."""
     j = int(np.argmin(res))
     lag = float(lags[j])
     if 0 < j < lags.size - 1:  # the vertex of the parabola through the neighbours
@@ -154,8 +170,15 @@ def _pick(lags: np.ndarray, res: np.ndarray) -> tuple[float, bool]:
             shift = 0.5 * (x0**2 * (y1 - y2) + x1**2 * (y2 - y0) + x2**2 * (y0 - y1)) / den
             lag += float(np.clip(shift, x0, x2))
     side = [float(np.interp(lags[j] + d, lags, res)) for d in (-1.0, 1.0) if lags[0] <= lags[j] + d <= lags[-1]]
-    sharp = bool(side and min(side) >= 1.01 * res[j])
-    return (max(lag, 0.0) if sharp else 0.0), sharp
+    if side and min(side) >= 1.01 * res[j]:
+        return max(lag, 0.0), True
+    # a flat minimum: the lags within 1 % of the smallest residual. Bounded on both sides inside the search and at
+    # most PLATEAU samples wide (rare level changes, e.g. a slow PRBS, pin the lag to within a sample or two), its
+    # midpoint; wider or reaching an end of the search (slow, smooth excitation), the lag is not identifiable: 0
+    flat = lags[res <= 1.01 * res[j]]
+    if flat[0] > lags[0] and flat[-1] < lags[-1] and flat[-1] - flat[0] <= PLATEAU:
+        return float(0.5 * (flat[0] + flat[-1])), True
+    return 0.0, False
 
 
 def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
@@ -164,11 +187,11 @@ def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
     lags, res = (np.asarray(x, float) for x in align.curve)
     keep = lags <= max_logging_skew + SKEW_FRACTION + 1e-9
     if not keep.any():
-        return Alignment(0.0, 0.0, False, align.rule, align.curve)
-    samples, _ = _pick(lags[keep], res[keep])
+        return Alignment(0.0, 0.0, False, align.rule, align.curve, False)
+    samples, known = _pick(lags[keep], res[keep])
     return Alignment(samples, samples * dt, False, align.rule + f"; the {align.samples:.2f}-sample lag of the "
                      "search did not predict the held-out data better than one within the conventions, so the "
-                     "best lag within them is used and no input_delay is called", align.curve)
+                     "best lag within them is used and no input_delay is called", align.curve, known)
 
 
 def realign(log: Log, samples: float) -> Log:

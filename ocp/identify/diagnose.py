@@ -12,8 +12,9 @@ Procedure:
    count from the residual's spectrum against rotor angle) and relative errors of the constants.
 4. **Selection** (:mod:`.select`): every model refines all constants within ``tolerance`` of nominal
    (``calibration``); a constant is *named* (``param:<key>`` in the verdict) only when freeing it beyond
-   the tolerance wins on held-out data like an effect must: forward selection while the held-out score
-   is above ``noise_floor`` and falls by ``min_improvement``. Adopted items that another item explains
+   the tolerance wins on held-out data: forward selection while the held-out score is above ``noise_floor``
+   and falls beyond sampling noise (an effect: also by ``min_improvement``; a constant's materiality is the
+   tolerance). Adopted items that another item explains
    equally well (within ``ambiguity_margin``) are reported under ``ambiguous`` with the reason.
 5. The user's plant and each round's adopted model are simulated (free run under the measured voltage,
    :func:`ocp.identify.predict.free_run`) on the held-out segments: the per-channel errors reported.
@@ -58,7 +59,7 @@ class DiagnoseOptions(BaseModel):
 
     segment_s: float = Field(default=0.5, gt=0)
     holdout_every: int = Field(default=3, ge=2)
-    min_improvement: float = Field(default=0.12, gt=0, lt=1)  # held-out score must fall by this fraction
+    min_improvement: float = Field(default=0.12, gt=0, lt=1)  # an effect's held-out score must fall by this
     noise_floor: float = Field(default=1.15, gt=0)  # [noise units] a model this close to the noise is done
     max_effects: int = Field(default=3, ge=1, le=10)  # at most this many items in the verdict
     include_params: bool = True  # constants may be named beyond the tolerance (else: calibration only)
@@ -231,7 +232,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     delay = (align.samples - own) * log.dt if align.delay and "input_delay" in _allowed(opt) else None
     aligned = realign(log, align.samples - own)  # the equations always see the command when it acts
     work = log if delay is not None else aligned  # free runs: the delay, if called, is in the plant
-    design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress)
+    design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align)
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:
@@ -267,10 +268,16 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],
              noise: dict[str, float], opt: DiagnoseOptions, delayed: bool,
-             progress: Callable[[float], None] | None) -> tuple[Design, Selection]:
+             progress: Callable[[float], None] | None, align: Alignment) -> tuple[Design, Selection]:
     """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
-    ripple faster than the low-pass kept, :mod:`.regression`)."""
+    ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
+    search residual), ``L`` is unresolved: a sub-sample command timing error looks like an inductance error
+    in the armature equation (eq. dc_electrical: a shift ``d`` of the command leaves ``-d dt R i'``)."""
     design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True)
+    if not align.identified and log.kind is LogKind.TIME_SERIES:
+        design.unresolved.setdefault("L", "the command timing is not identifiable in this log (flat alignment "
+                                          "residual): an inductance error cannot be told from a sub-sample "
+                                          "timing error")
     if progress is not None:
         progress(0.2)
     return design, select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor,

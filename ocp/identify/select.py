@@ -10,12 +10,16 @@ boxed in, what it stands for would be explained by a wrong item (brush drop, dea
 Its score is the held-out RMS of the three
 weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise).
 
-Forward selection adopts the item with the best held-out score while some equation's held-out RMS is
-above ``noise_floor`` and the score falls by at least ``min_improvement`` and beyond sampling noise (the
-pooled score's scatter, or one equation's own: :func:`_beyond_scatter`); where no item clears that alone, two
-that clear it only together (and each against the other alone) are adopted as a pair (:func:`_pair`). A constant that
-would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` yields to an effect that fits as well (a prior on
-constant errors: :func:`_prefer_effects`). Then every adopted item is challenged: an
+Forward selection adopts, while some equation's held-out RMS is above ``noise_floor``, the best-scoring item
+whose win passes its test (the tests differ by item, so the best-scoring one may fail where the next passes):
+the score falls beyond sampling noise (the pooled score's scatter, or one equation's
+own: :func:`_beyond_scatter`) -- for an effect also by at least ``min_improvement`` (its materiality); a
+constant's materiality is the tolerance itself (calibration already takes the first ``tol`` of its error, and
+beyond it the user wants the name), so a constant freed beyond it needs only to win beyond sampling noise.
+Where no item clears that alone, two that clear it only together (and each against the other alone) are adopted
+as a pair (:func:`_pair`).
+A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` yields to an effect that fits as
+well (a prior on constant errors: :func:`_prefer_effects`). Then every adopted item is challenged: an
 alternative that swaps it for another item and scores within ``ambiguity_margin`` makes the verdict
 ``ambiguous`` (both candidates and the reason are reported) instead of a confident wrong name.
 """
@@ -158,7 +162,8 @@ class Selection:
 def select(design: Design, pool: Sequence[str], tol: float, min_improvement: float, noise_floor: float,
            max_items: int, margin: float, progress: Callable[[float], None] | None = None) -> Selection:
     """Forward selection over ``pool`` (effects and constants), then the ambiguity challenge (module doc).
-    Constants the log cannot resolve (:attr:`.regression.Design.unresolved`) are calibrated, never named."""
+    Constants the log cannot resolve (:attr:`.regression.Design.unresolved`) are calibrated, never named;
+    ``min_improvement`` applies to effects (a constant's materiality is ``tol``)."""
     pool = [c for c in pool if c not in design.unresolved and design.index(c)]  # (no columns: not testable here)
     items: list[str] = []
     current = fit_model(design, items, tol)
@@ -169,9 +174,12 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
         tried = _prefer_effects(design, tried, margin)
         if progress is not None:
             progress((len(items) + 1) / (max_items + 1))
-        ok = bool(tried) and _worst(design, current) > noise_floor \
-            and tried[0][1].score <= (1 - min_improvement) * current.score \
-            and _beyond_scatter(design, current, tried[0][1])
+        # the best-scoring item whose win passes its test (they differ: materiality, one equation's scatter)
+        win = next((k for k, (c, f) in enumerate(tried) if _wins(design, current, c, f, min_improvement)), None) \
+            if _worst(design, current) > noise_floor else None
+        if win is not None:
+            tried = [tried[win], *tried[:win], *tried[win + 1:]]
+        ok = win is not None
         pair = None if ok or len(items) + 2 > max_items else \
             _pair(design, items, tried, current, tol, min_improvement, noise_floor)
         if pair is not None:  # two items that clear the test only together
@@ -203,6 +211,14 @@ def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], cur
         if f.score > (1 - min_improvement) * before.score or not _beyond_scatter(design, before, f):
             return None
     return [Step(current, [(a, single[a]), *[e for e in tried if e[0] != a]], a), Step(single[a], [(b, f)], b)]
+
+
+def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float) -> bool:
+    """Whether adding ``item`` (fitted ``f``) to ``current`` wins on held-out data: beyond sampling noise
+    (:func:`_beyond_scatter`), and for an effect by ``min_improvement`` too (a constant's materiality is the
+    tolerance, module doc)."""
+    material = item in CONSTANTS or f.score <= (1 - min_improvement) * current.score
+    return material and _beyond_scatter(design, current, f)
 
 
 def _prefer_effects(design: Design, tried: list[tuple[str, Fitted]], margin: float) -> list[tuple[str, Fitted]]:
