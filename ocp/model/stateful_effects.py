@@ -12,7 +12,6 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
-from scipy import signal
 
 from ocp.model.effect_base import Channel, EffectBase, require_positive
 from ocp.model.plant import Effect, Expr, Ops
@@ -78,6 +77,10 @@ def _lti_states(a: np.ndarray, b: np.ndarray, u: np.ndarray, dt: float) -> np.nd
 
     Exact ZOH discretisation, each state filtered by its own transfer function (``lfilter``, C speed).
     """
+    # scipy.signal is ~0.8 s of a cold import, and only identification reaches this: every optimiser worker and
+    # CLI call imports this module, so the import waits until a log is filtered
+    from scipy import signal
+
     n = a.shape[0]
     ad, bd, *_ = signal.cont2discrete((a, b.reshape(n, 1), np.eye(n), np.zeros((n, 1))), dt, method="zoh")
     z = np.empty((n, u.size))
