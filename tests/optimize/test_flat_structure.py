@@ -79,3 +79,19 @@ def test_intervals_parameter_scales_the_smoothness_term_as_the_radau_sum():
     assert at(n) - at(m) > 1e-3 * abs(at(n))
     expected = (1 / n**2 - 1 / m**2) / (1 / n**2 - 1 / k**2)
     assert abs((at(n) - at(m)) / (at(n) - at(k)) - expected) <= 1e-9
+
+
+def test_basis_tables_are_scipys_design_matrix_and_a_partition_of_unity():
+    """The basis at the check points is scipy's design matrix (its own evaluation path, 1e-14); the functions sum
+    to 1 everywhere and their tau-derivatives to 0 (a B-spline basis is a partition of unity)."""
+    from scipy.interpolate import BSpline
+
+    for spans in (8, 14, 20):
+        tau = flat.points(spans)["check"]
+        dm = BSpline.design_matrix(tau, flat.knots(spans), flat.DEGREE).toarray()
+        np.testing.assert_allclose(flat.basis(spans, tau, 0), dm, rtol=0, atol=1e-14)
+        np.testing.assert_allclose(flat.basis(spans, tau, 0).sum(axis=1), 1.0, rtol=0, atol=1e-13)
+        for r in range(1, 5):
+            table = flat.basis(spans, tau, r)
+            assert table.shape == (tau.size, spans + flat.DEGREE)
+            np.testing.assert_allclose(table.sum(axis=1), 0.0, atol=1e-9 * np.max(np.abs(table)))
