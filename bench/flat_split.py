@@ -5,6 +5,7 @@ Usage::
 
     python bench/flat_split.py [--repeats N] [--suite all|classic|user]
     python bench/flat_split.py --sqp [--repeats N] [--suite ...]   # trial: sqpmethod + qpOASES vs IPOPT
+    python bench/flat_split.py --sqp --batch 120 --repeats 1       # ... on bench/batch.py's mix (seed 7)
 
 For every mission the flat program answers (``optimize_mesh``; the program built once, not timed) the cold
 answer is computed ``repeats`` times; medians of: the whole call (wall), IPOPT (wall, every round), the answer's
@@ -34,6 +35,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.batch import missions
 from bench.optimizer import CLASSIC, SUITE
 from bench.user_missions import USER, user_missions
 from ocp.optimize import flat, flat_solve
@@ -98,7 +100,10 @@ def sqp_trial(specs: list[dict[str, Any]], repeats: int) -> None:
         print(f"{spec['name']:22s} {row[0]:7.1f} {row[1]:7.1f} {row[2]:3d} {row[3]:+11.1e} {ok:>3s} {kept:>6s}",
               flush=True)
     for k, name in ((0, "ipopt"), (1, "sqp")):
-        print(f"{name}: median {statistics.median(r[k] for r in rows):.1f} ms, max {max(r[k] for r in rows):.1f} ms")
+        print(f"{name}: median {statistics.median(r[k] for r in rows):.1f} ms, max {max(r[k] for r in rows):.1f} ms, "
+              f"total {sum(r[k] for r in rows) / 1e3:.2f} s")
+    print(f"sqp: objective above IPOPT's by more than 1e-3 on {sum(r[3] > 1e-3 for r in rows)}, not converged on "
+          f"{sum(not r[4] for r in rows)}, limits broken on {sum(not r[5] for r in rows)} of {len(rows)}")
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -106,10 +111,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--suite", choices=("all", "classic", "user"), default="all")
     ap.add_argument("--sqp", action="store_true", help="instead: the sqpmethod + qpOASES trial against IPOPT")
+    ap.add_argument("--batch", type=int, default=0, help="with --sqp: the first N missions of bench/batch.py's mix")
     args = ap.parse_args(argv)
     names = {"all": CLASSIC + USER, "classic": CLASSIC, "user": USER}[args.suite]
     by_name = {s["name"]: s for s in SUITE + user_missions()}
-    specs = [by_name[name] for name in names]
+    specs = [by_name[name] for name in names] if not args.batch else missions(args.batch, 7)
     if args.sqp:
         sqp_trial(specs, args.repeats)
         return 0
