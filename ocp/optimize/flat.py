@@ -80,16 +80,18 @@ CACHE_SIZE = 16
 class FlatStructure:
     """What the flat NLP's shape depends on (its cache key; plant constants are parameters).
 
+    The Radau program's intervals per phase (the smoothness and effort terms' normalisation) are a parameter
+    (``intervals``, :func:`param_slices`), not part of the key: missions of 40 and 60 intervals whose phases get
+    the same spans share one program (on ``bench/batch.py``'s mix 5 flat structures instead of 6).
+
     Attributes:
         n_phases: phases (reversals + 1); spans: B-spline spans per phase
-        intervals: the Radau program's intervals per phase (the smoothness and effort terms' normalisation)
         chain: the Radau program's input chain (0 held, 1 continuous, 2 C^1 voltage)
         order6: crossing order 6 (omega ~ s^3) instead of 2
     """
 
     n_phases: int
     spans: int
-    intervals: int
     chain: int
     order6: bool
 
@@ -108,13 +110,12 @@ def knots(spans: int) -> np.ndarray:
 
 
 def basis(spans: int, tau: np.ndarray, order: int) -> np.ndarray:
-    """``order``-th tau-derivative of every basis function at ``tau`` (M,): shape (M, spans + DEGREE)."""
+    """``order``-th tau-derivative of every basis function at ``tau`` (M,): shape (M, spans + DEGREE). One spline
+    with the identity as its coefficients (column k: basis function k; the same arithmetic per column as one
+    spline per function, 25x faster)."""
     t, n = knots(spans), spans + DEGREE
-    out = np.empty((np.size(tau), n))
-    for k in range(n):
-        spline = BSpline(t, np.eye(n)[k], DEGREE, extrapolate=True)
-        out[:, k] = spline.derivative(order)(tau) if order else spline(tau)
-    return out
+    spline = BSpline(t, np.eye(n), DEGREE, extrapolate=True)
+    return np.asarray((spline.derivative(order) if order else spline)(np.asarray(tau, float)))
 
 
 @lru_cache(maxsize=32)
@@ -162,7 +163,7 @@ def param_slices(st: FlatStructure) -> dict[str, slice]:
     """Layout of the parameter vector."""
     nq = st.spans * GAUSS
     sizes = {"constants": len(CONSTANTS), "scales": len(SCALES), "sigma": st.n_phases, "dur": st.n_phases,
-             "fd": st.n_phases * nq, "weights": 5}
+             "fd": st.n_phases * nq, "weights": 5, "intervals": 1}
     out, k = {}, 0
     for name, size in sizes.items():
         out[name] = slice(k, k + size)
@@ -215,7 +216,7 @@ class FlatProgram:
 def _phase_terms(st: FlatStructure, c: ca.SX, h: ca.SX, sigma: ca.SX, k: dict[str, ca.SX], ws: ca.SX,
                  tables: dict[str, list[np.ndarray]]) -> tuple[ca.SX, ca.SX, ca.SX, ca.SX]:
     """(current (n_check,), voltage (n_check,), speed at the Gauss points (nq,), control at the midpoints
-    (intervals,)) of one phase, SI; ``c`` its scaled coefficients, ``h`` its length [s]."""
+    (spans,)) of one phase, SI; ``c`` its scaled coefficients, ``h`` its length [s]."""
     def derivs(name: str, upto: int) -> list[ca.SX]:
         return [ca.mtimes(_sparse(tables[name][r]), c) * ws / h**r for r in range(upto + 1)]
 
@@ -247,6 +248,7 @@ def build(st: FlatStructure) -> FlatProgram:
     sigma, dur = par[ps["sigma"]], par[ps["dur"]]
     fd = ca.reshape(par[ps["fd"]], st.spans * GAUSS, P)
     w_track, _, w_stretch, w_smooth, w_effort = (par[ps["weights"]][r] for r in range(5))
+    n_int = par[ps["intervals"]]  # the Radau program's intervals per phase
     stretch = ca.SX.sym("stretch", P)
     coef = [ca.SX.sym(f"c{j}", nc) for j in range(P)]
     total = ca.sum1(dur)
@@ -266,9 +268,9 @@ def build(st: FlatStructure) -> FlatProgram:
     u_vec = ca.vertcat(*u_all)
     # the Radau program's sum over its P N intervals of (u_{k+1} - u_k)^2 / (P N) and u_k^2 / (P N), from one
     # sample a span: a difference across a span is N / spans of the Radau program's, squared, over spans / N terms
-    ratio = st.spans / st.intervals
+    ratio = st.spans / n_int
     obj = (w_track * f_track + w_stretch * ca.dot(stretch - 1, dur) / total
-           + w_smooth * ratio * ca.sumsqr(u_vec[1:] - u_vec[:-1]) / (P * st.intervals)
+           + w_smooth * ratio * ca.sumsqr(u_vec[1:] - u_vec[:-1]) / (P * n_int)
            + w_effort * ca.sumsqr(u_vec) / (P * st.spans))
     nlp = {"x": ca.vertcat(stretch, *coef), "f": obj, "g": ca.vertcat(*g_i, *g_v, *g_cont), "p": par}
     deadline = col._Deadline()
@@ -314,7 +316,7 @@ def clear_cache() -> None:
 
 
 #: the flat program's parameter parts that must be equal / within WARM_CLOSE for a start from its memory
-WARM_EXACT, WARM_NEAR = ("sigma", "weights"), ("constants", "scales", "dur")
+WARM_EXACT, WARM_NEAR = ("sigma", "weights"), ("constants", "scales", "dur", "intervals")
 #: largest distance (:func:`ocp.optimize.warm.distance`) of a remembered solve the flat program starts from: on
 #: the first 150 items of ``bench/batch.py``'s mix (seed 7), IPOPT took 10 -> 2 iterations cold -> warm below
 #: 0.05, 13 -> 7.5 at 0.05-0.1, the same at 0.1-0.15 and 10 -> 12.5 at 0.15-0.2 (``warm.CLOSE`` is 0.25)

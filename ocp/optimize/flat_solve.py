@@ -56,11 +56,11 @@ def applies(problem: Problem) -> str | None:
 
 
 def structure_of(problem: Problem) -> flat.FlatStructure:
-    """The flat structure of ``problem``: its phases, spans per phase, the Radau intervals and chain, order."""
+    """The flat structure of ``problem``: its phases, spans per phase (from the Radau intervals), chain, order."""
     st = problem.structure
     spans = int(np.clip(math.ceil(st.intervals / SPANS_PER_INTERVALS), *SPANS))
-    return flat.FlatStructure(n_phases=st.n_phases, spans=spans, intervals=st.intervals, chain=chain_order(
-        problem.mission), order6=crossing_order(problem.mission) == 6)
+    return flat.FlatStructure(n_phases=st.n_phases, spans=spans, chain=chain_order(problem.mission),
+                              order6=crossing_order(problem.mission) == 6)
 
 
 @dataclass(frozen=True)
@@ -91,7 +91,8 @@ def flat_data(problem: Problem, prog: flat.FlatProgram) -> FlatData | None:
                    for j in range(st.n_phases)]) / sc.f  # (P, nq)
     p = prog.pack(constants=np.array([getattr(mp, k) for k in flat.CONSTANTS], float),
                   scales=np.array([sc.x[0], sc.f, lim.current, lim.voltage, sc.u], float),
-                  sigma=problem.phases.signs, dur=dur, fd=fd, weights=WEIGHTS[m.objective])
+                  sigma=problem.phases.signs, dur=dur, fd=fd, weights=WEIGHTS[m.objective],
+                  intervals=problem.structure.intervals)
     lbx, ubx = _bounds(problem, st, sc.x[0], x_start[0])
     x0 = _guess(problem, st, fd * sc.f / mp.c_f, sc.x[0], lbx, ubx)
     return FlatData(p=p, lbx=lbx, ubx=ubx, x0=x0, scales=sc, x_start=x_start)
