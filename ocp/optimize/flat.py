@@ -163,7 +163,7 @@ def param_slices(st: FlatStructure) -> dict[str, slice]:
     """Layout of the parameter vector."""
     nq = st.spans * GAUSS
     sizes = {"constants": len(CONSTANTS), "scales": len(SCALES), "sigma": st.n_phases, "dur": st.n_phases,
-             "fd": st.n_phases * nq, "weights": 5, "intervals": 1}
+             "fd": st.n_phases * nq, "weights": 5, "intervals": 1, "obj_scale": 1}
     out, k = {}, 0
     for name, size in sizes.items():
         out[name] = slice(k, k + size)
@@ -269,9 +269,11 @@ def build(st: FlatStructure) -> FlatProgram:
     # the Radau program's sum over its P N intervals of (u_{k+1} - u_k)^2 / (P N) and u_k^2 / (P N), from one
     # sample a span: a difference across a span is N / spans of the Radau program's, squared, over spans / N terms
     ratio = st.spans / n_int
-    obj = (w_track * f_track + w_stretch * ca.dot(stretch - 1, dur) / total
-           + w_smooth * ratio * ca.sumsqr(u_vec[1:] - u_vec[:-1]) / (P * n_int)
-           + w_effort * ca.sumsqr(u_vec) / (P * st.spans))
+    # times obj_scale (1 / the objective at the initial guess, :func:`objective_scaled`): IPOPT's tolerances are
+    # absolute, and unscaled objectives of 1e-7 .. 1e-2 stopped a cold solve up to ~1 % above the optimum
+    obj = par[ps["obj_scale"]] * (w_track * f_track + w_stretch * ca.dot(stretch - 1, dur) / total
+                                  + w_smooth * ratio * ca.sumsqr(u_vec[1:] - u_vec[:-1]) / (P * n_int)
+                                  + w_effort * ca.sumsqr(u_vec) / (P * st.spans))
     nlp = {"x": ca.vertcat(stretch, *coef), "f": obj, "g": ca.vertcat(*g_i, *g_v, *g_cont), "p": par}
     deadline = col._Deadline()
     options = {**col.solver_options(), **IPOPT_OPTIONS}
@@ -323,19 +325,33 @@ WARM_EXACT, WARM_NEAR = ("sigma", "weights"), ("constants", "scales", "dur", "in
 WARM_CLOSE = 0.1
 
 
+def objective_scaled(prog: FlatProgram, p: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """``p`` (n_params,) with ``obj_scale`` set to 1 / the objective at the start ``x0`` (n_x,), so that IPOPT's
+    absolute tolerances are relative to the mission's own objective (1 where it is not positive and finite)."""
+    q, sl = p.copy(), param_slices(prog.structure)["obj_scale"]
+    q[sl] = 1.0
+    f0 = float(prog.solver.get_function("nlp_f")(x0, q))
+    q[sl] = 1.0 / f0 if math.isfinite(f0) and f0 > 0.0 else 1.0
+    return q
+
+
 def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray,
           g_bounds: tuple[np.ndarray, np.ndarray], until: float = math.inf, warm: bool | None = False) -> col.Solved:
     """One IPOPT run of the flat program from ``x0`` (n_x,), or from a remembered successful solve (primal and
     dual; the warm solver, which :func:`program_for` builds with the program): the last when ``warm`` is True or,
     ``None``, the nearest plausibly close one (:func:`ocp.optimize.warm.pick`); stopped once ``perf_counter()`` passes
-    ``until`` [s]. Thread-safe."""
+    ``until`` [s]. The objective reported is unscaled (``p``'s ``obj_scale`` divided out). Thread-safe."""
     args = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": g_bounds[0], "ubg": g_bounds[1]}
+    scale = param_slices(prog.structure)["obj_scale"]
     with prog.lock:
         solver = prog.solver
         start = warm_.pick(prog.memory, warm, p, lbx, ubx, param_slices(prog.structure), WARM_EXACT, WARM_NEAR,
                            WARM_CLOSE)
         if start is not None:
             args.update(warm_.warm_args(start, lbx, ubx))
+            # multipliers scale with the objective: from the remembered solve's objective scale to this one's
+            ratio = float(p[scale][0] / start.p[scale][0])
+            args["lam_x0"], args["lam_g0"] = args["lam_x0"] * ratio, args["lam_g0"] * ratio
             solver = prog.warm_solver or solver
         prog.deadline.until = until
         t0 = time.perf_counter()
@@ -352,7 +368,7 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
     g = np.asarray(sol["g"]).ravel()
     viol = float(np.max(np.maximum(g - g_bounds[1], g_bounds[0] - g), initial=0.0))
     return col.Solved(x=np.asarray(sol["x"]).ravel(), status=status, success=success,
-                      iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]),
+                      iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]) / float(p[scale][0]),
                       constraint_violation=viol, solve_time_s=solve_time, warm=start is not None)
 
 

@@ -92,10 +92,10 @@ def flat_data(problem: Problem, prog: flat.FlatProgram) -> FlatData | None:
     p = prog.pack(constants=np.array([getattr(mp, k) for k in flat.CONSTANTS], float),
                   scales=np.array([sc.x[0], sc.f, lim.current, lim.voltage, sc.u], float),
                   sigma=problem.phases.signs, dur=dur, fd=fd, weights=WEIGHTS[m.objective],
-                  intervals=problem.structure.intervals)
+                  intervals=problem.structure.intervals, obj_scale=1.0)
     lbx, ubx = _bounds(problem, st, sc.x[0], x_start[0])
     x0 = _guess(problem, st, fd * sc.f / mp.c_f, sc.x[0], lbx, ubx)
-    return FlatData(p=p, lbx=lbx, ubx=ubx, x0=x0, scales=sc, x_start=x_start)
+    return FlatData(p=flat.objective_scaled(prog, p, x0), lbx=lbx, ubx=ubx, x0=x0, scales=sc, x_start=x_start)
 
 
 def _bounds(problem: Problem, st: flat.FlatStructure, ws: float, w0: float) -> tuple[np.ndarray, np.ndarray]:

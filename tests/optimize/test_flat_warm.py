@@ -127,3 +127,19 @@ def test_the_plans_derivatives_are_scipys():
         for r in range(3):
             expect = (spline.derivative(r) if r else spline)((t[sel] - edges[j]) / h) / h**r
             np.testing.assert_array_equal(w[r][sel], expect)
+
+
+def test_a_cold_solve_converges_whatever_the_objective_units():
+    """A mission whose objective is ~2e-7 (the paper rig's 2 s reversal): the cold solve ends where a warm solve
+    from it, at the warm solver's tolerance of 1e-10, finds nothing better (one evaluator, 1e-5 relative). IPOPT's
+    tolerances are absolute; without the objective's scale (``flat.objective_scaled``) it stopped 1 % above."""
+    m = mission_from_mapping({"name": "reversal-2s", "limits": {"voltage": 12.0, "current": 1.0}, "segments": [
+        {"kind": "hold", "duration": 0.5, "thrust": 0.4},
+        {"kind": "reversal", "duration": 1.0, "to": -0.4, "shape": "cosine"},
+        {"kind": "hold", "duration": 0.5, "thrust": -0.4}]})
+    problem = problem_for(m)
+    cold = optimize_mesh(m, warm=False)
+    polished = optimize_mesh(m, warm=True)
+    assert cold.solver.program == "flat" and polished.solver.warm_start
+    assert objective_of(problem, cold) < 1e-6  # the small-objective case this test is about
+    assert objective_of(problem, cold) == pytest.approx(objective_of(problem, polished), rel=1e-5)
