@@ -159,8 +159,9 @@ CONSTANTS = ("J", "B", "c_tau", "k_t", "k_e", "R", "L", "c_f")
 SCALES = ("w", "f", "i", "v", "u")  # speed [rad/s], thrust [N], current [A], voltage [V], control
 
 
+@lru_cache(maxsize=64)
 def param_slices(st: FlatStructure) -> dict[str, slice]:
-    """Layout of the parameter vector."""
+    """Layout of the parameter vector (cached per structure: every solve asks; read it, never change it)."""
     nq = st.spans * GAUSS
     sizes = {"constants": len(CONSTANTS), "scales": len(SCALES), "sigma": st.n_phases, "dur": st.n_phases,
              "fd": st.n_phases * nq, "weights": 5, "intervals": 1, "obj_scale": 1}
@@ -185,6 +186,7 @@ class FlatProgram:
     deadline: col._Deadline
     build_s: float
     lock: threading.Lock
+    objective: ca.Function  # f(x, p), the cold solver's own (:func:`objective_scaled`)
     nlp: dict[str, ca.SX] = field(default_factory=dict, repr=False)  # for the warm solver's build
     options: dict[str, object] = field(default_factory=dict, repr=False)  # the cold solver's options
     warm_solver: ca.Function | None = field(default=None, repr=False)  # built by program_for
@@ -280,7 +282,7 @@ def build(st: FlatStructure) -> FlatProgram:
     solver = ca.nlpsol("flat", "ipopt", nlp, {**options, "iteration_callback": deadline})  # type: ignore[dict-item]
     return FlatProgram(structure=st, solver=solver, n_params=n_par, n_check=pts["check"].size,
                        n_cont=len(g_cont), deadline=deadline, build_s=time.perf_counter() - started,
-                       lock=threading.Lock(), nlp=nlp, options=options)
+                       lock=threading.Lock(), nlp=nlp, options=options, objective=solver.get_function("nlp_f"))
 
 
 def continuity_orders(st: FlatStructure) -> list[int]:
@@ -319,7 +321,7 @@ def clear_cache() -> None:
 
 #: the flat program's parameter parts that must be equal / within WARM_CLOSE for a start from its memory
 WARM_EXACT, WARM_NEAR = ("sigma", "weights"), ("constants", "scales", "dur", "intervals")
-#: largest distance (:func:`ocp.optimize.warm.distance`) of a remembered solve the flat program starts from: on
+#: largest distance (:func:`ocp.optimize.warm.distances`) of a remembered solve the flat program starts from: on
 #: the first 150 items of ``bench/batch.py``'s mix (seed 7), IPOPT took 10 -> 2 iterations cold -> warm below
 #: 0.05, 13 -> 7.5 at 0.05-0.1, the same at 0.1-0.15 and 10 -> 12.5 at 0.15-0.2 (``warm.CLOSE`` is 0.25)
 WARM_CLOSE = 0.1
@@ -330,7 +332,7 @@ def objective_scaled(prog: FlatProgram, p: np.ndarray, x0: np.ndarray) -> np.nda
     absolute tolerances are relative to the mission's own objective (1 where it is not positive and finite)."""
     q, sl = p.copy(), param_slices(prog.structure)["obj_scale"]
     q[sl] = 1.0
-    f0 = float(prog.solver.get_function("nlp_f")(x0, q))
+    f0 = float(prog.objective(x0, q))
     q[sl] = 1.0 / f0 if math.isfinite(f0) and f0 > 0.0 else 1.0
     return q
 

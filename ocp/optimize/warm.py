@@ -9,7 +9,7 @@ program, from the cold solver's derivative functions, :func:`build_solver`).
 
 A program remembers its last solution, primal and dual (:class:`Memory`; the flat program its last
 :data:`MEMORIES`). A later solve starts from it when asked (``warm=True``: the Radau program's back-off rounds)
-or, by default (``warm=None``), when the new call is plausibly close (:func:`close`, :func:`pick`: same phase
+or, by default (``warm=None``), when the new call is plausibly close (:func:`distances`, :func:`pick`: same phase
 signs and weights, desired thrust, durations, scales (and the flat program's plant constants) within ``CLOSE``
 relative, the same bound pattern). Batch items and repeated requests of one structure so start warm; anything
 else starts cold.
@@ -94,19 +94,6 @@ def distances(memories: Sequence[Memory], p: np.ndarray, lbx: np.ndarray, ubx: n
     return out
 
 
-def distance(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: Mapping[str, slice],
-             near: Mapping[str, slice], fd: slice) -> float:
-    """:func:`distances` of one memory."""
-    return float(distances([mem], p, lbx, ubx, exact, near, fd)[0])
-
-
-def close(mem: Memory, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, exact: dict[str, slice],
-          near: dict[str, slice], fd: slice) -> bool:
-    """Whether the solution in ``mem`` is a plausible start for parameters ``p`` and bounds ``lbx``/``ubx``:
-    :func:`distance` at most ``CLOSE``."""
-    return distance(mem, p, lbx, ubx, exact, near, fd) <= CLOSE
-
-
 #: the Radau program's parameter parts that must be equal / within CLOSE for a warm start (:func:`start_from`)
 RADAU_EXACT, RADAU_NEAR = ("sigma", "weights"), ("dur", "xscale", "uscale", "fscale")
 
@@ -115,8 +102,9 @@ def start_from(mem: Memory | None, warm: bool | None, p: np.ndarray, lbx: np.nda
                slices: Mapping[str, slice], exact: tuple[str, ...] = RADAU_EXACT,
                near: tuple[str, ...] = RADAU_NEAR) -> bool:
     """Whether a solve starts from ``mem``: asked (``warm=True``, same size) or, ``warm=None``, when it is
-    plausibly close (:func:`close`; ``slices``: the program's parameter layout, ``exact``/``near``: the names of
-    its parts that must be equal / within ``CLOSE``, ``slices["fd"]`` the desired thrust)."""
+    plausibly close (:func:`distances` within ``CLOSE``; ``slices``: the program's parameter layout,
+    ``exact``/``near``: the names of its parts that must be equal / within ``CLOSE``, ``slices["fd"]`` the desired
+    thrust)."""
     return pick([] if mem is None else [mem], warm, p, lbx, ubx, slices, exact, near) is not None
 
 
@@ -124,7 +112,7 @@ def pick(memories: Sequence[Memory], warm: bool | None, p: np.ndarray, lbx: np.n
          slices: Mapping[str, slice], exact: tuple[str, ...], near: tuple[str, ...],
          limit: float = CLOSE) -> Memory | None:
     """The memory (of a program's last few solves, oldest first) a solve starts from: none (``warm=False``), the
-    latest of the right size (``warm=True``), or (``warm=None``) the nearest (:func:`distance`) within ``limit``."""
+    latest of the right size (``warm=True``), or (``warm=None``) the nearest (:func:`distances`) within ``limit``."""
     sized = [m for m in memories if m.x.size == lbx.size]
     if warm is False or not sized:
         return None
