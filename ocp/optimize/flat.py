@@ -360,7 +360,10 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
             ipopt = prog.warm_solver or ipopt
         prog.deadline.until = until
         try:
-            runs = [] if prog.sqp_solver is None else [_run(prog.sqp_solver, args)]
+            runs = []
+            if prog.sqp_solver is not None:
+                with sqp.quiet():
+                    runs.append(_run(prog.sqp_solver, args))
             method = "sqpmethod"
             if not runs or not runs[0][2]:
                 runs.append(_run(ipopt, args))

@@ -27,17 +27,18 @@ OPTIONS: dict[str, object] = {
 
 
 def build(name: str, nlp: Mapping[str, ca.SX], callback: object) -> ca.Function:
-    """The SQP solver of ``nlp`` with the iteration ``callback`` (the program's deadline). qpOASES prints its
-    banner to the process's standard output when a solver is made; it is kept off it (a CLI's standard output
-    carries its JSON answer)."""
-    with _stdout_silenced():
+    """The SQP solver of ``nlp`` with the iteration ``callback`` (the program's deadline). qpOASES prints a
+    banner when a solver is made (and its errors when a QP fails: call the solver inside :func:`quiet`); both are
+    kept off the standard output, which carries a CLI's JSON answer."""
+    with quiet():
         solver = ca.nlpsol(name, "sqpmethod", dict(nlp), {**OPTIONS, "iteration_callback": callback})  # type: ignore[dict-item]
     return solver
 
 
 @contextlib.contextmanager
-def _stdout_silenced() -> Iterator[None]:
+def quiet() -> Iterator[None]:
     """Nothing written to standard output inside the block reaches it: CasADi passes qpOASES's messages to
-    Python's ``sys.stdout`` (replaced by a discarded buffer here)."""
+    Python's ``sys.stdout`` (replaced by a discarded buffer here; process-wide, so another thread's ``print`` in
+    the meantime is lost too: the service logs to standard error)."""
     with contextlib.redirect_stdout(io.StringIO()):
         yield
