@@ -50,6 +50,7 @@ import numpy as np
 from scipy.interpolate import BSpline
 
 from ocp.optimize import collocation as col
+from ocp.optimize import sqp
 from ocp.optimize import warm as warm_
 from ocp.optimize.program_cache import ProgramCache
 
@@ -190,6 +191,7 @@ class FlatProgram:
     nlp: dict[str, ca.SX] = field(default_factory=dict, repr=False)  # for the warm solver's build
     options: dict[str, object] = field(default_factory=dict, repr=False)  # the cold solver's options
     warm_solver: ca.Function | None = field(default=None, repr=False)  # built by program_for
+    sqp_solver: ca.Function | None = field(default=None, repr=False)  # built by program_for (:mod:`ocp.optimize.sqp`)
     memory: deque[warm_.Memory] = field(default_factory=lambda: deque(maxlen=warm_.MEMORIES), repr=False)
 
     @property
@@ -310,7 +312,7 @@ _CACHE: ProgramCache[FlatProgram] = ProgramCache(CACHE_SIZE)
 def program_for(st: FlatStructure, on_build: Callable[[str], None] | None = None) -> tuple[FlatProgram, float]:
     """The cached flat program of ``st`` (built on first use; least recently used evicted) and the time [s]
     this call spent building it (0 when cached); ``on_build`` hears of a build (:class:`ProgramCache`)."""
-    prog, built = _CACHE.get(st, lambda: _with_warm_solver(build(st)), on_build)
+    prog, built = _CACHE.get(st, lambda: _with_solvers(build(st)), on_build)
     return prog, prog.build_s if built else 0.0
 
 
@@ -339,14 +341,15 @@ def objective_scaled(prog: FlatProgram, p: np.ndarray, x0: np.ndarray) -> np.nda
 
 def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0: np.ndarray,
           g_bounds: tuple[np.ndarray, np.ndarray], until: float = math.inf, warm: bool | None = False) -> col.Solved:
-    """One IPOPT run of the flat program from ``x0`` (n_x,), or from a remembered successful solve (primal and
-    dual; the warm solver, which :func:`program_for` builds with the program): the last when ``warm`` is True or,
-    ``None``, the nearest plausibly close one (:func:`ocp.optimize.warm.pick`); stopped once ``perf_counter()`` passes
-    ``until`` [s]. The objective reported is unscaled (``p``'s ``obj_scale`` divided out). Thread-safe."""
+    """One solve of the flat program from ``x0`` (n_x,), or from a remembered successful solve (primal and dual):
+    the last when ``warm`` is True or, ``None``, the nearest plausibly close one (:func:`ocp.optimize.warm.pick`);
+    stopped once ``perf_counter()`` passes ``until`` [s]. The SQP solver (:mod:`ocp.optimize.sqp`) runs first; where
+    it fails IPOPT (the warm solver from a remembered solve) runs from the same start, and the times and iterations
+    add up. The objective reported is unscaled (``p``'s ``obj_scale`` divided out). Thread-safe."""
     args = {"x0": x0, "p": p, "lbx": lbx, "ubx": ubx, "lbg": g_bounds[0], "ubg": g_bounds[1]}
     scale = param_slices(prog.structure)["obj_scale"]
     with prog.lock:
-        solver = prog.solver
+        ipopt = prog.solver
         start = warm_.pick(prog.memory, warm, p, lbx, ubx, param_slices(prog.structure), WARM_EXACT, WARM_NEAR,
                            WARM_CLOSE)
         if start is not None:
@@ -354,30 +357,45 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
             # multipliers scale with the objective: from the remembered solve's objective scale to this one's
             ratio = float(p[scale][0] / start.p[scale][0])
             args["lam_x0"], args["lam_g0"] = args["lam_x0"] * ratio, args["lam_g0"] * ratio
-            solver = prog.warm_solver or solver
+            ipopt = prog.warm_solver or ipopt
         prog.deadline.until = until
-        t0 = time.perf_counter()
         try:
-            sol = solver(**args)
+            runs = []
+            if prog.sqp_solver is not None:
+                with sqp.quiet():
+                    runs.append(_run(prog.sqp_solver, args))
+            method = "sqpmethod"
+            if not runs or not runs[0][2]:
+                runs.append(_run(ipopt, args))
+                method = "ipopt"
         finally:
             prog.deadline.until = math.inf
-        solve_time = time.perf_counter() - t0
-        stats = solver.stats()
-        status = str(stats.get("return_status", "unknown"))
-        success = bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level"
+        sol, stats, success, _ = runs[-1]
         if success:  # a failed run is no start for the next call
             prog.memory.append(warm_.remember(sol, p, lbx, ubx))
     g = np.asarray(sol["g"]).ravel()
     viol = float(np.max(np.maximum(g - g_bounds[1], g_bounds[0] - g), initial=0.0))
-    return col.Solved(x=np.asarray(sol["x"]).ravel(), status=status, success=success,
-                      iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]) / float(p[scale][0]),
-                      constraint_violation=viol, solve_time_s=solve_time, warm=start is not None)
+    return col.Solved(x=np.asarray(sol["x"]).ravel(), status=str(stats.get("return_status", "unknown")),
+                      success=success, iterations=sum(int(r[1].get("iter_count", 0)) for r in runs),
+                      objective=float(sol["f"]) / float(p[scale][0]), constraint_violation=viol,
+                      solve_time_s=sum(r[3] for r in runs), warm=start is not None, method=method)
 
 
-def _with_warm_solver(prog: FlatProgram) -> FlatProgram:
-    """``prog`` with its warm solver, built from the cold one's derivative functions (~15 % of the cold build, so
-    it comes with the program: a call's time limit never has to leave room for it)."""
+def _run(solver: ca.Function, args: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any], bool, float]:
+    """(solution, stats, success, wall time [s]) of one call of ``solver``."""
+    t0 = time.perf_counter()
+    sol = solver(**args)
+    elapsed = time.perf_counter() - t0
+    stats = solver.stats()
+    success = bool(stats.get("success", False)) or stats.get("return_status") == "Solved_To_Acceptable_Level"
+    return sol, stats, success, elapsed
+
+
+def _with_solvers(prog: FlatProgram) -> FlatProgram:
+    """``prog`` with its warm solver (built from the cold one's derivative functions, ~15 % of the cold build) and
+    its SQP solver: they come with the program, so a call's time limit never has to leave room for them."""
     started = time.perf_counter()
     prog.warm_solver = warm_.build_solver("flat_warm", prog.nlp, prog.options, prog.deadline, prog.solver)
+    prog.sqp_solver = sqp.build("flat_sqp", prog.nlp, prog.deadline)
     prog.build_s += time.perf_counter() - started
     return prog

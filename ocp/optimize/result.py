@@ -108,17 +108,20 @@ class Record:
 class SolverStats(Record):
     """How the answer was computed; times add up over the back-off rounds (the build happens in the first)."""
 
-    status: Status = field(default=Status.UNKNOWN, metadata=info("", "IPOPT return status of the last solve"))
+    status: Status = field(default=Status.UNKNOWN, metadata=info("", "return status of the last solve (IPOPT's "
+                                                                 "vocabulary; sqpmethod uses the same words)"))
+    method: str = field(default="ipopt", metadata=info(
+        "", "NLP solver of the last solve: ipopt, or sqpmethod (SQP with qpOASES, the flat program's first try)"))
     program: SolverProgram = field(default=SolverProgram.RADAU, metadata=info(
         "", "the program that produced the answer: flat (B-spline in the speed) or radau (collocation)"))
     flat_attempt_s: float = field(default=0.0, metadata=info(
         "s", "time spent on a flat program attempt that did not answer (then the Radau program did)"))
-    iterations: int = field(default=0, metadata=info("1", "IPOPT iterations over every solve"))
+    iterations: int = field(default=0, metadata=info("1", "NLP solver iterations over every solve (SQP and IPOPT)"))
     objective: float = field(default=float("nan"), metadata=info("1", "objective of the last solve (scaled)"))
     constraint_violation: float = field(default=0.0, metadata=info("1", "largest scaled collocation residual"))
     setup_time_s: float = field(default=0.0, metadata=info("s", "mission to problem data"))
     build_time_s: float = field(default=0.0, metadata=info("s", "building the program (0 when cached)"))
-    solve_time_s: float = field(default=0.0, metadata=info("s", "IPOPT wall time"))
+    solve_time_s: float = field(default=0.0, metadata=info("s", "NLP solver wall time"))
     verify_time_s: float = field(default=0.0, metadata=info("s", "simulation and packaging"))
     backoff_rounds: int = field(default=0, metadata=info("1", "re-solves with limits backed off between nodes"))
     limit_backoff: float = field(default=1.0, metadata=info("1", "smallest bound / limit after the back-off"))
