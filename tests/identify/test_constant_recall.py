@@ -29,4 +29,7 @@ def test_inductance_error_beyond_what_unknown_timing_explains_is_named() -> None
     assert res.alignment is not None and not res.alignment.identified
     assert res.verdict == ["param:L"]
     assert res.calibration["L"]["unresolved"] is None
+    nominal = case.nominal
+    assert res.calibration["L"]["slack"] == pytest.approx(2.75 * log.dt * nominal["R"] / nominal["L"], rel=1e-9)
+    assert 0.2 < res.calibration["L"]["slack"] < 0.3  # (the module doc's 25 %: an L error of 43 % lies beyond)
     assert res.calibration["L"]["fitted"] == pytest.approx(case.truth.L, rel=0.12)  # the generator's own value
