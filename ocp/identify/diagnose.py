@@ -277,9 +277,24 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
         _open_timing(design, plant, log, opt)
     if progress is not None:
         progress(0.2)
-    return design, select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor,
-                          opt.max_effects - delayed, opt.ambiguity_margin,
-                          None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
+    sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
+                 opt.ambiguity_margin, None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
+    if "L" in design.slack and "L" in sel.final.items and _implausible(design, sel.final, "L"):
+        # beyond a factor two under an open timing: a timing error beyond the conventions (an unconfirmed
+        # delay) is the likelier explanation (the prior of .select): L is unresolved, the selection redone
+        del design.slack["L"]
+        design.unresolved["L"] = ("the command timing is not identifiable in this log (flat alignment residual) and "
+                                  "L would have to be off by more than a factor two: a timing error beyond the "
+                                  "logging conventions explains the armature equation as well")
+        sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
+                     opt.ambiguity_margin)
+    return design, sel
+
+
+def _implausible(design: Design, f: Fitted, item: str) -> bool:
+    """Whether constant ``item`` is fitted in ``f`` beyond :data:`.select.IMPLAUSIBLE_FACTOR` of its nominal."""
+    factor = 1.0 + f.coefficient(design.index(item)[0])
+    return max(factor, 1.0 / max(factor, 1e-9)) > IMPLAUSIBLE_FACTOR
 
 
 def _open_timing(design: Design, plant: DCMotorPlant, log: Log, opt: DiagnoseOptions) -> None:
@@ -289,7 +304,8 @@ def _open_timing(design: Design, plant: DCMotorPlant, log: Log, opt: DiagnoseOpt
     box (:attr:`.regression.Design.slack`), and an error beyond both is still named (e.g. 43 % at an L/R of 11
     samples, where the timing mimics at most 25 %). Where the box would reach a factor of two below nominal
     (``tol + x >= 1 - 1 / IMPLAUSIBLE_FACTOR``: L/R under about 7 samples), no plausible error is left to name on
-    that side: ``L`` is unresolved, with the reason."""
+    that side: ``L`` is unresolved, with the reason (as it is when the selection names ``L`` beyond a factor two
+    (:func:`_explain`): a timing error beyond the conventions, an unconfirmed delay, is the likelier cause)."""
     x = (opt.max_logging_skew + SKEW_FRACTION) * log.dt * plant.params.R / plant.params.L
     if opt.tolerance + x < 1.0 - 1.0 / IMPLAUSIBLE_FACTOR:
         design.slack["L"] = x
