@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from ocp.identify.align import Alignment, estimate, realign, within
+from ocp.identify.align import SKEW_FRACTION, Alignment, estimate, realign, within
 from ocp.identify.candidates import candidate
 from ocp.identify.explain import (
     KEYS,
@@ -46,7 +46,7 @@ from ocp.identify.explain import (
 )
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
-from ocp.identify.select import Fitted, Selection, select
+from ocp.identify.select import IMPLAUSIBLE_FACTOR, Fitted, Selection, select
 from ocp.logs import Log, LogKind
 from ocp.model.effects import make_effect
 from ocp.model.plant import DCMotorPlant
@@ -271,18 +271,47 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
              progress: Callable[[float], None] | None, align: Alignment) -> tuple[Design, Selection]:
     """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
     ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
-    search residual), ``L`` is unresolved: a sub-sample command timing error looks like an inductance error
-    in the armature equation (eq. dc_electrical: a shift ``d`` of the command leaves ``-d dt R i'``)."""
+    search residual), ``L`` is judged beside the timing error it cannot be told from (:func:`_open_timing`)."""
     design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True)
     if not align.identified and log.kind is LogKind.TIME_SERIES:
-        design.unresolved.setdefault("L", "the command timing is not identifiable in this log (flat alignment "
-                                          "residual): an inductance error cannot be told from a sub-sample "
-                                          "timing error")
+        _open_timing(design, plant, log, opt)
     if progress is not None:
         progress(0.2)
-    return design, select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor,
-                          opt.max_effects - delayed, opt.ambiguity_margin,
-                          None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
+    sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
+                 opt.ambiguity_margin, None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
+    if "L" in design.slack and "L" in sel.final.items and _implausible(design, sel.final, "L"):
+        # beyond a factor two under an open timing: a timing error beyond the conventions (an unconfirmed
+        # delay) is the likelier explanation (the prior of .select): L is unresolved, the selection redone
+        del design.slack["L"]
+        design.unresolved["L"] = ("the command timing is not identifiable in this log (flat alignment residual) and "
+                                  "L would have to be off by more than a factor two: a timing error beyond the "
+                                  "logging conventions explains the armature equation as well")
+        sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
+                     opt.ambiguity_margin)
+    return design, sel
+
+
+def _implausible(design: Design, f: Fitted, item: str) -> bool:
+    """Whether constant ``item`` is fitted in ``f`` beyond :data:`.select.IMPLAUSIBLE_FACTOR` of its nominal."""
+    factor = 1.0 + f.coefficient(design.index(item)[0])
+    return max(factor, 1.0 / max(factor, 1e-9)) > IMPLAUSIBLE_FACTOR
+
+
+def _open_timing(design: Design, plant: DCMotorPlant, log: Log, opt: DiagnoseOptions) -> None:
+    """``L`` where the command timing is not identified (flat alignment residual): a timing error of ``d`` samples
+    within the conventions (``|d|`` up to ``max_logging_skew + SKEW_FRACTION``) leaves ``-d dt R i'`` in eq.
+    dc_electrical, as an inductance error ``x = d dt R / L`` does. Up to that ``x`` it widens ``L``'s calibration
+    box (:attr:`.regression.Design.slack`), and an error beyond both is still named (e.g. 43 % at an L/R of 11
+    samples, where the timing mimics at most 25 %). Where the box would reach a factor of two below nominal
+    (``tol + x >= 1 - 1 / IMPLAUSIBLE_FACTOR``: L/R under about 7 samples), no plausible error is left to name on
+    that side: ``L`` is unresolved, with the reason (as it is when the selection names ``L`` beyond a factor two
+    (:func:`_explain`): a timing error beyond the conventions, an unconfirmed delay, is the likelier cause)."""
+    x = (opt.max_logging_skew + SKEW_FRACTION) * log.dt * plant.params.R / plant.params.L
+    if opt.tolerance + x < 1.0 - 1.0 / IMPLAUSIBLE_FACTOR:
+        design.slack["L"] = x
+        return
+    design.unresolved.setdefault("L", "the command timing is not identifiable in this log (flat alignment "
+                                      "residual): an inductance error cannot be told from a sub-sample timing error")
 
 
 def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt: DiagnoseOptions, sp: Split,

@@ -106,6 +106,9 @@ class Design:
     #: (3,) per equation, the fraction of rows that are independent (low-passed rows are correlated; the
     #: torque rows' speed view remembers a rotor time constant)
     independence: np.ndarray = field(default_factory=lambda: np.ones(3))
+    #: per constant, the relative error a nuisance the log leaves open could mimic (``L`` under an unidentified
+    #: command timing): its calibration box is ``tol`` wider by this, so it is named only beyond both
+    slack: dict[str, float] = field(default_factory=dict)
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
