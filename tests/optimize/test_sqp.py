@@ -66,3 +66,16 @@ def test_building_and_solving_keeps_standard_output_empty():
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120,
                          env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}, check=True)
     assert out.stdout == "" and out.stderr.strip().endswith("sqpmethod")
+
+
+def test_quiet_keeps_what_qpoases_prints_off_standard_output(capsys):
+    """qpOASES's messages reach Python's ``sys.stdout`` through CasADi: a QP solver made outside :func:`sqp.quiet`
+    prints its banner there (the oracle that the check can fail), one made and run inside prints nothing."""
+    x = ca.SX.sym("x")
+    qp = {"x": x, "f": x**2, "g": x}
+    ca.qpsol("loud", "qpoases", qp, {"printLevel": "none"})
+    assert "qpOASES" in capsys.readouterr().out
+    with sqp.quiet():
+        quiet = ca.qpsol("quiet", "qpoases", qp, {"printLevel": "none", "error_on_fail": False})
+        quiet(lbx=0.0, ubx=1.0, lbg=2.0, ubg=3.0)  # infeasible
+    assert capsys.readouterr().out == "" and not quiet.stats()["success"]
