@@ -176,8 +176,9 @@ def param_slices(st: FlatStructure) -> dict[str, slice]:
 @dataclass
 class FlatProgram:
     """A built flat NLP: ``x = (stretch (P,), c (P * n_coef,))``; ``g = (current, voltage at the check points,
-    each (P * n_check,), scaled by the limits; continuity equalities)``. With its cold solver, the warm one
-    (:mod:`ocp.optimize.warm`) and the memory of its last few successful solves (oldest first)."""
+    each (P * n_check,), scaled by the limits; continuity equalities)``. With its SQP solver (tried first,
+    :mod:`ocp.optimize.sqp`), its cold and warm IPOPT solvers (:mod:`ocp.optimize.warm`) and the memory of its last
+    few successful solves (oldest first)."""
 
     structure: FlatStructure
     solver: ca.Function
