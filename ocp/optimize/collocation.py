@@ -37,6 +37,7 @@ import numpy as np
 from ocp.model.plant import CASADI, Plant
 from ocp.optimize import path_limits
 from ocp.optimize import warm as warm_
+from ocp.optimize.nlp_call import call
 from ocp.optimize.program_cache import ProgramCache
 
 DEGREE = 3
@@ -198,6 +199,7 @@ class Solved:
     method: str = "ipopt"
 
 
+
 @dataclass
 class Program:
     """A built NLP with its solvers (cold; warm, built on a warm start: :mod:`ocp.optimize.warm`), layout, a
@@ -278,22 +280,18 @@ class Program:
             t0 = time.perf_counter()
             self.deadline.until = until
             try:
-                sol = solver(**args)
+                run = call(solver, args)
             finally:
                 self.deadline.until = math.inf
-            solve_time = time.perf_counter() - t0
-            stats = solver.stats()
+            sol = run.sol
             x = np.asarray(sol["x"]).ravel()
             self._last = warm_.Memory(x=x, lam_x=np.asarray(sol["lam_x"]).ravel(),
                                       lam_g=np.asarray(sol["lam_g"]).ravel(), p=p.copy(), lbx=lbx.copy(),
                                       ubx=ubx.copy())
-        status = str(stats.get("return_status", "unknown"))
         g = np.asarray(sol["g"]).ravel()[:self.n_g]
-        return Solved(x=x, status=status,
-                      success=bool(stats.get("success", False)) or status == "Solved_To_Acceptable_Level",
-                      iterations=int(stats.get("iter_count", -1)), objective=float(sol["f"]),
+        return Solved(x=x, status=run.status, success=run.success, iterations=run.iterations, objective=float(sol["f"]),
                       constraint_violation=float(np.max(np.abs(g))) if self.n_g else 0.0,
-                      solve_time_s=solve_time, warm=started_warm, warm_build_s=t0 - t_lock)
+                      solve_time_s=run.seconds, warm=started_warm, warm_build_s=t0 - t_lock)
 
 
 def _param_slices(st: Structure, nx: int) -> dict[str, slice]:

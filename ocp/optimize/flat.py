@@ -52,15 +52,16 @@ from scipy.interpolate import BSpline
 from ocp.optimize import collocation as col
 from ocp.optimize import sqp
 from ocp.optimize import warm as warm_
+from ocp.optimize.nlp_call import call
 from ocp.optimize.program_cache import ProgramCache
 
 DEGREE = 5  # omega: C^4 inside a phase, so the voltage is C^2 and its slew C^1
 CHECKS = 3  # limit check points per span (equally spaced)
 #: ... in the first and last spans of a phase (outermost first), where a reversal's held voltage may jump and the
-#: current turns fastest. Every check is two rows of IPOPT's, and its time per iteration grows with the rows (rows
-#: with infinite bounds cost as much): 3 a span and (12, 8, 8) at the ends (98 rows a phase at 20 spans) took
-#: 30-40 % less time per iteration than 4 and 12 in 3 end spans (128 rows); with 8 in the 3 end spans the step
-#: reversal needed a back-off round (overshoot in the last span), with (12, 6, 6) the 1 Hz continuous-voltage sine
+#: current turns fastest. Every check is two limit rows, and a solver's time per iteration grows with the rows: 3
+#: a span and (12, 8, 8) at the ends (98 rows a phase at 20 spans) took 30-40 % less IPOPT time per iteration than
+#: 4 and 12 in 3 end spans (128 rows); with 8 in the 3 end spans the step reversal needed a back-off round
+#: (overshoot in the last span)
 END_CHECKS = (12, 8, 8)
 GAUSS = 4  # Gauss-Legendre points per span for the tracking integral
 #: knots graded towards the phase ends: a reversal with omega ~ s^3 needs fine spans there (the continuous-voltage
@@ -364,32 +365,20 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
             runs = []
             if prog.sqp_solver is not None:
                 with sqp.quiet():
-                    runs.append(_run(prog.sqp_solver, args))
-            method = "sqpmethod"
-            if not runs or not runs[0][2]:
-                runs.append(_run(ipopt, args))
-                method = "ipopt"
+                    runs.append(call(prog.sqp_solver, args))
+            if not runs or not runs[0].success:
+                runs.append(call(ipopt, args))
         finally:
             prog.deadline.until = math.inf
-        sol, stats, success, _ = runs[-1]
-        if success:  # a failed run is no start for the next call
-            prog.memory.append(warm_.remember(sol, p, lbx, ubx))
-    g = np.asarray(sol["g"]).ravel()
+        last = runs[-1]
+        if last.success:  # a failed run is no start for the next call
+            prog.memory.append(warm_.remember(last.sol, p, lbx, ubx))
+    g = np.asarray(last.sol["g"]).ravel()
     viol = float(np.max(np.maximum(g - g_bounds[1], g_bounds[0] - g), initial=0.0))
-    return col.Solved(x=np.asarray(sol["x"]).ravel(), status=str(stats.get("return_status", "unknown")),
-                      success=success, iterations=sum(int(r[1].get("iter_count", 0)) for r in runs),
-                      objective=float(sol["f"]) / float(p[scale][0]), constraint_violation=viol,
-                      solve_time_s=sum(r[3] for r in runs), warm=start is not None, method=method)
-
-
-def _run(solver: ca.Function, args: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any], bool, float]:
-    """(solution, stats, success, wall time [s]) of one call of ``solver``."""
-    t0 = time.perf_counter()
-    sol = solver(**args)
-    elapsed = time.perf_counter() - t0
-    stats = solver.stats()
-    success = bool(stats.get("success", False)) or stats.get("return_status") == "Solved_To_Acceptable_Level"
-    return sol, stats, success, elapsed
+    return col.Solved(x=np.asarray(last.sol["x"]).ravel(), status=last.status, success=last.success,
+                      iterations=sum(r.iterations for r in runs), objective=float(last.sol["f"]) / float(p[scale][0]),
+                      constraint_violation=viol, solve_time_s=sum(r.seconds for r in runs), warm=start is not None,
+                      method="ipopt" if last.solver is ipopt else "sqpmethod")
 
 
 def _with_solvers(prog: FlatProgram) -> FlatProgram:
