@@ -20,7 +20,7 @@ from scipy.interpolate import BSpline
 
 from ocp.model.equilibrium import equilibrium, speed_for_thrust
 from ocp.model.plant import DCMotorPlant
-from ocp.optimize import flat
+from ocp.optimize import bspline, flat
 from ocp.optimize.collocation import SolveContext
 from ocp.optimize.data import WEIGHTS
 from ocp.optimize.mission import output_grid
@@ -205,39 +205,42 @@ def _add_run(info: SolverStats, run: flat.col.Solved, rounds: int, backoff: floa
 
 @dataclass(frozen=True)
 class FlatPlan:
-    """A solved flat program as functions of time: the speed splines (SI) per phase and the phase edges [s]."""
+    """A solved flat program as functions of time: per phase the speed spline's coefficients ``coef`` (P, n_coef)
+    [rad/s] on the knots ``knots`` of the normalised time (:func:`ocp.optimize.flat.knots`, degree
+    :data:`~ocp.optimize.flat.DEGREE`), the phase edges [s] (P+1,), the speed signs (P,) and the plant constants."""
 
-    splines: list[BSpline]
+    coef: np.ndarray
+    knots: np.ndarray
     phase_edges: np.ndarray
     signs: np.ndarray
     constants: dict[str, float]
 
     def derivatives(self, t: np.ndarray, upto: int = 2) -> tuple[list[np.ndarray], np.ndarray]:
         """(omega and its first ``upto`` (<= DERIVED) time derivatives at ``t`` (M,), each (M,); the speed sign
-        (M,))."""
-        P = len(self.splines)
+        (M,)). The values of scipy's ``BSpline`` and its ``derivative()`` at the phase's normalised time, over the
+        phase length to the power of the order, bit for bit (:mod:`ocp.optimize.bspline`: one vectorised de Boor
+        pass over every phase and order)."""
+        P = self.coef.shape[0]
         j = np.clip(np.searchsorted(self.phase_edges, t, side="right") - 1, 0, P - 1)
         h = np.diff(self.phase_edges)
         tau = np.clip((t - self.phase_edges[j]) / h[j], 0.0, 1.0)
-        out = [np.zeros_like(t) for _ in range(upto + 1)]
-        for k in range(P):
-            sel = j == k
-            if not np.any(sel):
-                continue
-            for r in range(upto + 1):
-                out[r][sel] = self._derived[k][r](tau[sel]) / h[k] ** r
+        kn = bspline.knots(self.knots, flat.DEGREE)
+        ell, funcs = bspline.basis(kn, tau, flat.DEGREE - upto)
+        out = []
+        for r in range(upto + 1):
+            per_phase = np.array([h[k] ** r for k in range(P)])  # the divisor of a scalar spline's value, per phase
+            out.append(bspline.combine(kn, ell, funcs[r], self._windows[r], j) / per_phase[j])
         return out, self.signs[j]
 
     @cached_property
-    def _derived(self) -> list[list[BSpline]]:
-        """Per phase the speed spline and its tau-derivatives of orders 1..DERIVED (derived once per plan)."""
-        out = []
-        for spline in self.splines:
-            chain = [spline]
-            for _ in range(DERIVED):
-                chain.append(chain[-1].derivative())  # the same arithmetic as derivative(r) (splder, order by order)
-            out.append(chain)
-        return out
+    def _windows(self) -> list[np.ndarray]:
+        """Per order 0..DERIVED the coefficients of every phase's speed spline differentiated that often in tau (as
+        scipy's ``BSpline.derivative``, order by order), as :func:`ocp.optimize.bspline.windows`."""
+        n = self.coef.shape[1]
+        chain = [BSpline(self.knots, self.coef.T, flat.DEGREE)]  # column p: phase p (splder works per column)
+        for _ in range(DERIVED):
+            chain.append(chain[-1].derivative())
+        return [bspline.windows(np.asarray(s.c)[:n].T, flat.DEGREE) for s in chain]
 
     def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(states (omega [rad/s], current [A]) shape (2, M), voltage [V] (M,)) at ``t`` (M,)."""
@@ -252,9 +255,8 @@ def plan_of(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatD
     mp = problem.mission.motor()
     h = x[:P] * problem.phases.durations
     coef = x[P:].reshape(P, nc) * data.scales.x[0]
-    return FlatPlan(splines=[BSpline(flat.knots(st.spans), coef[j], flat.DEGREE) for j in range(P)],
-                    phase_edges=np.concatenate([[0.0], np.cumsum(h)]), signs=problem.phases.signs,
-                    constants={k: float(getattr(mp, k)) for k in flat.CONSTANTS})
+    return FlatPlan(coef=coef, knots=flat.knots(st.spans), phase_edges=np.concatenate([[0.0], np.cumsum(h)]),
+                    signs=problem.phases.signs, constants={k: float(getattr(mp, k)) for k in flat.CONSTANTS})
 
 
 def _answer(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatData,
