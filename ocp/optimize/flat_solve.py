@@ -27,6 +27,7 @@ from ocp.optimize.mission import output_grid
 from ocp.optimize.problem import Problem, Scales, chain_order, crossing_order, scales
 from ocp.optimize.result import Crossing, OptimizeResult, SolverProgram, SolverStats, Status, Unsolved
 from ocp.optimize.solution import package
+from ocp.simulate.zoh import union_sorted
 
 #: the smooth voltage is held on pieces (of at least 1/SUBSTEPS of the 1 kHz output step) over which it moves by
 #: about COMMAND_DV of its limit (:func:`held_command`): the response's current stays within ~COMMAND_DV V/R of
@@ -181,10 +182,12 @@ def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT,
         t0 = time.perf_counter()
         result = _answer(problem, st, run.x, data, info)
         info.verify_time_s += time.perf_counter() - t0
+        if result.path_ok:
+            return result
         ratios = problem.plant.limit_ratios(result.fine, m.bounds())
         excess = np.array([np.max(ratios["limits.current"]), np.max(ratios["limits.voltage"])])
-        if result.path_ok or not np.all(np.isfinite(excess)):
-            return result if result.path_ok else Unsolved("flat program: the simulated response diverged", info)
+        if not np.all(np.isfinite(excess)):
+            return Unsolved("flat program: the simulated response diverged", info)
         bound = np.where(excess > 1.0, bound / (1.0 + 1.2 * (excess - 1.0)), bound)
         # a back-off round starts the cold solver from this round's primal: IPOPT's warm start (duals, small
         # mu_init) took more iterations there, its active rows now infeasible (ramp, bounds 0.995 -> 0.965:
@@ -263,39 +266,47 @@ def plan_of(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatD
 
 def _answer(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatData,
             info: SolverStats) -> OptimizeResult:
-    """Package the solved flat program: the smooth voltage held (:data:`COMMAND_DV`), simulated."""
+    """Package the solved flat program: the smooth voltage held (:data:`COMMAND_DV`), simulated. The plan is
+    evaluated once, at the command grid's midpoints, the output times and the reversals together."""
     plan = plan_of(problem, st, x, data)
     edges = plan.phase_edges
     t = output_grid(float(edges[-1]))
-    knots, u_knots = held_command(plan, t, COMMAND_DV * data.scales.u_lim)
-    return package(problem, plan.states, edges, (knots, u_knots), data.x_start, _crossings(plan, data), info)
+    grid = command_grid(t, edges)
+    mid, ts = 0.5 * (grid[:-1] + grid[1:]), edges[1:-1]
+    states, volts = plan.states(np.concatenate([mid, t, ts]))
+    a, b = mid.size, mid.size + t.size
+    command = held_command(grid, volts[:a], edges, COMMAND_DV * data.scales.u_lim)
+    crossings = _crossings(ts, states[:, b:], volts[b:], data)
+    return package(problem, t, (states[:, a:b], volts[a:b]), edges, command, data.x_start, crossings, info)
 
 
-def held_command(plan: FlatPlan, t: np.ndarray, dv: float) -> tuple[np.ndarray, np.ndarray]:
-    """The plan's smooth voltage as a held command: (knots (K+1,) [s], values (K,) [V]). On a grid of SUBSTEPS
-    pieces per output step ``t`` (M,) [s] (and the phase edges), a piece ends where the voltage moves to another
-    multiple of ``dv`` [V] (rounded), or at a phase edge; each piece holds the voltage's mean over it. A hold
-    needs one piece, a reversal as many as its voltage's variation over ``dv``."""
+def command_grid(t: np.ndarray, phase_edges: np.ndarray) -> np.ndarray:
+    """SUBSTEPS equal pieces per output step of ``t`` (M,) [s], and the phase edges (P+1,): shape (G,) [s]."""
     frac = np.arange(SUBSTEPS) / SUBSTEPS
-    grid = np.union1d(np.append((t[:-1, None] + frac[None, :] * np.diff(t)[:, None]).ravel(), t[-1]),
-                      plan.phase_edges)
+    return union_sorted(np.append((t[:-1, None] + frac[None, :] * np.diff(t)[:, None]).ravel(), t[-1]), phase_edges)
+
+
+def held_command(grid: np.ndarray, v: np.ndarray, phase_edges: np.ndarray, dv: float) -> tuple[np.ndarray, np.ndarray]:
+    """The plan's smooth voltage ``v`` (G-1,) [V] at the midpoints of the pieces of ``grid`` (G,) [s]
+    (:func:`command_grid`) as a held command: (knots (K+1,) [s], values (K,) [V]). A held piece ends where the
+    voltage moves to another multiple of ``dv`` [V] (rounded), or at a phase edge (``phase_edges`` (P+1,) [s]);
+    each holds the voltage's mean over it. A hold needs one piece, a reversal as many as its voltage's variation
+    over ``dv``."""
     dt = np.diff(grid)
-    v = plan.states(0.5 * (grid[:-1] + grid[1:]))[1]
     level = np.round(v / dv)
     cut = np.flatnonzero(np.diff(level) != 0) + 1  # a piece starts at these grid steps
-    at_edges = np.searchsorted(grid, plan.phase_edges[1:-1])
+    at_edges = np.searchsorted(grid, phase_edges[1:-1])
     starts = np.union1d(np.concatenate([[0], cut, at_edges]), []).astype(int)
     held = np.add.reduceat(v * dt, starts) / np.add.reduceat(dt, starts)
     return np.append(grid[starts], grid[-1]), held
 
 
-def _crossings(plan: FlatPlan, data: FlatData) -> list[Crossing]:
-    """Local exponent at each reversal: 2 + 2n with n the leading links of (current, voltage) that vanish
-    (below 1e-6 of their limits) just after the crossing; with the planned current and voltage there."""
+def _crossings(ts: np.ndarray, x: np.ndarray, v: np.ndarray, data: FlatData) -> list[Crossing]:
+    """Local exponent at each reversal ``ts`` (R,) [s]: 2 + 2n with n the leading links of (current, voltage) that
+    vanish (below 1e-6 of their limits) just after the crossing; with the planned current and voltage there
+    (``x`` (2, R) the plan's states at ``ts``, i.e. at tau = 0 of the next phase, ``v`` (R,) its voltage)."""
     out = []
     scale = np.array([data.scales.x[1], data.scales.u_lim])  # the current and voltage limits [A], [V]
-    ts = plan.phase_edges[1:-1]
-    x, v = plan.states(ts)  # at tau = 0 of the next phase
     for k in range(ts.size):
         links = np.abs([x[1, k], v[k]]) / scale
         n = 0

@@ -6,11 +6,14 @@ over numpy scalars; the answer's plan evaluated by scipy's ``BSpline`` per phase
 """
 
 import numpy as np
+import pytest
+from scipy.interpolate import BSpline
 
 from bench.user_missions import user_missions
 from ocp.optimize import flat, flat_solve
 from ocp.optimize.mission import mission_from_mapping
 from ocp.optimize.problem import Problem, problem_for
+from ocp.optimize.result import SolverProgram, SolverStats
 
 REVERSAL = {"name": "rev", "limits": {"voltage": 12.0, "current": 1.0},
             "segments": [{"kind": "hold", "duration": 0.5, "thrust": 0.4},
@@ -54,3 +57,64 @@ def test_the_guess_rate_limit_on_python_floats_is_the_former_loop():
             for speed in [static, *rng.uniform(0.0, 2.0 * float(np.max(static)), (40, static.size))]:
                 np.testing.assert_array_equal(flat_solve._rate_limited(problem, speed, j),
                                               _former_rate_limited(problem, speed, j))
+
+
+def _former_states(plan: flat_solve.FlatPlan, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The plan's (states (2, M), voltage (M,)) at ``t`` (M,) as before: scipy's BSpline per phase and order."""
+    P = plan.coef.shape[0]
+    j = np.clip(np.searchsorted(plan.phase_edges, t, side="right") - 1, 0, P - 1)
+    h = np.diff(plan.phase_edges)
+    tau = np.clip((t - plan.phase_edges[j]) / h[j], 0.0, 1.0)
+    w = [np.zeros_like(t) for _ in range(3)]
+    for k in range(P):
+        sel = j == k
+        chain = [BSpline(plan.knots, plan.coef[k], flat.DEGREE)]
+        for _ in range(2):
+            chain.append(chain[-1].derivative())
+        for r in range(3):
+            w[r][sel] = chain[r](tau[sel]) / h[k] ** r
+    cur, volts = flat.drive([*w, np.zeros_like(t)], dict(plan.constants), plan.signs[j], 0)
+    return np.vstack([w[0], cur]), volts
+
+
+def _former_held_command(plan: flat_solve.FlatPlan, t: np.ndarray, dv: float) -> tuple[np.ndarray, np.ndarray]:
+    frac = np.arange(flat_solve.SUBSTEPS) / flat_solve.SUBSTEPS
+    grid = np.union1d(np.append((t[:-1, None] + frac[None, :] * np.diff(t)[:, None]).ravel(), t[-1]),
+                      plan.phase_edges)
+    dt = np.diff(grid)
+    v = _former_states(plan, 0.5 * (grid[:-1] + grid[1:]))[1]
+    level = np.round(v / dv)
+    cut = np.flatnonzero(np.diff(level) != 0) + 1
+    at_edges = np.searchsorted(grid, plan.phase_edges[1:-1])
+    starts = np.union1d(np.concatenate([[0], cut, at_edges]), []).astype(int)
+    held = np.add.reduceat(v * dt, starts) / np.add.reduceat(dt, starts)
+    return np.append(grid[starts], grid[-1]), held
+
+
+@pytest.mark.parametrize("name", ["rev", "user-sine-1hz-b", "user-ramp-cv"])
+def test_the_answer_is_the_former_evaluation_bit_for_bit(name: str):
+    """A solved flat program packaged as an answer (the plan evaluated once at the command grid's midpoints, the
+    output times and the reversals together, by the vectorised de Boor pass): the held command, the planned
+    voltage on the output grid, the crossings' planned current and voltage and the reproduction error equal the
+    former evaluation's (scipy per phase and order, three separate evaluations) to the last bit."""
+    spec = next(s for s in [REVERSAL, *user_missions()] if s["name"] == name)
+    problem = problem_for(mission_from_mapping(spec))
+    st = flat_solve.structure_of(problem)
+    prog, _ = flat.program_for(st)
+    data = flat_solve.flat_data(problem, prog)
+    assert data is not None
+    run = flat.solve(prog, data.p, data.lbx, data.ubx, data.x0, prog.g_bounds(0.995, 0.995))
+    assert run.success
+    answer = flat_solve._answer(problem, st, run.x, data, SolverStats(program=SolverProgram.FLAT))
+    plan = flat_solve.plan_of(problem, st, run.x, data)
+    t = answer.arrays["t"]
+    knots, held = _former_held_command(plan, t, flat_solve.COMMAND_DV * data.scales.u_lim)
+    np.testing.assert_array_equal(answer.arrays["command_t"], knots)
+    np.testing.assert_array_equal(answer.arrays["command"], np.append(held, held[-1]))
+    x_plan, v_plan = _former_states(plan, t)
+    np.testing.assert_array_equal(answer.arrays["voltage"], v_plan)
+    err = answer.arrays["thrust"] - problem.plant.thrust([x_plan[0], x_plan[1]])
+    assert answer.verification.thrust_rms_error == float(np.sqrt(np.mean(err**2)))
+    x_cross, v_cross = _former_states(plan, plan.phase_edges[1:-1])
+    assert [(c.current, c.voltage) for c in answer.crossings] == list(zip(x_cross[1], v_cross, strict=True))
+    assert len(answer.crossings) == problem.phases.signs.size - 1 >= 1
