@@ -11,7 +11,7 @@ from scipy.interpolate import BSpline
 
 from bench.user_missions import user_missions
 from ocp.optimize import flat, flat_solve
-from ocp.optimize.mission import mission_from_mapping
+from ocp.optimize.mission import Profile, mission_from_mapping
 from ocp.optimize.problem import Problem, problem_for
 from ocp.optimize.result import SolverProgram, SolverStats
 
@@ -118,3 +118,19 @@ def test_the_answer_is_the_former_evaluation_bit_for_bit(name: str):
     x_cross, v_cross = _former_states(plan, plan.phase_edges[1:-1])
     assert [(c.current, c.voltage) for c in answer.crossings] == list(zip(x_cross[1], v_cross, strict=True))
     assert len(answer.crossings) == problem.phases.signs.size - 1 >= 1
+
+
+def test_the_resolved_bounds_follow_a_copied_mission():
+    """Mission.bounds() is kept per limits, profile and params: a copy with other limits, another profile or
+    other motor constants gets its own (the default torque bound 4 c_tau F_peak / c_f follows all three)."""
+    m = mission_from_mapping(REVERSAL)
+    first = m.bounds()
+    assert m.bounds() is first and first.torque == pytest.approx(4 * 2.2e-6 * 0.4 / 1.4e-4)
+    tighter = m.model_copy(update={"limits": m.limits.model_copy(update={"current": 0.5})})
+    assert tighter.bounds().current == 0.5 and m.bounds().current == 1.0
+    t = np.linspace(0.0, 1.0, 11)
+    sampled = m.model_copy(update={"segments": None,
+                                   "profile": Profile(t=t.tolist(), thrust=(0.8 * np.cos(3 * t)).tolist())})
+    assert sampled.bounds().torque == pytest.approx(4 * 2.2e-6 * 0.8 / 1.4e-4)
+    weaker = m.model_copy(update={"params": {**m.motor().model_dump(), "c_f": 2.8e-4}})
+    assert weaker.bounds().torque == pytest.approx(first.torque / 2)
