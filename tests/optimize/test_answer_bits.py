@@ -10,6 +10,7 @@ import pytest
 from scipy.interpolate import BSpline
 
 from bench.user_missions import user_missions
+from ocp.errors import MissionError
 from ocp.optimize import flat, flat_solve
 from ocp.optimize.mission import Profile, mission_from_mapping
 from ocp.optimize.problem import Problem, problem_for
@@ -134,3 +135,36 @@ def test_the_resolved_bounds_follow_a_copied_mission():
     assert sampled.bounds().torque == pytest.approx(4 * 2.2e-6 * 0.8 / 1.4e-4)
     weaker = m.model_copy(update={"params": {**m.motor().model_dump(), "c_f": 2.8e-4}})
     assert weaker.bounds().torque == pytest.approx(first.torque / 2)
+
+
+def test_phase_signs_are_the_former_majority_vote():
+    """Random profiles (sign runs of random lengths, zero samples, single-sample phases): the phases and their signs
+    equal the former per-phase masks' majority vote."""
+    from itertools import pairwise
+
+    from ocp.optimize.problem import split_phases
+    from ocp.theory.crossings import sign_change_times
+
+    rng = np.random.default_rng(9)
+    checked = 0
+    for _ in range(300):
+        n = int(rng.integers(5, 200))
+        t = np.cumsum(rng.uniform(0.001, 0.01, n))
+        f = np.repeat(rng.choice([-1.0, 1.0], n), rng.integers(1, 6, n))[:n] * rng.uniform(0.1, 1.0, n)
+        f[rng.random(n) < 0.1] = 0.0
+        if not np.any(f):
+            continue
+        try:
+            phases = split_phases(t, f)
+        except MissionError:  # reversals closer than the samples allow (refused either way)
+            continue
+        checked += 1
+        bounds = np.array([t[0], *sign_change_times(t, f, 1e-12 * float(np.max(np.abs(f)))), t[-1]])
+        former = []
+        for a, b in pairwise(bounds):
+            inside = f[(t > a) & (t < b)]
+            s = np.sign(np.sum(np.sign(inside))) if inside.size else np.sign(np.interp(0.5 * (a + b), t, f))
+            former.append(1.0 if s >= 0 else -1.0)
+        np.testing.assert_array_equal(phases.bounds, bounds)
+        np.testing.assert_array_equal(phases.signs, former)
+    assert checked >= 200
