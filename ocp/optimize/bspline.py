@@ -71,18 +71,22 @@ def basis(kn: Knots, x: np.ndarray, lowest: int) -> tuple[np.ndarray, list[np.nd
     ell = np.searchsorted(kn.t, x, side="right") - 1
     np.clip(ell, k, kn.n - 1, out=ell)
     i = ell - k
+    # a few work arrays written in place (out=): a new temporary per operation cost up to 5x more where the
+    # allocator hands large blocks back to the system and takes them again (page faults on every use)
     near = kn.nearby.take(i, axis=1)
-    right = near[k:] - x  # row m - 1: t[ell + m] - x, m = 1..k
-    left = x - near[:k]  # row d + k - 1: x - t[ell + d], d = -(k-1)..0
-    h = np.zeros((k + 1, x.size))
+    right = np.subtract(near[k:], x, out=near[k:])  # row m - 1: t[ell + m] - x, m = 1..k
+    left = np.subtract(x, near[:k], out=near[:k])  # row d + k - 1: x - t[ell + d], d = -(k-1)..0
+    h = np.empty((k + 1, x.size))
     h[0] = 1.0
+    w, up, down, gap = (np.empty((k, x.size)) for _ in range(4))
     levels = []
     for j in range(1, k + 1):
-        w = h[:j] / kn.gaps[j - 1].take(i, axis=1)  # w_m = h[m-1] / (t[ell+m] - t[ell+m-j]), m = 1..j
-        up = w * right[:j]  # w_m (t[ell+m] - x): added to h[m-1]
-        down = w * left[k - j:]  # w_m (x - t[ell+m-j]): h[m]
-        h[0] = 0.0 + up[0]
-        h[1:j] = down[: j - 1] + up[1:]
+        kn.gaps[j - 1].take(i, axis=1, out=gap[:j])
+        np.divide(h[:j], gap[:j], out=w[:j])  # w_m = h[m-1] / (t[ell+m] - t[ell+m-j]), m = 1..j
+        np.multiply(w[:j], right[:j], out=up[:j])  # w_m (t[ell+m] - x): added to h[m-1]
+        np.multiply(w[:j], left[k - j:], out=down[:j])  # w_m (x - t[ell+m-j]): h[m]
+        np.add(0.0, up[0], out=h[0])
+        np.add(down[: j - 1], up[1:j], out=h[1:j])
         h[j] = down[j - 1]
         if j >= lowest:
             levels.append(h[: j + 1].copy())
@@ -103,8 +107,9 @@ def combine(kn: Knots, ell: np.ndarray, funcs: np.ndarray, win: np.ndarray, whic
     """Values (M,) at the points of :func:`basis` (``ell`` (M,), ``funcs`` one of its entries) of spline
     ``which`` (M,) (or one index for every point) of the windows ``win`` (:func:`windows`), summed as scipy does:
     ``0 + c[ell-k] B_0 + c[ell-k+1] B_1 + ...``."""
-    prod = win[: funcs.shape[0]].take(np.asarray(which) * kn.n + ell - kn.k, axis=1) * funcs
-    out = 0.0 + prod[0]
+    prod = win[: funcs.shape[0]].take(np.asarray(which) * kn.n + ell - kn.k, axis=1)
+    prod *= funcs
+    out = np.add(0.0, prod[0])
     for a in range(1, funcs.shape[0]):
         out += prod[a]
     return out
