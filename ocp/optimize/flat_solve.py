@@ -20,13 +20,14 @@ from scipy.interpolate import BSpline
 
 from ocp.model.equilibrium import equilibrium, speed_for_thrust
 from ocp.model.plant import DCMotorPlant
-from ocp.optimize import flat
+from ocp.optimize import bspline, flat
 from ocp.optimize.collocation import SolveContext
 from ocp.optimize.data import WEIGHTS
 from ocp.optimize.mission import output_grid
 from ocp.optimize.problem import Problem, Scales, chain_order, crossing_order, scales
 from ocp.optimize.result import Crossing, OptimizeResult, SolverProgram, SolverStats, Status, Unsolved
 from ocp.optimize.solution import package
+from ocp.simulate.zoh import union_sorted
 
 #: the smooth voltage is held on pieces (of at least 1/SUBSTEPS of the 1 kHz output step) over which it moves by
 #: about COMMAND_DV of its limit (:func:`held_command`): the response's current stays within ~COMMAND_DV V/R of
@@ -135,21 +136,23 @@ def _rate_limited(problem: Problem, speed: np.ndarray, j: int) -> np.ndarray:
     limit wherever the drag alone is), and is zero at the phase's reversals (a forward and a backward pass)."""
     mp, phases = problem.mission.motor(), problem.phases
     torque = mp.k_t * problem.mission.limits.current  # [N m]
-    t = phases.bounds[j] + flat.points(speed.size // flat.GAUSS)["quad"] * phases.durations[j]  # (nq,) [s]
-    out = speed.copy()
-    prev_t, prev = (phases.bounds[j], 0.0) if j > 0 else (t[0], out[0])
-    for n in range(out.size):
+    J, B, c_tau = mp.J, mp.B, mp.c_tau
+    t = (phases.bounds[j] + flat.points(speed.size // flat.GAUSS)["quad"] * phases.durations[j]).tolist()  # [s]
+    # Python floats: the same IEEE operations as on numpy scalars (``**`` is C's pow in both), at a fifth of the cost
+    out = speed.tolist()
+    prev_t, prev = (float(phases.bounds[j]), 0.0) if j > 0 else (t[0], out[0])
+    for n in range(len(out)):
         # eq:dc_mechanical  J |w|' = k_t |i| - B |w| - c_tau w^2 (speeding up)
-        rate = GUESS_CURRENT * max(torque - mp.B * prev - mp.c_tau * prev**2, 0.0) / mp.J
+        rate = GUESS_CURRENT * max(torque - B * prev - c_tau * prev**2, 0.0) / J
         prev = out[n] = min(out[n], prev + rate * (t[n] - prev_t))
         prev_t = t[n]
-    nxt_t, nxt = (t[-1], out[-1]) if j == phases.signs.size - 1 else (phases.bounds[j + 1], 0.0)
-    for n in range(out.size - 1, -1, -1):
+    nxt_t, nxt = (t[-1], out[-1]) if j == phases.signs.size - 1 else (float(phases.bounds[j + 1]), 0.0)
+    for n in range(len(out) - 1, -1, -1):
         # eq:dc_mechanical  J |w|' = -(k_t |i| + B |w| + c_tau w^2) (slowing down)
-        rate = GUESS_CURRENT * (torque + mp.B * nxt + mp.c_tau * nxt**2) / mp.J
+        rate = GUESS_CURRENT * (torque + B * nxt + c_tau * nxt**2) / J
         nxt = out[n] = min(out[n], nxt + rate * (nxt_t - t[n]))
         nxt_t = t[n]
-    return out
+    return np.array(out)
 
 
 def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT,
@@ -179,10 +182,12 @@ def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT,
         t0 = time.perf_counter()
         result = _answer(problem, st, run.x, data, info)
         info.verify_time_s += time.perf_counter() - t0
+        if result.path_ok:
+            return result
         ratios = problem.plant.limit_ratios(result.fine, m.bounds())
         excess = np.array([np.max(ratios["limits.current"]), np.max(ratios["limits.voltage"])])
-        if result.path_ok or not np.all(np.isfinite(excess)):
-            return result if result.path_ok else Unsolved("flat program: the simulated response diverged", info)
+        if not np.all(np.isfinite(excess)):
+            return Unsolved("flat program: the simulated response diverged", info)
         bound = np.where(excess > 1.0, bound / (1.0 + 1.2 * (excess - 1.0)), bound)
         # a back-off round starts the cold solver from this round's primal: IPOPT's warm start (duals, small
         # mu_init) took more iterations there, its active rows now infeasible (ramp, bounds 0.995 -> 0.965:
@@ -205,39 +210,42 @@ def _add_run(info: SolverStats, run: flat.col.Solved, rounds: int, backoff: floa
 
 @dataclass(frozen=True)
 class FlatPlan:
-    """A solved flat program as functions of time: the speed splines (SI) per phase and the phase edges [s]."""
+    """A solved flat program as functions of time: per phase the speed spline's coefficients ``coef`` (P, n_coef)
+    [rad/s] on the knots ``knots`` of the normalised time (:func:`ocp.optimize.flat.knots`, degree
+    :data:`~ocp.optimize.flat.DEGREE`), the phase edges [s] (P+1,), the speed signs (P,) and the plant constants."""
 
-    splines: list[BSpline]
+    coef: np.ndarray
+    knots: np.ndarray
     phase_edges: np.ndarray
     signs: np.ndarray
     constants: dict[str, float]
 
     def derivatives(self, t: np.ndarray, upto: int = 2) -> tuple[list[np.ndarray], np.ndarray]:
         """(omega and its first ``upto`` (<= DERIVED) time derivatives at ``t`` (M,), each (M,); the speed sign
-        (M,))."""
-        P = len(self.splines)
+        (M,)). The values of scipy's ``BSpline`` and its ``derivative()`` at the phase's normalised time, over the
+        phase length to the power of the order, bit for bit (:mod:`ocp.optimize.bspline`: one vectorised de Boor
+        pass over every phase and order)."""
+        P = self.coef.shape[0]
         j = np.clip(np.searchsorted(self.phase_edges, t, side="right") - 1, 0, P - 1)
         h = np.diff(self.phase_edges)
         tau = np.clip((t - self.phase_edges[j]) / h[j], 0.0, 1.0)
-        out = [np.zeros_like(t) for _ in range(upto + 1)]
-        for k in range(P):
-            sel = j == k
-            if not np.any(sel):
-                continue
-            for r in range(upto + 1):
-                out[r][sel] = self._derived[k][r](tau[sel]) / h[k] ** r
+        kn = bspline.knots(self.knots, flat.DEGREE)
+        ell, funcs = bspline.basis(kn, tau, flat.DEGREE - upto)
+        out = []
+        for r in range(upto + 1):
+            per_phase = np.array([h[k] ** r for k in range(P)])  # the divisor of a scalar spline's value, per phase
+            out.append(bspline.combine(kn, ell, funcs[r], self._windows[r], j) / per_phase[j])
         return out, self.signs[j]
 
     @cached_property
-    def _derived(self) -> list[list[BSpline]]:
-        """Per phase the speed spline and its tau-derivatives of orders 1..DERIVED (derived once per plan)."""
-        out = []
-        for spline in self.splines:
-            chain = [spline]
-            for _ in range(DERIVED):
-                chain.append(chain[-1].derivative())  # the same arithmetic as derivative(r) (splder, order by order)
-            out.append(chain)
-        return out
+    def _windows(self) -> list[np.ndarray]:
+        """Per order 0..DERIVED the coefficients of every phase's speed spline differentiated that often in tau (as
+        scipy's ``BSpline.derivative``, order by order), as :func:`ocp.optimize.bspline.windows`."""
+        n = self.coef.shape[1]
+        chain = [BSpline(self.knots, self.coef.T, flat.DEGREE)]  # column p: phase p (splder works per column)
+        for _ in range(DERIVED):
+            chain.append(chain[-1].derivative())
+        return [bspline.windows(np.asarray(s.c)[:n].T, flat.DEGREE) for s in chain]
 
     def states(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(states (omega [rad/s], current [A]) shape (2, M), voltage [V] (M,)) at ``t`` (M,)."""
@@ -252,46 +260,53 @@ def plan_of(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatD
     mp = problem.mission.motor()
     h = x[:P] * problem.phases.durations
     coef = x[P:].reshape(P, nc) * data.scales.x[0]
-    return FlatPlan(splines=[BSpline(flat.knots(st.spans), coef[j], flat.DEGREE) for j in range(P)],
-                    phase_edges=np.concatenate([[0.0], np.cumsum(h)]), signs=problem.phases.signs,
-                    constants={k: float(getattr(mp, k)) for k in flat.CONSTANTS})
+    return FlatPlan(coef=coef, knots=flat.knots(st.spans), phase_edges=np.concatenate([[0.0], np.cumsum(h)]),
+                    signs=problem.phases.signs, constants={k: float(getattr(mp, k)) for k in flat.CONSTANTS})
 
 
 def _answer(problem: Problem, st: flat.FlatStructure, x: np.ndarray, data: FlatData,
             info: SolverStats) -> OptimizeResult:
-    """Package the solved flat program: the smooth voltage held (:data:`COMMAND_DV`), simulated."""
+    """Package the solved flat program: the smooth voltage held (:data:`COMMAND_DV`), simulated. The plan is
+    evaluated once, at the command grid's midpoints, the output times and the reversals together."""
     plan = plan_of(problem, st, x, data)
     edges = plan.phase_edges
     t = output_grid(float(edges[-1]))
-    knots, u_knots = held_command(plan, t, COMMAND_DV * data.scales.u_lim)
-    return package(problem, plan.states, edges, (knots, u_knots), data.x_start, _crossings(plan, data), info)
+    grid = command_grid(t, edges)
+    mid, ts = 0.5 * (grid[:-1] + grid[1:]), edges[1:-1]
+    states, volts = plan.states(np.concatenate([mid, t, ts]))
+    a, b = mid.size, mid.size + t.size
+    command = held_command(grid, volts[:a], edges, COMMAND_DV * data.scales.u_lim)
+    crossings = _crossings(ts, states[:, b:], volts[b:], data)
+    return package(problem, t, (states[:, a:b], volts[a:b]), edges, command, data.x_start, crossings, info)
 
 
-def held_command(plan: FlatPlan, t: np.ndarray, dv: float) -> tuple[np.ndarray, np.ndarray]:
-    """The plan's smooth voltage as a held command: (knots (K+1,) [s], values (K,) [V]). On a grid of SUBSTEPS
-    pieces per output step ``t`` (M,) [s] (and the phase edges), a piece ends where the voltage moves to another
-    multiple of ``dv`` [V] (rounded), or at a phase edge; each piece holds the voltage's mean over it. A hold
-    needs one piece, a reversal as many as its voltage's variation over ``dv``."""
+def command_grid(t: np.ndarray, phase_edges: np.ndarray) -> np.ndarray:
+    """SUBSTEPS equal pieces per output step of ``t`` (M,) [s], and the phase edges (P+1,): shape (G,) [s]."""
     frac = np.arange(SUBSTEPS) / SUBSTEPS
-    grid = np.union1d(np.append((t[:-1, None] + frac[None, :] * np.diff(t)[:, None]).ravel(), t[-1]),
-                      plan.phase_edges)
+    return union_sorted(np.append((t[:-1, None] + frac[None, :] * np.diff(t)[:, None]).ravel(), t[-1]), phase_edges)
+
+
+def held_command(grid: np.ndarray, v: np.ndarray, phase_edges: np.ndarray, dv: float) -> tuple[np.ndarray, np.ndarray]:
+    """The plan's smooth voltage ``v`` (G-1,) [V] at the midpoints of the pieces of ``grid`` (G,) [s]
+    (:func:`command_grid`) as a held command: (knots (K+1,) [s], values (K,) [V]). A held piece ends where the
+    voltage moves to another multiple of ``dv`` [V] (rounded), or at a phase edge (``phase_edges`` (P+1,) [s]);
+    each holds the voltage's mean over it. A hold needs one piece, a reversal as many as its voltage's variation
+    over ``dv``."""
     dt = np.diff(grid)
-    v = plan.states(0.5 * (grid[:-1] + grid[1:]))[1]
     level = np.round(v / dv)
     cut = np.flatnonzero(np.diff(level) != 0) + 1  # a piece starts at these grid steps
-    at_edges = np.searchsorted(grid, plan.phase_edges[1:-1])
+    at_edges = np.searchsorted(grid, phase_edges[1:-1])
     starts = np.union1d(np.concatenate([[0], cut, at_edges]), []).astype(int)
     held = np.add.reduceat(v * dt, starts) / np.add.reduceat(dt, starts)
     return np.append(grid[starts], grid[-1]), held
 
 
-def _crossings(plan: FlatPlan, data: FlatData) -> list[Crossing]:
-    """Local exponent at each reversal: 2 + 2n with n the leading links of (current, voltage) that vanish
-    (below 1e-6 of their limits) just after the crossing; with the planned current and voltage there."""
+def _crossings(ts: np.ndarray, x: np.ndarray, v: np.ndarray, data: FlatData) -> list[Crossing]:
+    """Local exponent at each reversal ``ts`` (R,) [s]: 2 + 2n with n the leading links of (current, voltage) that
+    vanish (below 1e-6 of their limits) just after the crossing; with the planned current and voltage there
+    (``x`` (2, R) the plan's states at ``ts``, i.e. at tau = 0 of the next phase, ``v`` (R,) its voltage)."""
     out = []
     scale = np.array([data.scales.x[1], data.scales.u_lim])  # the current and voltage limits [A], [V]
-    ts = plan.phase_edges[1:-1]
-    x, v = plan.states(ts)  # at tau = 0 of the next phase
     for k in range(ts.size):
         links = np.abs([x[1, k], v[k]]) / scale
         n = 0

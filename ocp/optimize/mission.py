@@ -215,6 +215,7 @@ class Mission(_Strict):
     _motor: tuple[object, MotorParams] | None = PrivateAttr(default=None)
     _plant: tuple[object, PlantKind, DrivenPlant] | None = PrivateAttr(default=None)
     _desired: tuple[object, np.ndarray, np.ndarray] | None = PrivateAttr(default=None)
+    _bounds: tuple[tuple[object, ...], DriveBounds] | None = PrivateAttr(default=None)
 
     @field_validator("min_crossing_order")
     @classmethod
@@ -275,9 +276,14 @@ class Mission(_Strict):
         return self._plant[2]
 
     def bounds(self) -> DriveBounds:
-        """The actuator limits resolved (:meth:`torque_limit` filled in)."""
-        lim = self.limits
-        return DriveBounds(voltage=lim.voltage, current=lim.current, torque=self.torque_limit(), speed=lim.speed)
+        """The actuator limits resolved (:meth:`torque_limit` filled in), once per limits, profile and params (a
+        solve and its verification read them several times; ~20 us each from the samples)."""
+        key = (self.limits, self.profile, self.segments, self.params)
+        if self._bounds is None or any(a is not b for a, b in zip(self._bounds[0], key, strict=True)):
+            lim = self.limits
+            self._bounds = (key, DriveBounds(voltage=lim.voltage, current=lim.current, torque=self.torque_limit(),
+                                             speed=lim.speed))
+        return self._bounds[1]
 
     def desired(self) -> tuple[np.ndarray, np.ndarray]:
         """Desired thrust samples ``(t [s], thrust [N])``, shapes (N,), t[0] = 0 for segments (sampled once;

@@ -7,7 +7,6 @@ and the :class:`Scales` that make every decision variable O(1).
 
 from __future__ import annotations
 
-import itertools
 import math
 from dataclasses import dataclass
 
@@ -42,13 +41,17 @@ class Phases:
 
 
 def split_phases(t: np.ndarray, f: np.ndarray) -> Phases:
-    """Phases between sign changes of the desired thrust ``f`` (N,) on ``t`` (N,)."""
+    """Phases between sign changes of the desired thrust ``f`` (N,) on ``t`` (N,) (strictly increasing): each
+    phase's sign is the majority sign of its samples strictly inside it (the middle's when it has none)."""
     cuts = sign_change_times(t, f, 1e-12 * float(np.max(np.abs(f))))
     bounds = np.array([t[0], *cuts, t[-1]])
+    # the samples strictly inside phase j are [first[j], last[j]); the sum of their signs from a running sum
+    # (whole numbers: exact in any order)
+    votes = np.concatenate([[0.0], np.cumsum(np.sign(f))])
+    first, last = np.searchsorted(t, bounds[:-1], side="right"), np.searchsorted(t, bounds[1:], side="left")
     signs = []
-    for a, b in itertools.pairwise(bounds):
-        inside = f[(t > a) & (t < b)]
-        s = np.sign(np.sum(np.sign(inside))) if inside.size else np.sign(np.interp(0.5 * (a + b), t, f))
+    for a, b, lo, hi in zip(bounds[:-1], bounds[1:], first, last, strict=True):
+        s = np.sign(votes[hi] - votes[lo]) if hi > lo else np.sign(np.interp(0.5 * (a + b), t, f))
         signs.append(1.0 if s >= 0 else -1.0)
     if np.any(np.diff(bounds) <= 0):
         raise MissionError("profile", "reversals are closer than the sampling allows")

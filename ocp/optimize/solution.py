@@ -7,7 +7,6 @@ samples the command, simulates the plant under it (:mod:`ocp.optimize.verify`) a
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -92,20 +91,20 @@ def finish_result(problem: Problem, prog: col.Program, xopt: np.ndarray, data: P
     else:
         knots, u_knots = sol.edges, sol.controls
     crossings = _crossings(sol, data.scales.x, data.scales.u)
-    return package(problem, sol.states, sol.phase_edges, (knots, u_knots), sol.points[0, 0, :prog.n_plant_states],
-                   crossings, solver_info)
+    return package(problem, t, sol.states(t), sol.phase_edges, (knots, u_knots),
+                   sol.points[0, 0, :prog.n_plant_states], crossings, solver_info)
 
 
-def package(problem: Problem, plan: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], phase_edges: np.ndarray,
+def package(problem: Problem, t: np.ndarray, planned: tuple[np.ndarray, np.ndarray], phase_edges: np.ndarray,
             command: tuple[np.ndarray, np.ndarray], x0: np.ndarray, crossings: list[Crossing],
             solver_info: SolverStats) -> OptimizeResult:
-    """The answer of a solved program (Radau or flat): ``plan(t)`` its planned (states (nx, M), input (M,)) at
-    times ``t`` (M,) [s]; ``phase_edges`` (P+1,) [s]; ``command`` (knots (K+1,) [s], input held from each (K,));
-    ``x0`` (n_plant_states,) the initial state. The command is simulated and verified on the output grid."""
+    """The answer of a solved program (Radau or flat) on the output times ``t`` (M,) [s]
+    (:func:`~ocp.optimize.mission.output_grid` of the retimed length): ``planned`` its plan there (states (nx, M),
+    input (M,)); ``phase_edges`` (P+1,) [s]; ``command`` (knots (K+1,) [s], input held from each (K,)); ``x0``
+    (n_plant_states,) the initial state. The command is simulated and verified on the output grid."""
     m, plant = problem.mission, problem.plant
     npx = len(plant.state_names)
-    t = output_grid(float(phase_edges[-1]))
-    x_plan, u = plan(t)
+    x_plan, u = planned
     f_plan = np.asarray(plant.thrust([x_plan[i] for i in range(npx)]), float)
     # desired thrust at the retimed time (same normalised time within each phase)
     j = np.clip(np.searchsorted(phase_edges, t, side="right") - 1, 0, problem.phases.signs.size - 1)

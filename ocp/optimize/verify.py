@@ -8,6 +8,8 @@ reproduction error and the peaks and margins of the simulated response on the in
 
 from __future__ import annotations
 
+from functools import cache
+
 import numpy as np
 
 from ocp.model.plant import Plant
@@ -46,6 +48,7 @@ def verification(m: Mission, arrays: dict[str, np.ndarray], f_plan: np.ndarray,
     simulated response on the integration grid ``fine`` (between the output samples too)."""
     err = arrays["thrust"] - f_plan
 
+    @cache  # the drive's peak report asks for the current and the voltage again
     def peak(name: str) -> float:
         return max(float(np.max(np.abs(arrays[name]))), float(np.max(np.abs(fine[name]))))
 
