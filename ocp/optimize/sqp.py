@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -149,6 +149,34 @@ def convexified(H: np.ndarray, rows: np.ndarray) -> np.ndarray:
         if np.min(pivots, initial=math.inf) >= FLOOR * scale:
             return B
     raise np.linalg.LinAlgError("no positive definite shift of the QP's Hessian")
+
+
+def screened(solve: Callable[..., daqp.QPResult | None], B: np.ndarray, grad: np.ndarray, A: np.ndarray,
+             lower: np.ndarray, upper: np.ndarray, ws: np.ndarray, base: np.ndarray) -> daqp.QPResult | None:
+    """The QP ``min 0.5 d'Bd + grad'd``, ``lower <= (d; A d) <= upper`` (bounds (n + m,)) by ``solve`` (the
+    arguments of :func:`ocp.optimize.daqp.solve`) over the rows within :data:`SCREEN` of a bound or in the working
+    set ``ws`` ((n + m,) flags; ``base`` the equality rows'); rows left out that the answer breaks are added (with
+    those it brings within SCREEN) and the QP solved again from its working set, until none is broken: the answer
+    is the full QP's (a row that does not bind does not move its optimum). Multipliers (n + m,), 0 off the rows
+    solved with."""
+    nf = grad.size
+    slack = np.minimum(upper[nf:], -lower[nf:])
+    keep = (slack <= SCREEN) | (ws[nf:] & daqp.ACTIVE != 0)
+    start = ws
+    for _ in range(len(slack) + 1):
+        sel = np.concatenate([np.arange(nf), nf + np.flatnonzero(keep)])
+        res = solve(B, grad, A[keep], lower[sel], upper[sel], start[sel])
+        if res is None:
+            return None
+        lam = np.zeros(lower.size)
+        lam[sel] = res.lam
+        lin = A @ res.x
+        out = ~keep & ((lin > upper[nf:] + daqp.PRIMAL_TOL) | (lin < lower[nf:] - daqp.PRIMAL_TOL))
+        if not np.any(out):
+            return daqp.QPResult(x=res.x, lam=lam, exitflag=res.exitflag, iterations=res.iterations)
+        keep |= out | (np.minimum(upper[nf:] - lin, lin - lower[nf:]) <= SCREEN)
+        start = daqp.working_set(lam, base)
+    return None
 
 
 @dataclass
@@ -312,32 +340,7 @@ class _Loop:
             return None
         lower = np.concatenate([self.lbx[free] - st.x[free], self.lbg - st.g])
         upper = np.concatenate([self.ubx[free] - st.x[free], self.ubg - st.g])
-        return self.screened(B, st.grad[free], A, lower, upper, ws)
-
-    def screened(self, B: np.ndarray, grad: np.ndarray, A: np.ndarray, lower: np.ndarray, upper: np.ndarray,
-                 ws: np.ndarray) -> daqp.QPResult | None:
-        """The QP (bounds (n_f + n_g,): the free variables', then the rows') over the rows within :data:`SCREEN`
-        of a bound or in the working set ``ws``; rows left out that the answer's step breaks are added (with
-        those it brings within SCREEN) and the QP solved again from its working set, until none is broken: the
-        answer is the full QP's (a row that is not binding does not move its optimum). Multipliers (n_f + n_g,)."""
-        nf = grad.size
-        slack = np.minimum(upper[nf:], -lower[nf:])
-        keep = (slack <= SCREEN) | (ws[nf:] & daqp.ACTIVE != 0)
-        start = ws
-        for _ in range(len(slack) + 1):
-            sel = np.concatenate([np.arange(nf), nf + np.flatnonzero(keep)])
-            res = self.solve(B, grad, A[keep], lower[sel], upper[sel], start[sel])
-            if res is None:
-                return None
-            lam = np.zeros(lower.size)
-            lam[sel] = res.lam
-            lin = A @ res.x
-            out = ~keep & ((lin > upper[nf:] + daqp.PRIMAL_TOL) | (lin < lower[nf:] - daqp.PRIMAL_TOL))
-            if not np.any(out):
-                return daqp.QPResult(x=res.x, lam=lam, exitflag=res.exitflag, iterations=res.iterations)
-            keep |= out | (np.minimum(upper[nf:] - lin, lin - lower[nf:]) <= SCREEN)
-            start = daqp.working_set(lam, self.base)
-        return None
+        return screened(self.solve, B, st.grad[free], A, lower, upper, ws, self.base)
 
     def solve(self, B: np.ndarray, grad: np.ndarray, A: np.ndarray, lower: np.ndarray, upper: np.ndarray,
               start: np.ndarray) -> daqp.QPResult | None:

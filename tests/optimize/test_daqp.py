@@ -83,3 +83,29 @@ def test_convexified_keeps_the_hessian_on_the_rows_null_space_and_is_positive_de
     shift = np.diag(B0 - H)
     np.testing.assert_allclose(B0 - H, np.diag(shift), atol=1e-15)
     assert np.all(shift > 0.0)
+
+
+def test_screened_qp_is_the_full_qp():
+    """Rows far from their bounds are left out of the QP and checked after it (:func:`sqp.screened`): on QPs
+    whose unconstrained step breaks rows that start far from their bounds (so they are added in later rounds)
+    the answer equals the full QP's, multipliers included (0 on the rows never solved with)."""
+    for seed in range(4):
+        H, f, A, lower, upper = _qp(seed)
+        n = f.size
+        lower[n + 1:], upper[n + 1:] = lower[n + 1:] - 0.5, upper[n + 1:] + 0.5  # most rows start > SCREEN away
+        base = _base(lower, upper)
+        full = daqp.solve(H, f, A, lower, upper, base)
+        calls = []
+
+        def solve(*args, _calls=calls):
+            _calls.append(args[2].shape[0])
+            out = daqp.solve(*args)
+            return out if out.success else None
+
+        part = sqp.screened(solve, H, f, A, lower, upper, base, base)
+        assert full.success and part is not None
+        np.testing.assert_allclose(part.x, full.x, atol=1e-9)
+        np.testing.assert_allclose(part.lam, full.lam, atol=1e-8)
+        assert calls[0] < A.shape[0]  # the first solve had fewer rows
+        if seed == 0:
+            assert len(calls) > 1  # ... and rows were added
