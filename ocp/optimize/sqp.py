@@ -136,9 +136,9 @@ def convexified(H: np.ndarray, rows: np.ndarray) -> np.ndarray:
     machine, a Cholesky factor 0.06 ms."""
     scale = max(float(np.max(np.abs(H), initial=0.0)), 1e-12)
     eye = np.eye(H.shape[0])
-    gram = np.zeros_like(H)
+    gram = eye * 0.0
     if rows.size:
-        unit = rows / np.maximum(np.linalg.norm(rows, axis=1), 1e-300)[:, None]
+        unit = rows / np.maximum(np.sqrt(np.einsum("ij,ij->i", rows, rows)), 1e-300)[:, None]
         gram = unit.T @ unit
     # first the rows' weight grows (H unchanged on their null space), then a multiple of the identity is added
     tries = [(rho * scale, 0.0) for rho in (RHO if rows.size else (0.0,))]
@@ -278,11 +278,12 @@ class _Loop:
                  ubg: np.ndarray, free: np.ndarray, base: np.ndarray) -> None:
         self.s, self.p, self.lbx, self.ubx, self.lbg, self.ubg = solver, p, lbx, ubx, lbg, ubg
         self.free, self.base = free, base
+        self.eye = np.eye(free.size)
         self.qp_iterations, self.qp_seconds = 0, 0.0
 
     def violation(self, g: np.ndarray) -> float:
         """The l1 norm of the rows' violation of their bounds."""
-        return float(np.sum(np.maximum(g - self.ubg, 0.0)) + np.sum(np.maximum(self.lbg - g, 0.0)))
+        return float(np.maximum(g - self.ubg, 0.0).sum() + np.maximum(self.lbg - g, 0.0).sum())
 
     def run(self, st: _State, lam_g: np.ndarray, ws: np.ndarray) -> _Result:
         nf, free = self.free.size, self.free
@@ -336,7 +337,7 @@ class _Loop:
         H = self.s._hessian(st.x, self.p, lam_g)[np.ix_(free, free)]
         A = st.jac[:, free]
         active = ws & daqp.ACTIVE != 0
-        rows = np.concatenate([np.eye(free.size)[active[: free.size]], A[active[free.size:]]])
+        rows = np.concatenate([self.eye[active[: free.size]], A[active[free.size:]]])
         try:
             B = convexified(H, rows)
         except np.linalg.LinAlgError:  # not a finite Hessian
