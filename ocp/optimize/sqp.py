@@ -9,21 +9,22 @@ iterations and makes each QP cheap:
 * its Hessian is the exact Hessian of the Lagrangian (``H``, indefinite: a tracking residual that the limits keep
   from zero curves the objective down), plus ``rho`` times the normalised rows of the previous QP's working set
   ``R'R``: on the null space of those rows ``H`` is unchanged, so where the working set is the optimum's the step
-  is the exact Newton step (with the modified Hessian alone the 0.5 Hz bounded sine converged linearly, 17
-  iterations); whatever curvature is still negative is reflected (eigenvalues ``|w|``, at least :data:`FLOOR` of
-  the largest) so that the QP is strictly convex, as DAQP needs;
+  is the exact Newton step (with eigenvalues reflected instead, ``|w|``, the 0.5 Hz bounded sine converged
+  linearly, 17 iterations); curvature still negative on that null space is shifted off by the smallest multiple
+  of the identity that makes the QP strictly convex, as DAQP needs (:func:`convexified`);
 * each QP starts from the previous one's working set (:mod:`ocp.optimize.daqp`; the first from a warm start's
-  multipliers, or empty);
+  multipliers, or empty), over the rows near their bounds only (:func:`screened`; the others checked after);
 * a step is accepted on the l1 merit function ``f + nu * violation`` (backtracking, ``nu`` above the largest
   row multiplier).
 
-It stops when the largest row violation and the gradient of the Lagrangian are both below :data:`TOL` (the
-objective is scaled to 1 at the start, :func:`ocp.optimize.flat.objective_scaled`: IPOPT's ``tol`` is 1e-7 too),
-fails after :data:`MAX_ITER` iterations, on a QP DAQP cannot solve or a step the merit function rejects, and
-stops between iterations once the program's deadline passes (``callback.until``, :class:`collocation._Deadline`);
-IPOPT then solves the same NLP (:func:`ocp.optimize.flat.solve`). The solver is called like a CasADi NLP solver
-(keyword arguments ``x0, p, lbx, ubx, lbg, ubg, lam_x0, lam_g0``; ``stats()`` with ``success``, ``iter_count``,
-``return_status`` in IPOPT's words).
+It stops when the largest row violation and the gradient of the Lagrangian (over the largest multiplier, as
+IPOPT's scaled dual error) are both below :data:`TOL` (the objective is scaled to 1 at the start,
+:func:`ocp.optimize.flat.objective_scaled`: IPOPT's ``tol`` is 1e-7 too) or a feasible point's QP step is below
+:data:`MIN_MOVE`; it fails after :data:`MAX_ITER` iterations, on a QP DAQP cannot solve or a step the merit function
+rejects, and stops between iterations once the program's deadline passes (``callback.until``,
+:class:`collocation._Deadline`); IPOPT then solves the same NLP (:func:`ocp.optimize.flat.solve`). The solver is
+called like a CasADi NLP solver (keyword arguments ``x0, p, lbx, ubx, lbg, ubg, lam_x0, lam_g0``; ``stats()``
+with ``success``, ``iter_count``, ``return_status`` in IPOPT's words).
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ import numpy as np
 
 from ocp.optimize import daqp
 
-MAX_ITER = 50  # SQP iterations before IPOPT takes over (the bench missions need 3 to 8)
+MAX_ITER = 50  # SQP iterations before IPOPT takes over (the bench missions need 2 to 6)
 #: largest row violation, and largest entry of the Lagrangian's gradient over max(1, largest multiplier), at a
 #: solution (scaled objective)
 TOL = 1e-7
