@@ -4,7 +4,7 @@
 Usage::
 
     python bench/flat_split.py [--repeats N] [--suite all|classic|user]
-    python bench/flat_split.py --sqp [--repeats N] [--suite ...]   # sqpmethod + qpOASES (first) vs IPOPT alone
+    python bench/flat_split.py --sqp [--repeats N] [--suite ...]   # the SQP (first) vs IPOPT alone and sqpmethod
     python bench/flat_split.py --sqp --batch 120 --repeats 1       # ... on bench/batch.py's mix (seed 7)
 
 For every mission the flat program answers (``optimize_mesh``; the program built once, not timed) the cold
@@ -14,22 +14,27 @@ and IPOPT where SQP failed), the answer's packaging and verification (``solver["
 machine's load does not inflate), solver iterations, back-off rounds, and the limit rows of the program (current
 and voltage at the check points). Not a test: it prints a table.
 
-``--sqp``: the flat program's first solver, CasADi's ``sqpmethod`` with the sparse qpOASES (:mod:`ocp.optimize.sqp`;
-:func:`ocp.optimize.flat.solve`, IPOPT behind it) against the program's IPOPT solver alone, on the same NLP and
-start (the first round): per mission the median solve time, SQP iterations, objective against IPOPT's, whether SQP
-answered alone, and whether the answer's simulated response keeps the limits (the verification of
-:func:`ocp.optimize.flat_solve.solve_flat`, no back-off round).
+``--sqp``: the flat program's first solver, the SQP with DAQP hot-started (:mod:`ocp.optimize.sqp`;
+:func:`ocp.optimize.flat.solve`, IPOPT behind it) against the program's IPOPT solver alone and against CasADi's
+``sqpmethod`` with the sparse qpOASES (the first solver until session 8), on the same NLP and start (the first
+round): per mission the median solve time (wall) of each, the CPU time of the SQP and of sqpmethod, iterations of
+both, the SQP's objective against IPOPT's, whether the SQP answered alone, and whether the answer's simulated
+response keeps the limits (the verification of :func:`ocp.optimize.flat_solve.solve_flat`, no back-off round).
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import io
 import os
 import statistics
 import sys
 import time
 from pathlib import Path
 from typing import Any
+
+import casadi as ca
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -55,48 +60,71 @@ def _cpu_of_solve(problem: Any) -> float:
     return time.process_time() - c0
 
 
-def _sqp_row(problem: Any, repeats: int) -> tuple[float, float, int, float, bool, bool]:
-    """(IPOPT ms, SQP ms, SQP iterations, SQP objective / IPOPT's - 1, SQP converged (no IPOPT behind it), the
-    answer keeps the limits) on the flat program's first round from the static inverse: :func:`flat.solve` (SQP
-    first) against the program's IPOPT solver alone from the same start."""
+def _sqpmethod(prog: flat.FlatProgram) -> Any:
+    """CasADi's ``sqpmethod`` with the sparse qpOASES on the program's NLP (the flat program's first solver until
+    session 8), quiet."""
+    opts: dict[str, Any] = {"max_iter": 50, "tol_pr": 1e-7, "tol_du": 1e-7, "error_on_fail": False, "print_time": False,
+                            "print_header": False, "print_iteration": False, "print_status": False, "qpsol": "qpoases",
+                            "qpsol_options": {"printLevel": "none", "sparse": True, "error_on_fail": False}}
+    with contextlib.redirect_stdout(io.StringIO()):
+        return ca.nlpsol("sqpmethod", "sqpmethod", prog.nlp, opts)
+
+
+def _timed(fn: Any, repeats: int) -> tuple[float, float, Any]:
+    """Median wall and CPU time [ms] of ``repeats`` calls of ``fn`` (no arguments), and its last result."""
+    walls, cpus = [], []
+    for _ in range(repeats):
+        w0, c0 = time.perf_counter(), time.process_time()
+        out = fn()
+        walls.append(time.perf_counter() - w0)
+        cpus.append(time.process_time() - c0)
+    return 1e3 * statistics.median(walls), 1e3 * statistics.median(cpus), out
+
+
+def _sqp_row(problem: Any, repeats: int) -> dict[str, Any]:
+    """The first round of the flat program from the static inverse: :func:`flat.solve` (SQP first) against the
+    program's IPOPT solver alone and CasADi's sqpmethod from the same start (times [ms], iterations, the SQP's
+    objective / IPOPT's - 1, the SQP answered alone, the answer keeps the limits)."""
     st = flat_solve.structure_of(problem)
     prog, _ = flat.program_for(st)
     data = flat_solve.flat_data(problem, prog)
     assert data is not None
     bounds = prog.g_bounds(1.0 - flat.MARGIN, 1.0 - flat.MARGIN)
-    runs = [flat.solve(prog, data.p, data.lbx, data.ubx, data.x0, bounds) for _ in range(repeats)]
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        sol = prog.solver(x0=data.x0, p=data.p, lbx=data.lbx, ubx=data.ubx, lbg=bounds[0], ubg=bounds[1])
-        times.append(time.perf_counter() - t0)
+    args = {"x0": data.x0, "p": data.p, "lbx": data.lbx, "ubx": data.ubx, "lbg": bounds[0], "ubg": bounds[1]}
+    sqp_wall, sqp_cpu, run = _timed(lambda: flat.solve(prog, data.p, data.lbx, data.ubx, data.x0, bounds), repeats)
+    ipopt_wall, _, sol = _timed(lambda: prog.solver(**args), repeats)
+    old = _sqpmethod(prog)
+    with contextlib.redirect_stdout(io.StringIO()):
+        old_wall, old_cpu, _ = _timed(lambda: old(**args), repeats)
     f_ipopt = float(sol["f"]) / float(data.p[flat.param_slices(st)["obj_scale"]][0])
-    run = runs[-1]
-    ok = run.method == "sqpmethod" and run.constraint_violation <= 1e-6
     kept = flat_solve._answer(problem, st, run.x, data, SolverStats(program=SolverProgram.FLAT)).path_ok
-    return (1e3 * statistics.median(times), 1e3 * statistics.median(r.solve_time_s for r in runs), run.iterations,
-            run.objective / f_ipopt - 1.0, ok, kept)
+    return {"ipopt": ipopt_wall, "sqpmethod": old_wall, "sqp": sqp_wall, "sqpmethod_cpu": old_cpu, "sqp_cpu": sqp_cpu,
+            "it_old": int(old.stats()["iter_count"]), "it": run.iterations, "rel": run.objective / f_ipopt - 1.0,
+            "ok": run.method == "sqpmethod" and run.constraint_violation <= 1e-6, "kept": kept}
 
 
 def sqp_trial(specs: list[dict[str, Any]], repeats: int) -> None:
-    """Print the ``--sqp`` table and the medians of IPOPT and SQP over the missions."""
-    print(f"load {os.getloadavg()[0]:.2f}; sqpmethod + qpOASES vs IPOPT, medians over {repeats} [ms]")
-    print(f"{'mission':22s} {'ipopt':>7s} {'sqp':>7s} {'it':>3s} {'obj/ipopt-1':>11s} {'ok':>3s} {'limits':>6s}")
+    """Print the ``--sqp`` table and the medians of IPOPT, sqpmethod and the SQP over the missions."""
+    print(f"load {os.getloadavg()[0]:.2f}; the SQP (DAQP) vs IPOPT and sqpmethod + qpOASES, medians over {repeats} "
+          "[ms]")
+    print(f"{'mission':22s} {'ipopt':>7s} {'sqpmeth':>7s} {'sqp':>7s} {'cpu old':>7s} {'cpu sqp':>7s} {'it':>5s} "
+          f"{'obj/ipopt-1':>11s} {'ok':>3s} {'limits':>6s}")
     rows = []
     for spec in specs:
         problem = problem_for(mission_from_mapping(spec))
         if flat_solve.applies(problem) is not None:
             continue
-        row = _sqp_row(problem, repeats)
-        rows.append(row)
-        ok, kept = "yes" if row[4] else "no", "kept" if row[5] else "BROKE"
-        print(f"{spec['name']:22s} {row[0]:7.1f} {row[1]:7.1f} {row[2]:3d} {row[3]:+11.1e} {ok:>3s} {kept:>6s}",
-              flush=True)
-    for k, name in ((0, "ipopt"), (1, "sqp")):
-        print(f"{name}: median {statistics.median(r[k] for r in rows):.1f} ms, max {max(r[k] for r in rows):.1f} ms, "
-              f"total {sum(r[k] for r in rows) / 1e3:.2f} s")
-    print(f"sqp: objective above IPOPT's by more than 1e-3 on {sum(r[3] > 1e-3 for r in rows)}, IPOPT needed behind "
-          f"it on {sum(not r[4] for r in rows)}, limits broken on {sum(not r[5] for r in rows)} of {len(rows)}")
+        r = _sqp_row(problem, repeats)
+        rows.append(r)
+        ok, kept = "yes" if r["ok"] else "no", "kept" if r["kept"] else "BROKE"
+        print(f"{spec['name']:22s} {r['ipopt']:7.1f} {r['sqpmethod']:7.1f} {r['sqp']:7.1f} {r['sqpmethod_cpu']:7.1f} "
+              f"{r['sqp_cpu']:7.1f} {r['it_old']:2d}/{r['it']:<2d} {r['rel']:+11.1e} {ok:>3s} {kept:>6s}", flush=True)
+    for name in ("ipopt", "sqpmethod", "sqp", "sqpmethod_cpu", "sqp_cpu"):
+        print(f"{name}: median {statistics.median(r[name] for r in rows):.1f} ms, max {max(r[name] for r in rows):.1f} "
+              f"ms, total {sum(r[name] for r in rows) / 1e3:.2f} s")
+    print(f"sqp: objective above IPOPT's by more than 1e-3 on {sum(r['rel'] > 1e-3 for r in rows)}, IPOPT needed "
+          f"behind it on {sum(not r['ok'] for r in rows)}, limits broken on {sum(not r['kept'] for r in rows)} of "
+          f"{len(rows)}")
 
 
 def main(argv: list[str] | None = None) -> int:
