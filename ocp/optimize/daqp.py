@@ -17,8 +17,10 @@ from __future__ import annotations
 
 import ctypes
 import os
+import re
 from dataclasses import dataclass
 from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 import casadi as ca
@@ -56,11 +58,55 @@ class _Settings(ctypes.Structure):
         ("rel_subopt", ctypes.c_double), ("abs_subopt", ctypes.c_double)]
 
 
+#: the C structures mirrored above, with the header that declares each (CasADi's ``include/daqp``)
+_HEADERS = {"DAQPProblem": ("types.h", _Problem), "DAQPSettings": ("types.h", _Settings),
+            "DAQPResult": ("api.h", _Result)}
+
+
+def header_fields(text: str, name: str) -> list[str]:
+    """The field names, in order, of ``typedef struct{ ... }name;`` in the C header ``text`` (comments dropped;
+    empty when the structure is not there)."""
+    text = re.sub(r"/\*.*?\*/|//[^\n]*", "", text, flags=re.S)
+    found = re.search(r"typedef\s+struct\s*\{([^{}]*)\}\s*" + name + r"\s*;", text)
+    if found is None:
+        return []
+    return [re.sub(r"\[.*\]", "", decl).split()[-1].lstrip("*")
+            for decl in found.group(1).split(";") if decl.strip()]
+
+
+def _layout_matches(include: str) -> bool:
+    """Whether the headers CasADi ships declare the structures as this module mirrors them (a CasADi whose DAQP
+    changed its layout must not be called with these: the SQP then leaves the flat program to IPOPT)."""
+    try:
+        texts = {f: Path(include, f).read_text(encoding="utf-8") for f in ("types.h", "api.h")}
+    except OSError:
+        return False
+    return all(header_fields(texts[f], name) == [fd[0] for fd in cls._fields_]
+               for name, (f, cls) in _HEADERS.items())
+
+
+def _self_test(lib: ctypes.CDLL, settings: _Settings) -> bool:
+    """One QP with a known answer: min 0.5 |x|^2 - x_0 - x_1 s.t. x_0 + x_1 <= 1 has x = (0.5, 0.5) with the row's
+    multiplier 0.5 (a library built in single precision, or reading the structures otherwise, fails it)."""
+    H, f, A = np.eye(2), np.array([-1.0, -1.0]), np.array([[1.0, 1.0]])
+    up, lo = np.array([INF, INF, 1.0]), np.array([-INF, -INF, -INF])
+    flags, x, lam = np.zeros(3, np.int32), np.zeros(2), np.zeros(3)
+    prob = _Problem(2, 3, 2, _ptr(H), _ptr(f), _ptr(A), _ptr(up), _ptr(lo), _ptr(flags, _IP))
+    res = _Result()
+    res.x, res.lam = _ptr(x), _ptr(lam)
+    lib.daqp_quadprog(ctypes.byref(res), ctypes.byref(prob), ctypes.byref(settings))
+    return res.exitflag == OPTIMAL and bool(np.allclose(x, 0.5, atol=1e-12) and abs(lam[2] - 0.5) < 1e-12)
+
+
 @lru_cache(maxsize=1)
 def _library() -> tuple[ctypes.CDLL, _Settings] | None:
-    """CasADi's ``libdaqp.so`` with the settings this module solves with, or ``None`` where it cannot be loaded."""
+    """CasADi's ``libdaqp.so`` with the settings this module solves with, or ``None`` where it cannot be loaded,
+    its headers declare other structures than this module's, or it fails :func:`_self_test`."""
+    root = os.path.dirname(ca.__file__)
+    if not _layout_matches(os.path.join(root, "include", "daqp")):
+        return None
     try:
-        lib = ctypes.CDLL(os.path.join(os.path.dirname(ca.__file__), "libdaqp.so"))
+        lib = ctypes.CDLL(os.path.join(root, "libdaqp.so"))
     except OSError:
         return None
     lib.daqp_default_settings.argtypes = [ctypes.POINTER(_Settings)]
@@ -70,7 +116,7 @@ def _library() -> tuple[ctypes.CDLL, _Settings] | None:
     settings = _Settings()
     lib.daqp_default_settings(ctypes.byref(settings))
     settings.primal_tol = PRIMAL_TOL
-    return lib, settings
+    return (lib, settings) if _self_test(lib, settings) else None
 
 
 def available() -> bool:

@@ -109,3 +109,22 @@ def test_screened_qp_is_the_full_qp():
         assert calls[0] < A.shape[0]  # the first solve had fewer rows
         if seed == 0:
             assert len(calls) > 1  # ... and rows were added
+
+
+def test_a_changed_daqp_layout_is_refused(tmp_path):
+    """The ctypes structures are checked against CasADi's DAQP headers: the shipped headers match, a header whose
+    settings gained a field (or whose result reordered two) does not, and a missing header folder is refused."""
+    import os
+    import shutil
+
+    include = os.path.join(os.path.dirname(ca.__file__), "include", "daqp")
+    assert daqp._layout_matches(include)
+    for name, edit in (("types.h", ("c_float abs_subopt;", "c_float abs_subopt;\n    c_float extra;")),
+                       ("api.h", ("int exitflag;\n    int iter;", "int iter;\n    int exitflag;"))):
+        copy = tmp_path / name.split(".")[0]
+        shutil.copytree(include, copy)
+        text = (copy / name).read_text()
+        assert edit[0] in text
+        (copy / name).write_text(text.replace(edit[0], edit[1]))
+        assert not daqp._layout_matches(str(copy))
+    assert not daqp._layout_matches(str(tmp_path / "absent"))
