@@ -62,6 +62,9 @@ GRID = 12
 #: one noise level (:func:`visible_torque`): far smaller mismatches are averaged out of a long log but never
 #: show in a prediction (tuned on proving-ground seeds 1000..1099)
 VISIBLE_FRACTION = 0.15
+#: a rich fit leaving less than this fraction of an equation's nominal residual has scaled the equation to zero
+#: (:func:`_noise_residual`): rounding, not noise (measured noise leaves ~1e-2 and more)
+DEGENERATE = 1e-6
 
 
 @dataclass(frozen=True)
@@ -272,6 +275,20 @@ def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> n
     return t - a @ x
 
 
+def _noise_residual(t: np.ndarray, rich: list[np.ndarray], fixed: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
+    """An equation's residual (N,) [its unit] for its noise level: what the ``rich`` columns (N,) leave of the
+    nominal residual ``t`` (N,) on ``rows``; where they leave nothing (below :data:`DEGENERATE` of ``t``'s RMS),
+    what the constants' and nuisances' columns ``fixed`` alone leave. The constants' columns span the nominal
+    model's own prediction (eq. dc_electrical: ``R i_arm`` is homogeneous in ``(R, L)``, so its R and L columns
+    add up to it; ``k`` gives ``k_e w``), so the rich fit reproduces ``t`` exactly, noise and all, wherever an
+    effect's column also spans the measured side: a constant command is a current offset's (and a saturated dead
+    band's) column. That fit scales the equation to zero, no noise level; the effects cannot be told from it."""
+    r = _rich_residual(t, rich, rows)
+    if not rows.any() or np.sqrt(np.mean(r[rows] ** 2)) >= DEGENERATE * np.sqrt(np.mean(t[rows] ** 2)):
+        return r
+    return _rich_residual(t, fixed, rows)
+
+
 def speed_view(y: np.ndarray, dt: float, tau: float) -> np.ndarray:
     """Torque rows (N,) [N m] seen as the speed error they cause: the rotor's first-order low-pass
     (eq. dc_mechanical ``J w' + D w = tau``, ``tau = J / D`` [s], unit gain at DC, exact for a held input),
@@ -349,7 +366,9 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         angle = angle_limits(raw.theta, periods, log.theta is not None)
     # (the armature and thrust equations keep the motor constant: their measured side does not scale)
     k_col = [a for c, a in cols if c.item == "k"]
-    resid = np.vstack([_rich_residual(t[e], [a[e] for a in (rich if e == 0 else [*rich, *k_col])], train)
+    fixed = [a for j, (c, a) in enumerate(cols) if j in keep and c.item in (*CONSTANTS, *NUISANCES)]
+    resid = np.vstack([_noise_residual(t[e], [a[e] for a in (rich if e == 0 else [*rich, *k_col])],
+                                       [a[e] for a in (fixed if e == 0 else [*fixed, *k_col])], train)
                        for e in range(3)])
     sigma = np.array([max(float(np.sqrt(np.mean(resid[e][train] ** 2))), 1e-12 * (np.std(t[e]) + 1e-30))
                       for e in range(3)])
