@@ -65,6 +65,9 @@ VISIBLE_FRACTION = 0.15
 #: a rich fit leaving less than this fraction of an equation's nominal residual has scaled the equation to zero
 #: (:func:`_noise_residual`): rounding, not noise (measured noise leaves ~1e-2 and more)
 DEGENERATE = 1e-6
+#: a held-out block (:func:`_blocks`) spans at least this many independent torque rows (rotor time constants of
+#: the speed view), so that blocks are nearly independent of each other
+BLOCK_INDEPENDENT = 3.0
 
 
 @dataclass(frozen=True)
@@ -112,6 +115,12 @@ class Design:
     #: per constant, the relative error a nuisance the log leaves open could mimic (``L`` under an unidentified
     #: command timing): its calibration box is ``tol`` wider by this, so it is named only beyond both
     slack: dict[str, float] = field(default_factory=dict)
+    #: the held-out rows cut into blocks (contiguous, each at least a few independent torque rows long,
+    #: :func:`_blocks`): per block b and equation e, ``g_blocks[b, e]`` (B, 3, Q, Q), ``h_blocks`` (B, 3, Q),
+    #: ``c_blocks`` (B, 3), as ``g_test`` etc. (they sum to them): a paired comparison's scatter between blocks
+    g_blocks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0, 0)))
+    h_blocks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0)))
+    c_blocks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
@@ -380,9 +389,31 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     h = {k: np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
     c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
+    independence = _independence(p, log, s, tau)
+    blocks = _blocks(test, math.ceil(BLOCK_INDEPENDENT / float(independence.min())))
+    gb = np.stack([np.einsum("enq,enr->eqr", a_all[:, b], a_all[:, b]) for b in blocks]) if blocks else None
+    hb = np.stack([np.einsum("enq,en->eq", a_all[:, b], tw[:, b]) for b in blocks]) if blocks else None
+    cb = np.stack([np.einsum("en,en->e", tw[:, b], tw[:, b]) for b in blocks]) if blocks else None
+    q = len(cols)
     return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
                   sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
-                  _independence(p, log, s, tau))
+                  independence, g_blocks=gb if gb is not None else np.zeros((0, 3, q, q)),
+                  h_blocks=hb if hb is not None else np.zeros((0, 3, q)),
+                  c_blocks=cb if cb is not None else np.zeros((0, 3)))
+
+
+def _blocks(test: np.ndarray, length: int) -> list[np.ndarray]:
+    """The held-out rows of mask ``test`` (M,) as blocks of row indices: each contiguous run of held-out rows
+    (a held-out segment) cut into pieces of at least ``length`` rows (a run shorter than that is one block)."""
+    out: list[np.ndarray] = []
+    idx = np.flatnonzero(test)
+    if idx.size == 0:
+        return out
+    runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
+    for run in runs:
+        pieces = max(1, run.size // max(length, 1))
+        out += [piece for piece in np.array_split(run, pieces) if piece.size]
+    return out
 
 
 def _independence(p: MotorParams, log: Log, s: Signals, tau: float) -> np.ndarray:
