@@ -17,7 +17,8 @@ own: :func:`_beyond_scatter`) -- for an effect also by at least ``min_improvemen
 constant's materiality is the tolerance itself (calibration already takes the first ``tol`` of its error, and
 beyond it the user wants the name), so a constant freed beyond it needs only to win beyond sampling noise --
 or, the models being nested and scored on the same rows, in a paired comparison over held-out blocks
-(:func:`_blocks_agree`).
+(:func:`_blocks_agree`). After the forward rounds, each adopted constant is tested again beside the items adopted
+after it, and dropped (calibrated, not named) where it no longer wins.
 Where no item clears that alone, two that clear it only together (and each against the other alone) are adopted
 as a pair (:func:`_pair`).
 A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` yields to an effect that fits as
@@ -31,7 +32,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import stats
@@ -166,6 +167,8 @@ class Selection:
     final: Fitted
     steps: list[Step]
     ambiguous: list[dict[str, object]]
+    #: constants adopted in a forward step that no longer win beside the items adopted after them (not named)
+    dropped: list[str] = field(default_factory=list)
 
 
 def select(design: Design, pool: Sequence[str], tol: float, min_improvement: float, noise_floor: float,
@@ -201,7 +204,14 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
             break
         items.append(tried[0][0])
         current = tried[0][1]
-    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin))
+    dropped = []
+    for c in [i for i in items if i in CONSTANTS]:  # backward: a constant adopted before the effects that follow
+        rest = fit_model(design, [i for i in items if i != c], tol)  # it, tested again beside them
+        if not _wins(design, rest, c, current, min_improvement):
+            items.remove(c)
+            dropped.append(c)
+            current = rest
+    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin), dropped)
 
 
 def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], current: Fitted, tol: float,
