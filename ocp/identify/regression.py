@@ -62,6 +62,12 @@ GRID = 12
 #: one noise level (:func:`visible_torque`): far smaller mismatches are averaged out of a long log but never
 #: show in a prediction (tuned on proving-ground seeds 1000..1099)
 VISIBLE_FRACTION = 0.15
+#: a rich fit leaving less than this fraction of an equation's nominal residual has scaled the equation to zero
+#: (:func:`_noise_residual`): rounding, not noise (measured noise leaves ~1e-2 and more)
+DEGENERATE = 1e-6
+#: a held-out block (:func:`_blocks`) spans at least this many independent torque rows (rotor time constants of
+#: the speed view), so that blocks are nearly independent of each other
+BLOCK_INDEPENDENT = 3.0
 
 
 @dataclass(frozen=True)
@@ -109,6 +115,12 @@ class Design:
     #: per constant, the relative error a nuisance the log leaves open could mimic (``L`` under an unidentified
     #: command timing): its calibration box is ``tol`` wider by this, so it is named only beyond both
     slack: dict[str, float] = field(default_factory=dict)
+    #: the held-out rows cut into blocks (contiguous, each at least a few independent torque rows long,
+    #: :func:`_blocks`): per block b and equation e, ``g_blocks[b, e]`` (B, 3, Q, Q), ``h_blocks`` (B, 3, Q),
+    #: ``c_blocks`` (B, 3), as ``g_test`` etc. (they sum to them): a paired comparison's scatter between blocks
+    g_blocks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0, 0)))
+    h_blocks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0)))
+    c_blocks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
@@ -272,6 +284,20 @@ def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> n
     return t - a @ x
 
 
+def _noise_residual(t: np.ndarray, rich: list[np.ndarray], fixed: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
+    """An equation's residual (N,) [its unit] for its noise level: what the ``rich`` columns (N,) leave of the
+    nominal residual ``t`` (N,) on ``rows``; where they leave nothing (below :data:`DEGENERATE` of ``t``'s RMS),
+    what the constants' and nuisances' columns ``fixed`` alone leave. The constants' columns span the nominal
+    model's own prediction (eq. dc_electrical: ``R i_arm`` is homogeneous in ``(R, L)``, so its R and L columns
+    add up to it; ``k`` gives ``k_e w``), so the rich fit reproduces ``t`` exactly, noise and all, wherever an
+    effect's column also spans the measured side: a constant command is a current offset's (and a saturated dead
+    band's) column. That fit scales the equation to zero, no noise level; the effects cannot be told from it."""
+    r = _rich_residual(t, rich, rows)
+    if not rows.any() or np.sqrt(np.mean(r[rows] ** 2)) >= DEGENERATE * np.sqrt(np.mean(t[rows] ** 2)):
+        return r
+    return _rich_residual(t, fixed, rows)
+
+
 def speed_view(y: np.ndarray, dt: float, tau: float) -> np.ndarray:
     """Torque rows (N,) [N m] seen as the speed error they cause: the rotor's first-order low-pass
     (eq. dc_mechanical ``J w' + D w = tau``, ``tau = J / D`` [s], unit gain at DC, exact for a held input),
@@ -349,7 +375,9 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         angle = angle_limits(raw.theta, periods, log.theta is not None)
     # (the armature and thrust equations keep the motor constant: their measured side does not scale)
     k_col = [a for c, a in cols if c.item == "k"]
-    resid = np.vstack([_rich_residual(t[e], [a[e] for a in (rich if e == 0 else [*rich, *k_col])], train)
+    fixed = [a for j, (c, a) in enumerate(cols) if j in keep and c.item in (*CONSTANTS, *NUISANCES)]
+    resid = np.vstack([_noise_residual(t[e], [a[e] for a in (rich if e == 0 else [*rich, *k_col])],
+                                       [a[e] for a in (fixed if e == 0 else [*fixed, *k_col])], train)
                        for e in range(3)])
     sigma = np.array([max(float(np.sqrt(np.mean(resid[e][train] ** 2))), 1e-12 * (np.std(t[e]) + 1e-30))
                       for e in range(3)])
@@ -361,9 +389,31 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     h = {k: np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
     c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
+    independence = _independence(p, log, s, tau)
+    blocks = _blocks(test, math.ceil(BLOCK_INDEPENDENT / float(independence.min())))
+    gb = np.stack([np.einsum("enq,enr->eqr", a_all[:, b], a_all[:, b]) for b in blocks]) if blocks else None
+    hb = np.stack([np.einsum("enq,en->eq", a_all[:, b], tw[:, b]) for b in blocks]) if blocks else None
+    cb = np.stack([np.einsum("en,en->e", tw[:, b], tw[:, b]) for b in blocks]) if blocks else None
+    q = len(cols)
     return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
                   sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
-                  _independence(p, log, s, tau))
+                  independence, g_blocks=gb if gb is not None else np.zeros((0, 3, q, q)),
+                  h_blocks=hb if hb is not None else np.zeros((0, 3, q)),
+                  c_blocks=cb if cb is not None else np.zeros((0, 3)))
+
+
+def _blocks(test: np.ndarray, length: int) -> list[np.ndarray]:
+    """The held-out rows of mask ``test`` (M,) as blocks of row indices: each contiguous run of held-out rows
+    (a held-out segment) cut into pieces of at least ``length`` rows (a run shorter than that is one block)."""
+    out: list[np.ndarray] = []
+    idx = np.flatnonzero(test)
+    if idx.size == 0:
+        return out
+    runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
+    for run in runs:
+        pieces = max(1, run.size // max(length, 1))
+        out += [piece for piece in np.array_split(run, pieces) if piece.size]
+    return out
 
 
 def _independence(p: MotorParams, log: Log, s: Signals, tau: float) -> np.ndarray:

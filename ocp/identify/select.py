@@ -15,7 +15,10 @@ whose win passes its test (the tests differ by item, so the best-scoring one may
 the score falls beyond sampling noise (the pooled score's scatter, or one equation's
 own: :func:`_beyond_scatter`) -- for an effect also by at least ``min_improvement`` (its materiality); a
 constant's materiality is the tolerance itself (calibration already takes the first ``tol`` of its error, and
-beyond it the user wants the name), so a constant freed beyond it needs only to win beyond sampling noise.
+beyond it the user wants the name), so a constant freed beyond it needs only to win beyond sampling noise --
+or, the models being nested and scored on the same rows, in a paired comparison over held-out blocks
+(:func:`_blocks_agree`). After the forward rounds, each adopted constant is tested again beside the items adopted
+after it, and dropped (calibrated, not named) where it no longer wins.
 Where no item clears that alone, two that clear it only together (and each against the other alone) are adopted
 as a pair (:func:`_pair`).
 A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` yields to an effect that fits as
@@ -29,9 +32,10 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
+from scipy import stats
 from scipy.optimize import lsq_linear
 
 from ocp.identify.regression import CONSTANTS, NUISANCES, Design
@@ -49,6 +53,11 @@ PAIR_TOP = 4
 #: 1.4 V width is no dead band (it would explain a brush drop by a reduced gain at low voltage)
 SATURATING = frozenset({"brush_drop", "voltage_deadband"})
 SATURATION_SLACK = 1.5
+#: the paired block test of a constant (:func:`_blocks_agree`): one-sided level, and the fewest held-out blocks
+BLOCK_ALPHA = 0.01
+BLOCK_MIN = 4
+#: ... and the fall of that equation's held-out RMS it needs (the tolerance's own 10 %: a constant's materiality)
+BLOCK_FALL = 0.10
 
 
 @dataclass(frozen=True)
@@ -158,6 +167,8 @@ class Selection:
     final: Fitted
     steps: list[Step]
     ambiguous: list[dict[str, object]]
+    #: constants adopted in a forward step that no longer win beside the items adopted after them (not named)
+    dropped: list[str] = field(default_factory=list)
 
 
 def select(design: Design, pool: Sequence[str], tol: float, min_improvement: float, noise_floor: float,
@@ -193,7 +204,14 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
             break
         items.append(tried[0][0])
         current = tried[0][1]
-    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin))
+    dropped = []
+    for c in [i for i in items if i in CONSTANTS]:  # backward: a constant adopted before the effects that follow
+        rest = fit_model(design, [i for i in items if i != c], tol)  # it, tested again beside them
+        if not _wins(design, rest, c, current, min_improvement):
+            items.remove(c)
+            dropped.append(c)
+            current = rest
+    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin), dropped)
 
 
 def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], current: Fitted, tol: float,
@@ -219,7 +237,24 @@ def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement
     (:func:`_beyond_scatter`), and for an effect by ``min_improvement`` too (a constant's materiality is the
     tolerance, module doc)."""
     material = item in CONSTANTS or f.score <= (1 - min_improvement) * current.score
-    return material and _beyond_scatter(design, current, f)
+    if not material:
+        return False
+    return _beyond_scatter(design, current, f) or (item in CONSTANTS and _blocks_agree(design, current, item, f))
+
+
+def _blocks_agree(design: Design, current: Fitted, item: str, f: Fitted) -> bool:
+    """Whether a constant freed beyond the tolerance (``f``) fits the held-out data better than ``current`` in a
+    PAIRED comparison over the held-out blocks (:func:`block_t`): some equation's squared error falls, block by
+    block, beyond the one-sided :data:`BLOCK_ALPHA` quantile of Student's t (the blocks' own scatter; nested models
+    compared on the same rows need far less than the unpaired :func:`_beyond_scatter`, which holds each RMS to its
+    own sampling noise). Only a plausible error (within :data:`IMPLAUSIBLE_FACTOR` of nominal) is named so."""
+    if _factor(design, f, item) is not None:
+        return False
+    t, nb = block_t(design, current, f)
+    if nb < BLOCK_MIN:
+        return False
+    material = (design.n_test > 0) & (f.per_eq <= (1.0 - BLOCK_FALL) * current.per_eq)
+    return bool(np.any(material & (t >= stats.t.ppf(1.0 - BLOCK_ALPHA, nb - 1))))
 
 
 def _prefer_effects(design: Design, tried: list[tuple[str, Fitted]], margin: float) -> list[tuple[str, Fitted]]:
@@ -255,6 +290,26 @@ def _beyond_scatter(design: Design, before: Fitted, after: Fitted) -> bool:
     n = np.maximum(design.n_test * design.independence, 1.0)
     fall = 1.0 - after.per_eq[live] / before.per_eq[live]
     return bool(np.any(fall >= np.sqrt(2.0 / n[live])))
+
+
+def block_t(design: Design, before: Fitted, after: Fitted) -> tuple[np.ndarray, int]:
+    """Paired comparison over the held-out blocks (:attr:`.regression.Design.g_blocks`): per equation (3,), the
+    mean fall of the squared error from ``before`` to ``after`` over the blocks, in standard errors of that mean
+    (the blocks' own scatter: whatever the rows' correlation and whatever the residual holds); and the number
+    of blocks. Gram-matrix algebra only."""
+    nb = design.c_blocks.shape[0]
+    if nb < 2:
+        return np.zeros(3), nb
+
+    def sse(f: Fitted) -> np.ndarray:  # (nb, 3)
+        idx = np.array(f.cols, dtype=int)
+        g = design.g_blocks[:, :, idx][:, :, :, idx]
+        return design.c_blocks - 2 * design.h_blocks[:, :, idx] @ f.x + np.einsum("q,beqr,r->be", f.x, g, f.x)
+
+    d = sse(before) - sse(after)
+    sd = d.std(axis=0, ddof=1)
+    t = np.where(sd > 0, d.mean(axis=0) / np.maximum(sd, 1e-300) * math.sqrt(nb), 0.0)
+    return t, nb
 
 
 def _worst(design: Design, f: Fitted) -> float:
