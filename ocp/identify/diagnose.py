@@ -23,6 +23,7 @@ Procedure:
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -39,6 +40,7 @@ from ocp.identify.explain import (
     effect_values,
     explain,
     item_name,
+    physical,
     plant_of,
     relative,
     spectrum_peak,
@@ -283,8 +285,9 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
         _open_timing(design, plant, log, opt)
     if progress is not None:
         progress(0.2)
+    ok = functools.partial(physical, design)
     sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
-                 opt.ambiguity_margin, None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
+                 opt.ambiguity_margin, None if progress is None else (lambda f: progress(0.2 + 0.6 * f)), ok)
     if "L" in design.slack and "L" in sel.final.items and _implausible(design, sel.final, "L"):
         # beyond a factor two under an open timing: a timing error beyond the conventions (an unconfirmed
         # delay) is the likelier explanation (the prior of .select): L is unresolved, the selection redone
@@ -293,7 +296,7 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
                                   "L would have to be off by more than a factor two: a timing error beyond the "
                                   "logging conventions explains the armature equation as well")
         sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
-                     opt.ambiguity_margin)
+                     opt.ambiguity_margin, physical=ok)
     return design, sel
 
 

@@ -73,6 +73,18 @@ def params_of(p: MotorParams, design: Design, f: Fitted) -> MotorParams:
     return MotorParams(**data)
 
 
+def physical(design: Design, f: Fitted) -> bool:
+    """Whether every effect of ``f`` has catalogue parameters within their physical range (the catalogue accepts
+    them; a fit may put e.g. a Stribeck level of 1.8e4 N m on columns that only a wrong constant explains)."""
+    try:
+        for item in f.items:
+            if item not in CONSTANTS:
+                make_effect(item, effect_values(design, f, item))
+    except ParameterError:
+        return False
+    return True
+
+
 def plant_of(plant: DCMotorPlant, design: Design, f: Fitted, delay: float | None) -> DCMotorPlant:
     """The user's plant with the explanation in: calibrated constants, adopted effects, a delay if called."""
     effects = list(plant.effects)

@@ -172,10 +172,12 @@ class Selection:
 
 
 def select(design: Design, pool: Sequence[str], tol: float, min_improvement: float, noise_floor: float,
-           max_items: int, margin: float, progress: Callable[[float], None] | None = None) -> Selection:
+           max_items: int, margin: float, progress: Callable[[float], None] | None = None,
+           physical: Callable[[Fitted], bool] = lambda f: True) -> Selection:
     """Forward selection over ``pool`` (effects and constants), then the ambiguity challenge (module doc).
     Constants the log cannot resolve (:attr:`.regression.Design.unresolved`) are calibrated, never named;
-    ``min_improvement`` applies to effects (a constant's materiality is ``tol``)."""
+    ``min_improvement`` applies to effects (a constant's materiality is ``tol``). A model that ``physical``
+    refuses (an effect fitted outside its catalogue range, e.g. a Stribeck level of 1.8e4 N m) is never adopted."""
     pool = [c for c in pool if c not in design.unresolved and design.index(c)]  # (no columns: not testable here)
     items: list[str] = []
     current = fit_model(design, items, tol)
@@ -187,13 +189,13 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
         if progress is not None:
             progress((len(items) + 1) / (max_items + 1))
         # the best-scoring item whose win passes its test (they differ: materiality, one equation's scatter)
-        win = next((k for k, (c, f) in enumerate(tried) if _wins(design, current, c, f, min_improvement)), None) \
-            if _worst(design, current) > noise_floor else None
+        win = next((k for k, (c, f) in enumerate(tried) if _wins(design, current, c, f, min_improvement)
+                    and physical(f)), None) if _worst(design, current) > noise_floor else None
         if win is not None:
             tried = [tried[win], *tried[:win], *tried[win + 1:]]
         ok = win is not None
         pair = None if ok or len(items) + 2 > max_items else \
-            _pair(design, items, tried, current, tol, min_improvement, noise_floor)
+            _pair(design, items, tried, current, tol, min_improvement, noise_floor, physical)
         if pair is not None:  # two items that clear the test only together
             steps += pair
             items += [st.adopted for st in pair if st.adopted is not None]
@@ -215,7 +217,7 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
 
 
 def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], current: Fitted, tol: float,
-          min_improvement: float, noise_floor: float) -> list[Step] | None:
+          min_improvement: float, noise_floor: float, physical: Callable[[Fitted], bool]) -> list[Step] | None:
     """Two of the :data:`PAIR_TOP` best challengers adopted together, where none clears the test alone: two effects
     whose residuals overlap (an angle ripple beside Coulomb friction: each alone leaves the other's residual,
     fitted into the wrong columns). The pair must clear the test against ``current`` (the score falling by
@@ -226,6 +228,8 @@ def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], cur
     single = dict(tried[:PAIR_TOP])
     fits = [(a, b, fit_model(design, [*items, a, b], tol)) for a, b in itertools.combinations(single, 2)]
     a, b, f = min(fits, key=lambda e: e[2].score)
+    if not physical(f):
+        return None
     for before in (current, single[a], single[b]):
         if f.score > (1 - min_improvement) * before.score or not _beyond_scatter(design, before, f):
             return None
