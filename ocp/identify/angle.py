@@ -12,17 +12,10 @@ the torque residual on held-out rows (:func:`angle_spectrum`: a matched filter a
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
 import numpy as np
 
 MAX_PERIODS = 64
-#: [rad] of ripple phase an integrated angle may drift within one tracking window (:func:`drift_time`)
-PHASE_DRIFT = 0.5
-#: [s] shortest knot spacing of the tracking windows: two held-out segments' length (0.5 s each by default)
-MIN_SPACING = 1.0
-#: at most this many tracking windows (two columns each, in every model that holds the ripple: time)
-MAX_WINDOWS = 12
 
 
 def _means(ea: np.ndarray, ed: np.ndarray, d: np.ndarray, triangle: bool) -> np.ndarray:
@@ -59,53 +52,15 @@ def instant_spectrum(resid: np.ndarray, theta: np.ndarray, rows: np.ndarray) -> 
     return np.asarray(2.0 * np.abs(ph @ r) / max(r.size, 1), float)
 
 
-def drift_time(noise_w: float, dt: float, periods: int) -> float:
-    """Time [s] over which an angle integrated from a speed column with white noise ``noise_w`` [rad/s] per
-    sample (sampled every ``dt`` [s]) drifts by :data:`PHASE_DRIFT` radians of a ripple of ``periods`` per
-    revolution: the angle's error is a random walk, ``var = noise_w^2 dt T``, so ``T = (PHASE_DRIFT / (n
-    noise_w))^2 / dt``. Infinite for a noise-free speed."""
-    rate = (periods * noise_w) ** 2 * dt
-    return PHASE_DRIFT**2 / rate if rate > 0 else math.inf
-
-
-def phase_windows(t: np.ndarray, spacing: float) -> np.ndarray:
-    """(K, M) overlapping triangular windows (hat functions, summing to one) over the row times ``t`` (M,)
-    [s], knots about ``spacing`` [s] apart: the ripple's complex amplitude interpolated linearly between
-    knots, so its phase may follow an integrated angle's drift (:func:`drift_time`). One window (all ones)
-    when the spacing covers the log."""
-    span = float(t[-1] - t[0]) if t.size else 0.0
-    if not math.isfinite(spacing) or spacing >= span:
-        return np.ones((1, t.size))
-    k = math.ceil(span / spacing)
-    knots = t[0] + np.arange(k + 1) * (span / k)
-    return np.asarray(np.clip(1.0 - np.abs(t[None, :] - knots[:, None]) / (span / k), 0.0, 1.0), float)
-
-
-def tracking_windows(t: np.ndarray, noise_w: float, dt: float, periods: int, logged: bool) -> np.ndarray:
-    """Windows (:func:`phase_windows`, (K, M) over the row times ``t`` [s]) for a ripple of ``periods`` per
-    revolution: one where the angle is ``logged`` (an encoder: no drift); else knots a :func:`drift_time`
-    apart (speed noise ``noise_w`` [rad/s], ``dt`` [s]), at least :data:`MIN_SPACING` (held-out segments
-    must lie between windows fitted on training rows) and at most :data:`MAX_WINDOWS` over the log."""
-    if logged or t.size < 2:
-        return np.ones((1, t.size))
-    longest = float(t[-1] - t[0]) / (MAX_WINDOWS - 1)
-    return phase_windows(t, max(drift_time(noise_w, dt, periods), MIN_SPACING, longest))
-
-
 def angle_spectrum(resid: np.ndarray, theta: np.ndarray, triangle: bool, train: np.ndarray,
-                   test: np.ndarray, windows: Callable[[int], np.ndarray] | None = None,
-                   transform: Callable[[np.ndarray], np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+                   test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """A torque ripple at 1..64 periods per revolution fitted to the torque residual ``resid`` (M,): per
     period count ``n``, the least-squares fit on the ``train`` rows by the row means of ``sin/cos(n theta)``
     (:func:`interval_ripple`; ``theta`` (M + 1,) [rad], ``triangle`` as there). The residual's spectrum
     against the rotor angle, as a matched filter: a ripple faster than the sampling averages out of its
-    columns instead of aliasing. ``windows(n)`` (K, M) lets the ripple's phase follow a drifting angle
-    (:func:`tracking_windows`; default: one window); ``transform`` (2, M) -> (2, M) filters the row means of
-    sin and cos along their rows as the torque rows were filtered (a low-pass and the speed view; applied
-    before the windows, which are slow).
-    Returns (64,) each: the amplitude [N m] (RMS over the
-    windows) and the fraction of the residual's square sum it explains on the ``test`` rows (a ripple locked
-    to the angle holds there, a slow residual that happens to correlate with the angle does not)."""
+    columns instead of aliasing. Returns (64,) each: the amplitude [N m] and the fraction of the residual's
+    square sum it explains on the ``test`` rows (a ripple locked to the angle holds there, a slow residual
+    that happens to correlate with the angle does not)."""
     amp, share = np.zeros(MAX_PERIODS), np.zeros(MAX_PERIODS)
     r, q = resid[train], resid[test]
     total = float(q @ q) or 1.0
@@ -115,16 +70,11 @@ def angle_spectrum(resid: np.ndarray, theta: np.ndarray, triangle: bool, train: 
     for n in range(1, MAX_PERIODS + 1):
         ea, ed = ea * e1a, ed * e1d  # exp(i n a), exp(i n d) by recurrence
         z = _means(ea, ed, n * step, triangle)
-        w = windows(n) if windows is not None else np.ones((1, z.size))
-        zs, zc = (z.imag, z.real) if transform is None else transform(np.vstack([z.imag, z.real]))
-        cols = np.vstack([w * zs, w * zc])  # (2K, M): sin, cos per window
-        a = cols[:, train]
-        g = a @ a.T + 1e-300 * np.eye(a.shape[0])
+        a = np.stack([z.imag[train], z.real[train]])  # (2, rows): sin, cos
+        g = a @ a.T + 1e-300 * np.eye(2)
         x = np.linalg.lstsq(g, a @ r, rcond=1e-12)[0]
-        e = q - x @ cols[:, test]
-        k = w.shape[0]
-        amp[n - 1] = float(np.sqrt(np.mean(x[:k] ** 2 + x[k:] ** 2)))
-        share[n - 1] = 1.0 - float(e @ e) / total
+        e = q - x[0] * z.imag[test] - x[1] * z.real[test]
+        amp[n - 1], share[n - 1] = math.hypot(*x), 1.0 - float(e @ e) / total
     return amp, share
 
 

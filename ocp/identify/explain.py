@@ -42,7 +42,8 @@ def effect_values(design: Design, f: Fitted, item: str) -> dict[str, float]:
         return {}
     col, x = picked[0]
     if item == "cogging":
-        return {**_ripple(picked), "periods": col.shape}
+        out = {c.key: x_ for c, x_ in picked}
+        return {**out, "periods": col.shape}
     shape, x = _blend([(c.shape, x_) for c, x_ in picked])
     if item == "stribeck":
         return {"tau_s": max(x, 0.0), "omega_s": shape}
@@ -51,18 +52,6 @@ def effect_values(design: Design, f: Fitted, item: str) -> dict[str, float]:
     if item == "thrust_lag":
         return {"tau": shape}
     return {col.key: x}
-
-
-def _ripple(picked: list[tuple[Any, float]]) -> dict[str, float]:
-    """``tau_sin, tau_cos`` [N m] of a ripple fitted per tracking window (:func:`.angle.tracking_windows`:
-    columns sin, cos per window): the RMS amplitude over the windows, at the first window's phase (an
-    integrated angle's drift leaves no phase to report beyond that)."""
-    s = np.array([x for c, x in picked if c.key == "tau_sin"])
-    c = np.array([x for c_, x in picked if c_.key == "tau_cos"])
-    amp = float(np.sqrt(np.mean(s * s + c * c))) if s.size else 0.0
-    first = math.hypot(s[0], c[0]) if s.size else 0.0
-    scale = amp / first if first > 0 else 0.0
-    return {"tau_sin": float(s[0]) * scale if s.size else 0.0, "tau_cos": float(c[0]) * scale if c.size else 0.0}
 
 
 def _blend(parts: list[tuple[float, float]]) -> tuple[float, float]:

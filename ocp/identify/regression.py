@@ -43,8 +43,7 @@ import numpy as np
 from scipy import signal
 
 from ocp.identify.align import cutoff_hz, smooth
-from ocp.identify.angle import angle_limits, angle_spectrum, instant_spectrum, interval_ripple, tracking_windows
-from ocp.identify.predict import noise_levels
+from ocp.identify.angle import angle_limits, angle_spectrum, instant_spectrum, interval_ripple
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE, ThrustLag, make_effect
 from ocp.model.params import MotorParams
@@ -252,23 +251,14 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
             return []
         z = np.zeros_like(s.w)
         theta = np.append(s.theta, s.theta[-1] + s.w1[-1] * s.dt)
-        ripple = interval_ripple(theta, periods, s.triangle)  # its phase tracked through a drifting angle:
-        win = _windows(log, s)(periods)  # one amplitude per window (ocp.identify.angle.tracking_windows)
-        means = [w * m for w in win for m in ripple]
+        means = list(interval_ripple(theta, periods, s.triangle))
         if not s.triangle:  # low-passed rows (no logged angle): the ripple low-passed like them
             fc = cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
             means = [smooth(m, log.dt, fc) for m in means]
         return [(Column(name, k, float(periods)), np.vstack([m, z, z]))
-                for k, m in zip(("tau_sin", "tau_cos") * win.shape[0], means, strict=True)]
+                for k, m in zip(("tau_sin", "tau_cos"), means, strict=True)]
     key = CATALOGUE[name].fitted[0]
     return [(Column(name, key), _effect(name, {key: 1.0}, p, s))]
-
-
-def _windows(log: Log, s: Signals) -> Callable[[int], np.ndarray]:
-    """Per period count, the ripple's tracking windows (K, M) over the rows of ``s``: one where the angle is
-    logged, else as many as an angle integrated from this speed column's noise needs (:func:`tracking_windows`)."""
-    noise_w = noise_levels(log)["omega"]
-    return functools.partial(tracking_windows, s.t, noise_w, log.dt, logged=log.theta is not None)
 
 
 def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
@@ -337,8 +327,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     keep = [j for j, (c, _) in enumerate(cols)
             if c.item != "k" and (math.isnan(c.shape) or c.shape == _mid(cols, c.item))]
     periods, spectrum, cands, angle = 0, np.zeros(0), [], {}
-    ripple = "cogging" in effects and s.theta is not None and raw.theta is not None and log.kind is LogKind.TIME_SERIES
-    if ripple and log.theta is not None and raw.theta is not None and s.theta is not None:  # an encoder angle
+    if "cogging" in effects and s.theta is not None and raw.theta is not None and log.kind is LogKind.TIME_SERIES:
         theta = np.append(raw.theta, raw.theta[-1] + raw.w1[-1] * raw.dt)
         spectrum, share = angle_spectrum(_rich_residual(t[0], [cols[j][1][0] for j in keep], train), theta,
                                          raw.triangle, train, test)  # the raw rows: a fast ripple kept
@@ -353,8 +342,6 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     for y in (t, *(a for _, a in cols)):
         y[0] = view(y[0])
     rich = [cols[j][1] for j in keep]
-    if ripple and log.theta is None:  # an integrated angle: the spectrum in the speed view, phase tracked
-        cands, spectrum = _integrated_candidates(p, s, log, t[0], [a[0] for a in rich], train, test, view)
     if cands:
         periods, cogging = _pick_periods(cands, p, raw, log, t[0], [a[0] for a in rich], train, test, view)
         cols += cogging
@@ -415,23 +402,6 @@ def _columns(p: MotorParams, s: Signals, raw: Signals, log: Log,
 
 def _effect_columns_on(name: str, p: MotorParams, log: Log, s: Signals) -> list[tuple[Column, np.ndarray]]:
     return effect_columns(name, p, s, log, 0)
-
-
-def _integrated_candidates(p: MotorParams, s: Signals, log: Log, target: np.ndarray, rich: list[np.ndarray],
-                           train: np.ndarray, test: np.ndarray,
-                           view: Callable[[np.ndarray], np.ndarray]) -> tuple[list[int], np.ndarray]:
-    """Period counts to try where the angle is integrated from a speed column (no encoder angle): the speed
-    column's noise is differentiated into the torque rows, so the ripple is looked for where the torque
-    equation is judged, in the speed view (``view``) of the low-passed rows ``s``, and with its phase tracked
-    through the angle's drift (:func:`tracking_windows`): the best held-out share (:func:`angle_spectrum`), and
-    the amplitudes [N m] (64,) per period count."""
-    if s.theta is None:
-        return [], np.zeros(0)
-    fc = cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
-    theta = np.append(s.theta, s.theta[-1] + s.w1[-1] * s.dt)
-    amp, share = angle_spectrum(_rich_residual(target, rich, train), theta, s.triangle, train, test, _windows(log, s),
-                              lambda m: view(smooth(m, log.dt, fc)))
-    return [int(np.argmax(share)) + 1], amp
 
 
 def _pick_periods(cands: list[int], p: MotorParams, raw: Signals, log: Log, target: np.ndarray,
