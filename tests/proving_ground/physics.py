@@ -3,7 +3,8 @@
 Equations (SI; written here from the physics, independently of ``ocp``):
 
 * armature:   L di/dt = V_a - R i - k_e w,  with the drive's output V_a = dead_zone(V_cmd(t - lag)) and the
-  brush contact drop ``v_b sign(i)`` subtracted;
+  brush contact drop ``v_b sign(i)`` subtracted, ``sign`` set-valued at i = 0 (a dry contact: the current
+  stays zero while |V_a - k_e w| <= v_b);
 * rotor:      J dw/dt = k_t i - B w - c_tau w|w| - friction(w) - drag_asym(w) - ripple(theta);
 * angle:      dtheta/dt = w;
 * thrust:     F_qs = c_f w|w| (+ extra reverse thrust), the load cell sees F = F_lagged + f0, where the wake
@@ -11,7 +12,8 @@ Equations (SI; written here from the physics, independently of ``ocp``):
 * the current sensor reads ``i + i0``.
 
 Integration per sub-step ``h``: the current by its exact exponential solution with the speed frozen
-over the step, the mechanics (w, theta, F_lagged) by classical RK4 with the step-mean current.
+over the step (with brushes: piecewise, split where the current reaches zero, held at zero inside the
+contact band), the mechanics (w, theta, F_lagged) by classical RK4 with the step-mean current.
 """
 
 from __future__ import annotations
@@ -69,15 +71,43 @@ def quasi_static_thrust(t: Truth, w: float) -> float:
     return f
 
 
-def armature_voltage(t: Truth, v_cmd: float, i: float) -> float:
-    """What reaches the armature: drive clip, dead zone (hard), brush drop."""
+def drive_voltage(t: Truth, v_cmd: float) -> float:
+    """What the drive puts out [V]: the command clipped to the supply, then the dead zone (hard)."""
     v = max(-t.v_max, min(t.v_max, v_cmd))
     if "voltage_deadband" in t.effects:
         d = t.e("voltage_deadband", "v_db")
         v = math.copysign(max(abs(v) - d, 0.0), v)
-    if "brush_drop" in t.effects:
-        v -= t.e("brush_drop", "v_b") * _sgn(i, 1e-3 * t.v_max / t.R)
     return v
+
+
+def _exp_segment(i0: float, i_ss: float, tau_e: float, h: float) -> tuple[float, float]:
+    """Exact solution of ``tau_e di/dt = i_ss - i`` from ``i0`` over ``h`` [s]: (end current [A], integral [A s])."""
+    a = math.exp(-h / tau_e)
+    return i_ss + (i0 - i_ss) * a, i_ss * h + (i0 - i_ss) * (1.0 - a) * tau_e
+
+
+def brush_current_step(u: float, v_b: float, R: float, L: float, i0: float, h: float) -> tuple[float, float]:
+    """Exact current step through brushes: ``L di/dt = u - R i - v_b sign(i)``, sign set-valued at 0.
+
+    ``u = V_a - k_e w`` [V] (frozen over the step), ``v_b`` brush drop [V], ``R`` [ohm], ``L`` [H], ``i0`` the
+    current [A] at the start, ``h`` the step [s]. The drop opposes the current; where the current reaches zero
+    the step is split, and the current stays zero while ``|u| <= v_b`` (the contact takes up the whole
+    ``u``). Returns (end current [A], mean current over the step [A]).
+    """
+    tau_e, left, i, q = L / R, h, i0, 0.0
+    for _ in range(3):  # at most: decay to zero, then stick or restart the other way
+        s = 1.0 if i > 0.0 else -1.0 if i < 0.0 else (1.0 if u > v_b else -1.0 if u < -v_b else 0.0)
+        if s == 0.0:  # stuck inside the band: i = 0 for the rest of the step
+            return 0.0, q / h
+        # eq:dc_electrical with the brush drop v_b sign(i), sign(i) = s on this segment
+        i_ss = (u - s * v_b) / R
+        t_zero = tau_e * math.log((i - i_ss) / -i_ss) if s * i_ss < 0.0 and i != 0.0 else math.inf
+        if t_zero >= left:
+            i, dq = _exp_segment(i, i_ss, tau_e, left)
+            return i, (q + dq) / h
+        q += _exp_segment(i, i_ss, tau_e, t_zero)[1]
+        i, left = 0.0, left - t_zero
+    return i, q / h
 
 
 class Rig:
@@ -97,17 +127,21 @@ class Rig:
 
     def substep(self, v_cmd: float, h: float) -> None:
         t = self.t
-        va = armature_voltage(t, v_cmd, self.i)
-        i_ss = (va - t.k * self.w) / t.R
-        a = math.exp(-h * t.R / t.L)
-        i_mean = i_ss + (self.i - i_ss) * (1.0 - a) * t.L / (t.R * h)
+        va = drive_voltage(t, v_cmd)
+        if "brush_drop" in t.effects:
+            i_end, i_mean = brush_current_step(va - t.k * self.w, t.e("brush_drop", "v_b"), t.R, t.L, self.i, h)
+        else:  # eq:dc_electrical, exact over the step
+            i_ss = (va - t.k * self.w) / t.R
+            a = math.exp(-h * t.R / t.L)
+            i_mean = i_ss + (self.i - i_ss) * (1.0 - a) * t.L / (t.R * h)
+            i_end = i_ss + (self.i - i_ss) * a
         y = (self.w, self.theta, self.f_lag)
         k1 = self._mech(*y, i_mean)
         k2 = self._mech(*(y[j] + 0.5 * h * k1[j] for j in range(3)), i_mean)
         k3 = self._mech(*(y[j] + 0.5 * h * k2[j] for j in range(3)), i_mean)
         k4 = self._mech(*(y[j] + h * k3[j] for j in range(3)), i_mean)
         self.w, self.theta, self.f_lag = (y[j] + h / 6.0 * (k1[j] + 2 * k2[j] + 2 * k3[j] + k4[j]) for j in range(3))
-        self.i = i_ss + (self.i - i_ss) * a
+        self.i = i_end
 
     def thrust(self) -> float:
         f = self.f_lag if self.tau_f > 0 else quasi_static_thrust(self.t, self.w)
