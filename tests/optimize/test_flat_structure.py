@@ -34,9 +34,9 @@ def _data(intervals: int) -> tuple[flat.FlatStructure, flat_solve.FlatData, flat
 
 
 def test_missions_of_other_intervals_share_one_program_with_unchanged_answers():
-    """40 and 60 intervals over three phases (13 and 20 a phase, 8 spans both) are one flat structure; the
-    shared program, used first for 60, answers the 40-interval mission exactly as a program with 13 intervals
-    built in as a constant (1e-12, the same iterations)."""
+    """40 and 60 intervals over three phases (13 and 20 a phase, 8 spans both, doubled for the ramps' corners)
+    are one flat structure; the shared program, used first for 60, answers the 40-interval mission exactly as a
+    program with 13 intervals built in as a constant (1e-12, the same iterations)."""
     st40, d40, prog = _data(40)
     st60, d60, prog60 = _data(60)
     assert st40 == st60 and prog is prog60
