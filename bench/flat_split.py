@@ -100,7 +100,7 @@ def _sqp_row(problem: Any, repeats: int) -> dict[str, Any]:
     kept = flat_solve._answer(problem, st, run.x, data, SolverStats(program=SolverProgram.FLAT)).path_ok
     return {"ipopt": ipopt_wall, "sqpmethod": old_wall, "sqp": sqp_wall, "sqpmethod_cpu": old_cpu, "sqp_cpu": sqp_cpu,
             "it_old": int(old.stats()["iter_count"]), "it": run.iterations, "rel": run.objective / f_ipopt - 1.0,
-            "ok": run.method == "sqpmethod" and run.constraint_violation <= 1e-6, "kept": kept}
+            "ok": run.method == "sqp" and run.constraint_violation <= 1e-6, "kept": kept}
 
 
 def sqp_trial(specs: list[dict[str, Any]], repeats: int) -> None:

@@ -184,7 +184,7 @@ class Solved:
         constraint_violation: largest |g| of the (scaled) collocation residuals
         solve_time_s: wall time of the run [s]
         warm, warm_build_s: started from the program's last solution; time [s] spent building the warm solver
-        method: the NLP solver of the answer: ``ipopt``, or ``sqpmethod`` (the flat program's, :mod:`ocp.optimize.sqp`)
+        method: the NLP solver of the answer: ``ipopt``, or ``sqp`` (the flat program's, :mod:`ocp.optimize.sqp`)
     """
 
     x: np.ndarray

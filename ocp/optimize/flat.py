@@ -377,8 +377,7 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
     return col.Solved(x=np.asarray(last.sol["x"]).ravel(), status=last.status, success=last.success,
                       iterations=sum(r.iterations for r in runs), objective=float(last.sol["f"]) / float(p[scale][0]),
                       constraint_violation=viol, solve_time_s=sum(r.seconds for r in runs), warm=start is not None,
-                      # "sqpmethod": the answer's word for the SQP since session 7 (clients read it), kept for ours
-                      method="sqpmethod" if isinstance(last, sqp.Run) else "ipopt")
+                      method="sqp" if isinstance(last, sqp.Run) else "ipopt")
 
 
 def _with_solvers(prog: FlatProgram) -> FlatProgram:

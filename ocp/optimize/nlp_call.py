@@ -1,4 +1,4 @@
-"""One timed call of a CasADi NLP solver (IPOPT or ``sqpmethod``) and what a program reads from it."""
+"""One timed call of a CasADi NLP solver (IPOPT) and what a program reads from it."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import casadi as ca
 
 @dataclass(frozen=True)
 class Call:
-    """One call of a CasADi NLP solver (IPOPT or sqpmethod): the solver, its solution and stats, the return status,
+    """One call of a CasADi NLP solver (IPOPT): the solver, its solution and stats, the return status,
     whether it succeeded (or stopped at IPOPT's acceptable level) and the wall time [s]."""
 
     solver: ca.Function

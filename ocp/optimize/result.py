@@ -109,9 +109,10 @@ class SolverStats(Record):
     """How the answer was computed; times add up over the back-off rounds (the build happens in the first)."""
 
     status: Status = field(default=Status.UNKNOWN, metadata=info("", "return status of the last solve (IPOPT's "
-                                                                 "vocabulary; sqpmethod uses the same words)"))
+                                                                 "vocabulary; the flat program's SQP uses the same "
+                                                                 "words)"))
     method: str = field(default="ipopt", metadata=info(
-        "", "NLP solver of the last solve: ipopt, or sqpmethod (SQP with qpOASES, the flat program's first try)"))
+        "", "NLP solver of the last solve: ipopt, or sqp (the flat program's first try: its own SQP, QPs by DAQP)"))
     program: SolverProgram = field(default=SolverProgram.RADAU, metadata=info(
         "", "the program that produced the answer: flat (B-spline in the speed) or radau (collocation)"))
     flat_attempt_s: float = field(default=0.0, metadata=info(

@@ -34,9 +34,9 @@ def _data(intervals: int) -> tuple[flat.FlatStructure, flat_solve.FlatData, flat
 
 
 def test_missions_of_other_intervals_share_one_program_with_unchanged_answers():
-    """40 and 60 intervals over three phases (13 and 20 a phase, 8 spans both) are one flat structure; the
-    shared program, used first for 60, answers the 40-interval mission exactly as a program with 13 intervals
-    built in as a constant (1e-12, the same iterations)."""
+    """40 and 60 intervals over three phases (13 and 20 a phase, 8 spans both, doubled for the ramps' corners)
+    are one flat structure; the shared program, used first for 60, answers the 40-interval mission exactly as a
+    program with 13 intervals built in as a constant (1e-12, the same iterations)."""
     st40, d40, prog = _data(40)
     st60, d60, prog60 = _data(60)
     assert st40 == st60 and prog is prog60
@@ -49,7 +49,7 @@ def test_missions_of_other_intervals_share_one_program_with_unchanged_answers():
     par = prog.nlp["p"]
     fixed = {k: ca.substitute(prog.nlp[k], par[sl.start], ca.SX(13.0)) for k in ("f", "g")}
     assert not ca.depends_on(fixed["f"], par[sl.start])
-    assert shared.method == "sqpmethod"  # the flat program's first solver answered: the old program's is the same
+    assert shared.method == "sqp"  # the flat program's first solver answered: the old program's is the same
     old = sqp.build("old", {"x": prog.nlp["x"], "p": par, **fixed}, prog.deadline)
     sol = old(x0=d40.x0, p=d40.p, lbx=d40.lbx, ubx=d40.ubx, lbg=bounds[0], ubg=bounds[1])
     assert shared.success and old.stats()["success"]

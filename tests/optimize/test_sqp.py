@@ -48,7 +48,7 @@ def test_sqp_reaches_ipopts_optimum_in_fewer_iterations():
     prog, data, bounds = _reversal()
     run = flat.solve(prog, data.p, data.lbx, data.ubx, data.x0, bounds)
     f_ipopt = _ipopt(prog, data, bounds)
-    assert run.success and run.method == "sqpmethod"
+    assert run.success and run.method == "sqp"
     assert abs(run.objective / f_ipopt - 1.0) < 1e-4
     assert run.constraint_violation < 1e-7
     assert run.iterations < prog.solver.stats()["iter_count"]
@@ -63,7 +63,7 @@ def test_sqp_with_binding_current_rows_reaches_ipopts_optimum():
     prog, data, bounds = _program(spec)
     run = flat.solve(prog, data.p, data.lbx, data.ubx, data.x0, bounds)
     f_ipopt = _ipopt(prog, data, bounds)
-    assert run.success and run.method == "sqpmethod"
+    assert run.success and run.method == "sqp"
     assert abs(run.objective / f_ipopt - 1.0) < 1e-4
     assert run.constraint_violation < 1e-7
     assert run.iterations < prog.solver.stats()["iter_count"]
@@ -109,4 +109,4 @@ def test_building_and_solving_keeps_standard_output_empty():
             "import sys; print(r.solver.method, file=sys.stderr)")
     out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120,
                          env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"}, check=True)
-    assert out.stdout == "" and out.stderr.strip().endswith("sqpmethod")
+    assert out.stdout == "" and out.stderr.strip().endswith("sqp")
