@@ -811,7 +811,7 @@ def main(argv: list[str] | None = None) -> int:
           "Opti: plain, same IPOPT options")
     rev = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=Path(__file__).resolve().parent,
                          capture_output=True, text=True, check=False).stdout.strip()
-    dirty = subprocess.run(["git", "status", "--porcelain", "ocp"], cwd=Path(__file__).resolve().parent,
+    dirty = subprocess.run(["git", "status", "--porcelain", "ocp"], cwd=Path(__file__).resolve().parents[1],
                            capture_output=True, text=True, check=False).stdout.strip()
     print(f"code: HEAD {rev or '?'}{' + uncommitted changes in ocp/' if dirty else ''}; load (uptime): "
           f"{os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f}")
