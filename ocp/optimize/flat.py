@@ -362,9 +362,9 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
             ipopt = prog.warm_solver or ipopt
         prog.deadline.until = until
         try:
-            runs: list[sqp.Run | Call] = []
+            runs: list[Call] = []
             if prog.sqp_solver is not None:
-                runs.append(sqp.call(prog.sqp_solver, args))
+                runs.append(call(prog.sqp_solver, args))
             if not runs or not runs[0].success:
                 runs.append(call(ipopt, args))
         finally:
@@ -377,7 +377,7 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
     return col.Solved(x=np.asarray(last.sol["x"]).ravel(), status=last.status, success=last.success,
                       iterations=sum(r.iterations for r in runs), objective=float(last.sol["f"]) / float(p[scale][0]),
                       constraint_violation=viol, solve_time_s=sum(r.seconds for r in runs), warm=start is not None,
-                      method="sqp" if isinstance(last, sqp.Run) else "ipopt")
+                      method="sqp" if last.solver is prog.sqp_solver else "ipopt")
 
 
 def _with_solvers(prog: FlatProgram) -> FlatProgram:

@@ -1,4 +1,5 @@
-"""One timed call of a CasADi NLP solver (IPOPT) and what a program reads from it."""
+"""One timed call of an NLP solver (CasADi's IPOPT, or the flat program's own SQP, :class:`ocp.optimize.sqp.Solver`,
+which reports its stats in IPOPT's words) and what a program reads from it."""
 
 from __future__ import annotations
 
@@ -6,15 +7,13 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-import casadi as ca
-
 
 @dataclass(frozen=True)
 class Call:
-    """One call of a CasADi NLP solver (IPOPT): the solver, its solution and stats, the return status,
+    """One call of an NLP solver (IPOPT or the own SQP): the solver, its solution and stats, the return status,
     whether it succeeded (or stopped at IPOPT's acceptable level) and the wall time [s]."""
 
-    solver: ca.Function
+    solver: Any  # ca.Function (IPOPT) or ocp.optimize.sqp.Solver: called with the NLP's arguments, has stats()
     sol: dict[str, Any]
     stats: dict[str, Any]
     status: str
@@ -26,7 +25,7 @@ class Call:
         return int(self.stats.get("iter_count", -1))
 
 
-def call(solver: ca.Function, args: dict[str, Any]) -> Call:
+def call(solver: Any, args: dict[str, Any]) -> Call:
     """Call ``solver`` with ``args`` (x0, p, bounds, ...) and time it."""
     t0 = time.perf_counter()
     sol = solver(**args)

@@ -241,31 +241,6 @@ class Solver:
         return out.sol
 
 
-@dataclass(frozen=True)
-class Run:
-    """One timed call of a :class:`Solver` (the fields :func:`ocp.optimize.flat.solve` reads of an IPOPT run's
-    :class:`ocp.optimize.nlp_call.Call`): solution (x, f, g, lam_x, lam_g), stats, status, success, wall time [s]."""
-
-    sol: dict[str, Any]
-    stats: dict[str, Any]
-    status: str
-    success: bool
-    seconds: float
-
-    @property
-    def iterations(self) -> int:
-        return int(self.stats["iter_count"])
-
-
-def call(solver: Solver, args: dict[str, Any]) -> Run:
-    """Call ``solver`` with ``args`` (x0, p, bounds, and a warm start's lam_x0, lam_g0) and time it."""
-    t0 = time.perf_counter()
-    sol = solver(**args)
-    seconds = time.perf_counter() - t0
-    stats = solver.stats()
-    return Run(sol, stats, str(stats["return_status"]), bool(stats["success"]), seconds)
-
-
 @dataclass
 class _Result:
     sol: dict[str, Any]
