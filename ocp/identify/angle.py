@@ -35,7 +35,7 @@ def _means(ea: np.ndarray, ed: np.ndarray, d: np.ndarray, triangle: bool) -> np.
 def interval_ripple(theta: np.ndarray, n: int, triangle: bool) -> tuple[np.ndarray, np.ndarray]:
     """Weighted means of ``sin(n theta)`` and ``cos(n theta)`` (M,) on the rows of the sampled angle
     ``theta`` (M + 1,) [rad], moving linearly between samples: over each interval k -> k+1, or (``triangle``,
-    :func:`ocp.identify.regression.raw_signals`) under the triangle over k-1 -> k+1. Integrated in closed
+    :func:`ocp.identify.columns.raw_signals`) under the triangle over k-1 -> k+1. Integrated in closed
     form: a ripple faster than the sampling averages out (its impulse over the row, eq. dc_mechanical)
     instead of aliasing as samples at the instants would."""
     d = n * np.diff(theta)

@@ -19,7 +19,7 @@ are explained by a linear combination of columns, one set per candidate:
   value on a grid; cogging gets ``sin/cos(n theta)`` with ``n`` from the residual's spectrum against angle.
 
 Where an angle is logged, the torque equation can also be written on the RAW rows (``raw_torque``;
-:func:`raw_signals`: mean speeds between samples, exact from the angle), judged through the same speed view
+:func:`.columns.raw_signals`: mean speeds between samples, exact from the angle), judged through the same speed view
 (:func:`speed_view`): a torque ripple locked to the rotor angle is often faster than the low-pass (20-60
 periods/rev) and would be filtered out before it could be seen (:func:`ocp.identify.diagnose.diagnose`
 uses that view wherever an angle is logged). The ripple's columns are its exact
@@ -42,12 +42,21 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import signal
 
-from ocp.identify.align import cutoff_hz, smooth
-from ocp.identify.angle import angle_limits, angle_spectrum, instant_spectrum, interval_ripple
+from ocp.identify.align import cutoff_hz
+from ocp.identify.angle import angle_limits, angle_spectrum, instant_spectrum
+from ocp.identify.columns import (
+    Column,
+    Signals,
+    constant_columns,
+    effect_columns,
+    nuisance_columns,
+    raw_signals,
+    signals,
+    targets,
+)
 from ocp.logs import Log, LogKind
-from ocp.model.effects import CATALOGUE, ThrustLag, make_effect
+from ocp.model.effects import CATALOGUE
 from ocp.model.params import MotorParams
-from ocp.model.plant import NUMPY
 
 EQS = ("mechanical", "electrical", "thrust")
 CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
@@ -57,7 +66,6 @@ CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 NUISANCES: tuple[str, ...] = ("current_lag",)
 #: effects found by regression (input_delay is found by the alignment)
 REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")
-GRID = 12
 #: the torque equation's weight is at least this fraction of the smallest torque error a free run shows at
 #: one noise level (:func:`visible_torque`): far smaller mismatches are averaged out of a long log but never
 #: show in a prediction (tuned on proving-ground seeds 1000..1099)
@@ -68,15 +76,6 @@ DEGENERATE = 1e-6
 #: a held-out block (:func:`_blocks`) spans at least this many independent torque rows (rotor time constants of
 #: the speed view), so that blocks are nearly independent of each other
 BLOCK_INDEPENDENT = 3.0
-
-
-@dataclass(frozen=True)
-class Column:
-    """One regressor: its candidate, the shape value it was built with, and its parameter name."""
-
-    item: str
-    key: str
-    shape: float = math.nan
 
 
 @dataclass
@@ -124,153 +123,6 @@ class Design:
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
-
-
-@dataclass(frozen=True)
-class Signals:
-    """Low-passed log channels over the held intervals k -> k+1, (M,) SI with M = N - 1 (sweeps: M = N).
-
-    ``w0, w1``/``i0, i1``: at the interval's start and end; ``w, i``: their means; ``v``: the held command;
-    ``f``, ``theta``: at the start; ``dt`` [s] (0 for a steady-state sweep: no dynamics).
-    """
-
-    w0: np.ndarray
-    w1: np.ndarray
-    i0: np.ndarray
-    i1: np.ndarray
-    w: np.ndarray
-    i: np.ndarray
-    v: np.ndarray
-    f: np.ndarray
-    theta: np.ndarray | None
-    t: np.ndarray
-    dt: float
-    triangle: bool = False  # rows centred on the samples, torque weighted by a triangle (raw_signals)
-
-
-def raw_signals(log: Log, theta: np.ndarray) -> Signals:
-    """The log's rows as they are, for eq. dc_mechanical where a fast torque must keep its part, from the
-    logged angle ``theta`` (N,) [rad]: row k compares the mean speeds over k-1 -> k and k -> k+1 (``w0, w1``,
-    exact from the angle), whose difference times ``J`` is the torque's impulse under a triangle over
-    k-1 -> k+1 (``triangle``); the current and speed are that triangle's means."""
-    dt, n = log.dt, log.n
-    mean_w = np.diff(theta) / dt  # (N-1,) over k -> k+1
-    w0 = np.concatenate([mean_w[:1], mean_w[:-1]])
-    i = log.current
-    i0, i1 = 0.5 * (np.concatenate([i[:1], i[:n - 2]]) + i[:-1]), 0.5 * (i[:-1] + i[1:])  # at k -/+ half a sample
-    return Signals(w0, mean_w, i0, i1, 0.5 * (w0 + mean_w), 0.5 * (i0 + i1), log.voltage[:-1], log.thrust[:-1],
-                   theta[:-1], log.t[:-1], dt, triangle=True)
-
-
-def signals(log: Log, p: MotorParams) -> Signals:
-    if log.kind is LogKind.STEADY_STATE:
-        w, i = log.omega, log.current
-        return Signals(w, w, i, i, w, i, log.voltage, log.thrust, log.theta, log.t, 0.0)
-    dt, fc = log.dt, cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
-    i, v, f = (smooth(getattr(log, ch), dt, fc) for ch in ("current", "voltage", "thrust"))
-    # a logged angle gives the speed without the lag of a backward-differenced or filtered speed column
-    w = smooth(np.gradient(log.theta, dt) if log.theta is not None else log.omega, dt, fc)
-    theta = log.theta if log.theta is not None else np.concatenate(
-        [[0.0], np.cumsum(0.5 * (log.omega[1:] + log.omega[:-1]) * dt)])
-    return Signals(w[:-1], w[1:], i[:-1], i[1:], 0.5 * (w[:-1] + w[1:]), 0.5 * (i[:-1] + i[1:]), v[:-1], f[:-1],
-                   theta[:-1], log.t[:-1], dt)
-
-
-def _armature(s: Signals, r: float, el: float) -> np.ndarray:
-    """Voltage [V] that drives the current from i0 to i1 over one held sample (eq. dc_electrical, exact
-    for a constant voltage: i1 = a i0 + (1 - a) V / R with a = exp(-R dt / L)); sweeps: R i."""
-    if s.dt == 0:
-        return r * s.i
-    a = math.exp(-r * s.dt / el)
-    return r * (s.i1 - a * s.i0) / (1.0 - a)
-
-
-def targets(p: MotorParams, s: Signals) -> np.ndarray:
-    """Nominal-model residuals (3, M): r_mech [N m], r_elec [V], r_thr [N] (module doc)."""
-    dw = (s.w1 - s.w0) / s.dt if s.dt > 0 else 0.0 * s.w
-    return np.vstack([p.k_t * s.i - p.J * dw - p.B * s.w - p.c_tau * s.w * np.abs(s.w),
-                      s.v - _armature(s, p.R, p.L) - p.k_e * s.w,
-                      s.f - p.c_f * s.w0 * np.abs(s.w0)])
-
-
-def constant_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
-    """(3, M) per constant: the residual a relative error x = 1 of that constant leaves (to first order;
-    R and L through the exact armature step by central differences)."""
-    z = np.zeros_like(s.w)
-    dw = (s.w1 - s.w0) / s.dt if s.dt > 0 else z
-    h = 1e-4
-
-    def arm(dr: float, dl: float) -> np.ndarray:
-        return (_armature(s, p.R * (1 + dr), p.L * (1 + dl)) - _armature(s, p.R * (1 - dr), p.L * (1 - dl))) / (2 * h)
-
-    return {"J": np.vstack([p.J * dw, z, z]), "B": np.vstack([p.B * s.w, z, z]),
-            "c_tau": np.vstack([p.c_tau * s.w * np.abs(s.w), z, z]),
-            "c_f": np.vstack([z, z, p.c_f * s.w0 * np.abs(s.w0)]),
-            "k": np.vstack([-p.k_t * s.i, p.k_e * s.w, z]), "R": np.vstack([z, arm(h, 0.0), z]),
-            "L": np.vstack([z, arm(0.0, h), z])}
-
-
-def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
-    """(3, M) per logger artefact (:data:`NUISANCES`) at one unit: a one-sample current lag leaves
-    ``-k_t di`` in the torque residual (``di`` the current's step over the interval)."""
-    z = np.zeros_like(s.w)
-    return {"current_lag": np.vstack([-p.k_t * (s.i1 - s.i0) if s.dt > 0 else z, z, z])}
-
-
-def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> np.ndarray:
-    """(3, N): an effect's contribution at these parameter values, through the catalogue's hooks."""
-    eff = make_effect(name, values)
-    z = np.zeros_like(s.w)
-    mech = np.asarray(eff.load_torque(s.w, NUMPY, None), float) + z
-    elec = s.v - np.asarray(eff.drive_voltage(s.v, s.i, NUMPY), float)
-    ideal = p.c_f * s.w0 * np.abs(s.w0)
-    thr = np.asarray(eff.thrust(ideal, s.w0, NUMPY, None), float) - ideal
-    offset = float(eff.measured_current(0.0))
-    return np.vstack([mech + p.k_t * offset, elec - p.R * offset, thr])
-
-
-def _grid(lo: float, hi: float) -> np.ndarray:
-    return np.geomspace(lo, hi, GRID)
-
-
-def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int) -> list[tuple[Column, np.ndarray]]:
-    """Columns of one effect (one per shape value for shaped effects)."""
-    w_peak = float(np.max(np.abs(s.w))) or 1.0
-    v_peak = float(np.max(np.abs(s.v))) or 1.0
-    if name == "stribeck":
-        return [(Column(name, "tau_s", ws), _effect(name, {"tau_s": 1.0, "omega_s": ws}, p, s))
-                for ws in _grid(0.003 * w_peak, 0.15 * w_peak)]
-    if name == "brush_drop":  # the drop follows the current's sign, and while |V - k_e w| < v_b no current
-        u = s.v - p.k_e * s.w  # flows: the drop is V - k_e w there, so clip(V - k_e w, +-v_b) (quasi-static)
-        z = np.zeros_like(s.w)
-        return [(Column(name, "v_b", vb), np.vstack([z, np.clip(u, -vb, vb) / vb, z]))
-                for vb in _grid(0.005 * v_peak, 0.3 * v_peak)]
-    if name == "voltage_deadband":  # a driver's dead zone: no output below v_db, the drop clip(V, +-v_db)
-        z = np.zeros_like(s.w)  # (the catalogue's smooth V - v_db tanh(V / v_db) is for the optimiser)
-        return [(Column(name, "v_db", vd), np.vstack([z, np.clip(s.v, -vd, vd) / vd, z]))
-                for vd in _grid(0.005 * v_peak, 0.3 * v_peak)]
-    if name == "thrust_lag":
-        if log.kind is LogKind.STEADY_STATE:
-            return []
-        ideal = p.c_f * s.w0 * np.abs(s.w0)
-        out = []
-        for tau in _grid(max(2 * log.dt, 1e-3), 1.0):
-            lagged = ThrustLag(tau=tau).observe(s.t, s.w0, s.v, ideal, None)[0]
-            out.append((Column(name, "tau", tau), np.vstack([0 * ideal, 0 * ideal, lagged - ideal])))
-        return out
-    if name == "cogging":
-        if s.theta is None or periods < 1:
-            return []
-        z = np.zeros_like(s.w)
-        theta = np.append(s.theta, s.theta[-1] + s.w1[-1] * s.dt)
-        means = list(interval_ripple(theta, periods, s.triangle))
-        if not s.triangle:  # low-passed rows (no logged angle): the ripple low-passed like them
-            fc = cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
-            means = [smooth(m, log.dt, fc) for m in means]
-        return [(Column(name, k, float(periods)), np.vstack([m, z, z]))
-                for k, m in zip(("tau_sin", "tau_cos"), means, strict=True)]
-    key = CATALOGUE[name].fitted[0]
-    return [(Column(name, key), _effect(name, {key: 1.0}, p, s))]
 
 
 def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
