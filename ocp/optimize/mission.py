@@ -66,6 +66,11 @@ OUTPUT_RATE = 1000.0  # Hz of the returned reference arrays
 MAX_SPAN_S = MAX_PROFILE_SAMPLES / SEGMENT_RATE
 #: longest returned reference [s]: the desired span times the largest stretch the retiming allows
 MAX_OUTPUT_S = 2.0 * MAX_SPAN_S
+#: shortest desired profile [s]: one sample of the returned reference (a shorter one has nothing to answer with,
+#: and its collocation intervals divide by its length)
+MIN_SPAN_S = 1.0 / OUTPUT_RATE
+#: shortest segment [s] (a microsecond: shorter than any drive's PWM period; a denormal 5e-324 s passed before)
+MIN_SEGMENT_S = 1e-6
 #: largest thrust magnitude [N] anywhere in a mission (a propeller, not a rocket)
 MAX_THRUST = 1e3
 #: largest magnitude of a profile time stamp [s]
@@ -75,7 +80,7 @@ MAX_TIME = 1e6
 Finite = Annotated[float, Field(strict=True, allow_inf_nan=False)]
 PositiveFinite = Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]
 Thrust = Annotated[float, Field(strict=True, ge=-MAX_THRUST, le=MAX_THRUST, allow_inf_nan=False)]
-Duration = Annotated[float, Field(strict=True, gt=0, le=MAX_SPAN_S, allow_inf_nan=False)]
+Duration = Annotated[float, Field(strict=True, ge=MIN_SEGMENT_S, le=MAX_SPAN_S, allow_inf_nan=False)]
 
 
 def _limit(unit: str, top: float, what: str, example: float) -> Any:
@@ -134,13 +139,14 @@ class Profile(_Strict):
             raise ValueError(f"t has {len(self.t)} samples but thrust has {len(self.thrust)}")
         if any(b <= a for a, b in zip(self.t, self.t[1:], strict=False)):
             raise ValueError("t must be strictly increasing")
-        if self.t[-1] - self.t[0] > MAX_SPAN_S:
-            raise MissionError("t", f"spans {self.t[-1] - self.t[0]:.4g} s; at most {MAX_SPAN_S:g} s")
+        if not MIN_SPAN_S <= self.t[-1] - self.t[0] <= MAX_SPAN_S:
+            raise MissionError("t", f"spans {self.t[-1] - self.t[0]:.4g} s; between {MIN_SPAN_S:g} and "
+                                    f"{MAX_SPAN_S:g} s")
         return self
 
 
 def _duration() -> Any:
-    return Field(description=f"segment length [s], at most {MAX_SPAN_S:g}", examples=[0.5])
+    return Field(description=f"segment length [s], {MIN_SEGMENT_S:g} to {MAX_SPAN_S:g}", examples=[0.5])
 
 
 class Hold(_Strict):
@@ -240,8 +246,8 @@ class Mission(_Strict):
     def _one_profile(self) -> Mission:
         if (self.profile is None) == (self.segments is None):
             raise ValueError("give exactly one of 'profile' and 'segments'")
-        if self.segments is not None and sum(s.duration for s in self.segments) > MAX_SPAN_S:
-            raise MissionError("segments", f"last longer than {MAX_SPAN_S:g} s")
+        if self.segments is not None and not MIN_SPAN_S <= sum(s.duration for s in self.segments) <= MAX_SPAN_S:
+            raise MissionError("segments", f"last {self.span():.4g} s; between {MIN_SPAN_S:g} and {MAX_SPAN_S:g} s")
         if self.span() * self.retiming.max_stretch > MAX_OUTPUT_S:
             raise MissionError("retiming.max_stretch", f"a {self.span():.4g} s profile stretched "
                                                        f"{self.retiming.max_stretch:g}x would last longer than "

@@ -76,6 +76,13 @@ def test_1_a_huge_profile_span_is_refused_before_any_work(http: httpx.Client) ->
 
 
 BAD_INPUTS: list[tuple[str, dict[str, Any], str]] = [
+    # durations of a denormal 5e-324 s (found by schemathesis, session 8): a ZeroDivisionError in the worker and in
+    # the fallback (a 500) before the shortest segment and span were bounded
+    ("/v1/references/optimize", {"name": "m", "segments": [{"kind": "hold", "duration": 5e-324, "thrust": 0.0}] * 3},
+     "segments.0.duration"),
+    ("/v1/references/optimize", {"name": "m", "segments": [{"kind": "hold", "duration": 2e-4, "thrust": 0.1}] * 3},
+     "segments"),
+    ("/v1/references/optimize", {"name": "m", "profile": {"t": [0.0, 5e-324], "thrust": [0.1, -0.1]}}, "profile.t"),
     ("/v1/references/optimize", mission("m", amplitude=1e308), "segments.0.thrust"),
     ("/v1/references/optimize", {**mission("m"), "time_limit_s": "12"}, "time_limit_s"),
     ("/v1/references/optimize", {**mission("m"), "limits": {"current": True}}, "limits.current"),
