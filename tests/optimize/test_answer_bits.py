@@ -15,6 +15,7 @@ from ocp.optimize import flat, flat_solve
 from ocp.optimize.mission import Profile, mission_from_mapping
 from ocp.optimize.problem import Problem, problem_for
 from ocp.optimize.result import SolverProgram, SolverStats
+from tests.optimize.test_flat import solved
 
 REVERSAL = {"name": "rev", "limits": {"voltage": 12.0, "current": 1.0},
             "segments": [{"kind": "hold", "duration": 0.5, "thrust": 0.4},
@@ -99,13 +100,7 @@ def test_the_answer_is_the_former_evaluation_bit_for_bit(name: str):
     voltage on the output grid, the crossings' planned current and voltage and the reproduction error equal the
     former evaluation's (scipy per phase and order, three separate evaluations) to the last bit."""
     spec = next(s for s in [REVERSAL, *user_missions()] if s["name"] == name)
-    problem = problem_for(mission_from_mapping(spec))
-    st = flat_solve.structure_of(problem)
-    prog, _ = flat.program_for(st)
-    data = flat_solve.flat_data(problem, prog)
-    assert data is not None
-    run = flat.solve(prog, data.p, data.lbx, data.ubx, data.x0, prog.g_bounds(0.995, 0.995))
-    assert run.success
+    problem, st, data, run = solved(spec)
     answer = flat_solve._answer(problem, st, run.x, data, SolverStats(program=SolverProgram.FLAT))
     plan = flat_solve.plan_of(problem, st, run.x, data)
     t = answer.arrays["t"]

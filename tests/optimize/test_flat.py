@@ -85,7 +85,8 @@ def test_flat_answer_keeps_the_limits_in_an_independent_simulation():
     np.testing.assert_allclose(np.interp(r.arrays["t"], t, thrust), r.arrays["thrust"], atol=2e-3 * 0.3)
 
 
-def _solved_plan(spec: dict) -> tuple[flat_solve.FlatPlan, Problem]:
+def solved(spec: dict) -> tuple[Problem, flat.FlatStructure, flat_solve.FlatData, flat.col.Solved]:
+    """The mission ``spec``'s problem, flat structure and data, and one successful cold solve (bounds 0.995)."""
     problem = problem_for(mission_from_mapping(spec))
     st = flat_solve.structure_of(problem)
     prog, _ = flat.program_for(st)
@@ -93,6 +94,11 @@ def _solved_plan(spec: dict) -> tuple[flat_solve.FlatPlan, Problem]:
     assert data is not None
     run = flat.solve(prog, data.p, data.lbx, data.ubx, data.x0, prog.g_bounds(0.995, 0.995))
     assert run.success
+    return problem, st, data, run
+
+
+def _solved_plan(spec: dict) -> tuple[flat_solve.FlatPlan, Problem]:
+    problem, st, data, run = solved(spec)
     return flat_solve.plan_of(problem, st, run.x, data), problem
 
 
