@@ -59,7 +59,12 @@ def _jacobian_function(plant: Any) -> ca.Function:
 
 def fastest_rate(plant: Plant, x0: Sequence[float] | np.ndarray, u0: float) -> float:
     """Largest |eigenvalue| [1/s] of the plant's Jacobian at ``x0`` (nx,) and at ``x0`` with the speed zero."""
-    return max(float(np.max(np.abs(np.linalg.eigvals(a)))) for a in _jacobians(plant, x0, u0))
+    return _rate(_jacobians(plant, x0, u0))
+
+
+def _rate(jacs: list[np.ndarray]) -> float:
+    """Largest |eigenvalue| [1/s] of the Jacobians ``jacs`` (each (nx, nx))."""
+    return max(float(np.max(np.abs(np.linalg.eigvals(a)))) for a in jacs)
 
 
 def _jacobians(plant: Plant, x0: Sequence[float] | np.ndarray, u0: float) -> list[np.ndarray]:
@@ -81,7 +86,7 @@ def step_limit(plant: Plant, x0: Sequence[float] | np.ndarray, u0: float, max_st
     bound = max(float(np.max(np.sum(np.abs(a), axis=1))) for a in jacs) * (1.0 + 1e-8)
     if SUBSTEPS * RK4_STIFFNESS / bound >= max_step:  # False for a NaN bound or an infinite max_step
         return max_step
-    lam = max(float(np.max(np.abs(np.linalg.eigvals(a)))) for a in jacs)
+    lam = _rate(jacs)
     return min(max_step, SUBSTEPS * RK4_STIFFNESS / lam) if lam > 0 else max_step
 
 
