@@ -6,12 +6,10 @@ virtual machine (``mapaccum``). The step is CasADi's own generated C of the same
 arithmetic, no fast-math, no contraction into fused multiply-adds), so the numbers are the same:
 
 * the C source comes from ``casadi.CodeGenerator`` with a driver loop appended; its SHA-256 (with the flags and
-  CasADi's version) names the shared library in the cache directory (``$THRUSTSHAPE_CACHE_DIR``, else
-  ``$XDG_CACHE_HOME/thrustshape``, else ``~/.cache/thrustshape``; sub-folder ``sim``), so another process or a
-  later run loads it at once;
-* a library not on disk is built in a background thread by the C compiler on the ``PATH`` (``$CC``, ``cc``,
-  ``gcc`` or ``clang``): the first simulations of a new plant run uncompiled, the later ones compiled; a
-  failed build is remembered and never retried in the process;
+  CasADi's version) names the shared library in the cache's sub-folder ``sim`` (:mod:`ocp.native`: where, the
+  compiler, the background build), so another process or a later run loads it at once;
+* the first simulations of a new plant run uncompiled, the later ones compiled; a failed build is remembered and
+  never retried in the process;
 * ``THRUSTSHAPE_SIM_COMPILE=0`` turns the compiled path off.
 """
 
@@ -19,49 +17,36 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
-import os
-import shutil
-import subprocess
-import tempfile
 import threading
 from collections.abc import Callable
-from functools import cache
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-FLAGS = ("-O2", "-fPIC", "-shared", "-ffp-contract=off", "-fno-fast-math")
-BUILD_TIMEOUT_S = 120.0
+from ocp import native
+
+FLAGS = ("-O2", *native.SAFE_MATH)
+SWITCH = "THRUSTSHAPE_SIM_COMPILE"
 
 _LOCK = threading.Lock()
-_BUILT: dict[str, Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None] = {}  # key -> driver, or
-# None when the build or the load failed
-_BUILDING: set[str] = set()
+_LOADED: dict[str, Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] | None] = {}  # key -> driver, or
+# None when the load failed
 
 
 def enabled() -> bool:
     """Whether the compiled path may be used: not turned off, and a C compiler is on the PATH."""
-    return os.environ.get("THRUSTSHAPE_SIM_COMPILE", "1") != "0" and compiler() is not None
+    return native.enabled(SWITCH)
 
 
-@cache
 def compiler() -> str | None:
-    """Path of the C compiler (``$CC``, else ``cc``, ``gcc``, ``clang``), None when there is none."""
-    for name in (os.environ.get("CC"), "cc", "gcc", "clang"):
-        path = shutil.which(name) if name else None
-        if path:
-            return path
-    return None
+    """Path of the C compiler, None when there is none (:func:`ocp.native.compiler`)."""
+    return native.compiler()
 
 
 def cache_dir() -> Path:
-    """Where the compiled libraries are kept (see the module doc)."""
-    root = os.environ.get("THRUSTSHAPE_CACHE_DIR")
-    if root:
-        return Path(root) / "sim"
-    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
-    return Path(base) / "thrustshape" / "sim"
+    """Where the compiled steps are kept (:func:`ocp.native.cache_dir`)."""
+    return native.cache_dir("sim")
 
 
 _DRIVER = """
@@ -100,31 +85,8 @@ def _source(fn: ca.Function) -> str:
 
 
 def _key(fn: ca.Function, source: str) -> str:
-    h = hashlib.sha256("\n".join([source, " ".join(FLAGS), str(ca.CasadiMeta.version())]).encode())
+    h = hashlib.sha256("\n".join([source, " ".join(FLAGS), native.version_tag()]).encode())
     return f"{fn.name()}_{h.hexdigest()[:20]}"
-
-
-def _build(key: str, source: str, library: Path) -> None:
-    """Compile ``source`` into ``library`` (atomic rename, so a concurrent reader never sees half a file)."""
-    cc = compiler()
-    ok = False
-    try:
-        library.parent.mkdir(parents=True, exist_ok=True)
-        with tempfile.TemporaryDirectory(dir=library.parent) as tmp:
-            c_file = Path(tmp) / f"{key}.c"
-            c_file.write_text(source, encoding="utf-8")
-            out = Path(tmp) / library.name
-            run = subprocess.run([str(cc), *FLAGS, str(c_file), "-o", str(out), "-lm"], capture_output=True,
-                                 timeout=BUILD_TIMEOUT_S, check=False)
-            if run.returncode == 0:
-                os.replace(out, library)
-                ok = True
-    except (OSError, subprocess.SubprocessError):
-        ok = False
-    with _LOCK:
-        _BUILDING.discard(key)
-        if not ok:
-            _BUILT[key] = None
 
 
 Driver = Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray]
@@ -138,7 +100,6 @@ class CompiledStep:
         self.name = step.name()
         self.source = _source(step)
         self.key = _key(step, self.source)
-        self.library = cache_dir() / f"{self.key}.so"
 
     def get(self, wait: bool = False) -> Driver | None:
         """The driver when it is built (loaded from the disk cache), else None after starting its build in the
@@ -146,29 +107,17 @@ class CompiledStep:
         if not enabled():
             return None
         with _LOCK:
-            if self.key in _BUILT:
-                return _BUILT[self.key]
-            if self.key in _BUILDING:
-                return None
-            if not self.library.exists():
-                _BUILDING.add(self.key)
-                if not wait:
-                    threading.Thread(target=_build, args=(self.key, self.source, self.library), daemon=True,
-                                     name=f"cc-{self.key}").start()
-                    return None
-        if wait and not self.library.exists():
-            _build(self.key, self.source, self.library)
-        return self._load()
-
-    def _load(self) -> Driver | None:
-        driver: Driver | None = None
-        if self.library.exists():
-            try:
-                driver = self._driver(ctypes.CDLL(str(self.library)))
-            except OSError:
-                driver = None
+            if self.key in _LOADED:
+                return _LOADED[self.key]
+        path = native.library(self.key, "sim", lambda: self.source, FLAGS, wait=wait)
+        if path is None:
+            return None
+        try:
+            driver: Driver | None = self._driver(ctypes.CDLL(str(path)))
+        except OSError:
+            driver = None
         with _LOCK:
-            _BUILT[self.key] = driver
+            _LOADED[self.key] = driver
         return driver
 
     def _driver(self, lib: ctypes.CDLL) -> Driver:
