@@ -16,6 +16,9 @@ ENV PATH=/opt/venv/bin:$PATH \
     PYTHONDONTWRITEBYTECODE=1 \
     PYTHONUNBUFFERED=1 \
     THRUSTSHAPE_DB_PATH=/data/jobs.sqlite3
+# a C compiler: the flat program's SQP functions and the simulator's step are compiled at run time and cached
+# under /data/.cache/thrustshape (without one, CasADi's virtual machine evaluates them: same answers, slower)
+RUN apt-get update && apt-get install -y --no-install-recommends gcc libc6-dev && rm -rf /var/lib/apt/lists/*
 RUN useradd --system --uid 10001 --home-dir /data --shell /usr/sbin/nologin thrustshape \
     && mkdir -p /data && chown thrustshape:thrustshape /data
 COPY --from=build /opt/venv /opt/venv

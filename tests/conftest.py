@@ -1,5 +1,6 @@
 from __future__ import annotations
 
+import os
 from collections.abc import Iterator
 from typing import Any
 
@@ -7,6 +8,13 @@ import httpx
 import pytest
 
 from ocp.model.params import MotorParams, load_params
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """The suite's solves keep CasADi's virtual machine: a program solved 20 times would otherwise start a ~25 s
+    C build of its functions in the background (the tests of that path, ``tests/optimize/test_native_nlp.py``,
+    turn it on with a cache directory of their own)."""
+    os.environ.setdefault("THRUSTSHAPE_NLP_COMPILE", "0")
 
 
 @pytest.fixture(scope="session")

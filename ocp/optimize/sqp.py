@@ -38,7 +38,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from ocp.optimize import daqp
+from ocp.optimize import daqp, native_nlp
 
 MAX_ITER = 50  # SQP iterations before IPOPT takes over (the bench missions need 2 to 6)
 #: largest row violation, and largest entry of the Lagrangian's gradient over max(1, largest multiplier), at a
@@ -105,24 +105,30 @@ class _Functions:
     n_g: int
 
 
-def _functions(nlp: Mapping[str, ca.SX], cold: ca.Function | None) -> _Functions:
-    """The functions of ``nlp``, taken from the IPOPT solver ``cold`` built from it (no second symbolic Hessian,
-    most of the program's build) or derived here."""
+_NAMES = {"f": "nlp_f", "g": "nlp_g", "grad": "nlp_grad_f", "jac": "nlp_jac_g", "hess": "nlp_hess_l"}
+
+
+def _vm_functions(nlp: Mapping[str, ca.SX], cold: ca.Function | None) -> dict[str, ca.Function]:
+    """The functions of ``nlp`` (keys of :data:`_NAMES`), taken from the IPOPT solver ``cold`` built from it (no
+    second symbolic Hessian, most of the program's build) or derived here."""
     if cold is not None:
-        fns = {k: cold.get_function(k) for k in ("nlp_f", "nlp_g", "nlp_grad_f", "nlp_jac_g", "nlp_hess_l")}
-    else:
-        x, p, f, g = nlp["x"], nlp["p"], nlp["f"], nlp["g"]
-        lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", g.shape[0])
-        hess = ca.triu(ca.hessian(lam_f * f + ca.dot(lam_g, g), x)[0])
-        fns = {"nlp_f": ca.Function("f", [x, p], [f]), "nlp_g": ca.Function("g", [x, p], [g]),
-               "nlp_grad_f": ca.Function("grad_f", [x, p], [f, ca.gradient(f, x)]),
-               "nlp_jac_g": ca.Function("jac_g", [x, p], [g, ca.jacobian(g, x)]),
-               "nlp_hess_l": ca.Function("hess_l", [x, p, lam_f, lam_g], [hess])}
-    sp_j, sp_h = fns["nlp_jac_g"].sparsity_out(1), fns["nlp_hess_l"].sparsity_out(0)
+        return {k: cold.get_function(name) for k, name in _NAMES.items()}
+    x, p, f, g = nlp["x"], nlp["p"], nlp["f"], nlp["g"]
+    lam_f, lam_g = ca.SX.sym("lam_f"), ca.SX.sym("lam_g", g.shape[0])
+    hess = ca.triu(ca.hessian(lam_f * f + ca.dot(lam_g, g), x)[0])
+    return {"f": ca.Function("nlp_f", [x, p], [f]), "g": ca.Function("nlp_g", [x, p], [g]),
+            "grad": ca.Function("nlp_grad_f", [x, p], [f, ca.gradient(f, x)]),
+            "jac": ca.Function("nlp_jac_g", [x, p], [g, ca.jacobian(g, x)]),
+            "hess": ca.Function("nlp_hess_l", [x, p, lam_f, lam_g], [hess])}
+
+
+def _functions(fns: Mapping[str, ca.Function]) -> _Functions:
+    """The functions ``fns`` (keys of :data:`_NAMES`) buffered, with the dense positions of their nonzeros."""
+    sp_j, sp_h = fns["jac"].sparsity_out(1), fns["hess"].sparsity_out(0)
     rows, cols = sp_h.get_triplet()
     n = sp_h.size1()
-    return _Functions(f=_Buffered(fns["nlp_f"]), g=_Buffered(fns["nlp_g"]), grad=_Buffered(fns["nlp_grad_f"]),
-                      jac=_Buffered(fns["nlp_jac_g"]), hess=_Buffered(fns["nlp_hess_l"]), jac_index=_dense_index(sp_j),
+    return _Functions(f=_Buffered(fns["f"]), g=_Buffered(fns["g"]), grad=_Buffered(fns["grad"]),
+                      jac=_Buffered(fns["jac"]), hess=_Buffered(fns["hess"]), jac_index=_dense_index(sp_j),
                       hess_index=_dense_index(sp_h), hess_index_t=np.asarray(cols, int) * n + np.asarray(rows, int),
                       n_x=n, n_g=sp_j.size1())
 
@@ -201,9 +207,24 @@ class Solver:
                  max_iter: int = MAX_ITER) -> None:
         self.name, self.max_iter = name, max_iter
         self.callback = callback
-        self.fns = _functions(nlp, cold)
+        vm = _vm_functions(nlp, cold)
+        self.vm_fns = self.fns = _functions(vm)
+        #: the same functions compiled to C once the program is hot (:mod:`ocp.optimize.native_nlp`)
+        self.native = native_nlp.NativeNLP(vm)
+        self._native_fns: _Functions | None = None
+        self.allow_native = True  # False: the virtual machine only (benchmarks compare both)
         self._jac = np.zeros((self.fns.n_g, self.fns.n_x))
         self._stats: dict[str, Any] = {}
+
+    def use_native(self, wait: bool = False) -> bool:
+        """Switch to the compiled functions if their library is ready (``wait``: build it now); whether they are
+        in use."""
+        if self._native_fns is None:
+            fns = self.native.get(wait=True) if wait else self.native.poll()
+            if fns is not None:
+                self._native_fns = _functions(fns)
+        self.fns = self._native_fns or self.vm_fns
+        return self._native_fns is not None
 
     def stats(self) -> dict[str, Any]:
         """The last call's ``success``, ``iter_count``, ``return_status`` and the QP solver's share
@@ -224,6 +245,10 @@ class Solver:
         return H
 
     def __call__(self, **args: Any) -> dict[str, Any]:
+        if self.allow_native:
+            self.use_native()
+        else:
+            self.fns = self.vm_fns
         lbx, ubx = (np.asarray(args[k], float).ravel() for k in ("lbx", "ubx"))
         lbg, ubg = (np.asarray(args[k], float).ravel() for k in ("lbg", "ubg"))
         p = np.asarray(args["p"], float).ravel()
