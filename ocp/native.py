@@ -7,8 +7,9 @@ builds in flight (used by :mod:`ocp.simulate.compiled` and :mod:`ocp.optimize.na
   once. A sub-folder keeps at most :data:`MAX_LIBRARIES`; the oldest go first.
 * A library not on disk is built by the C compiler on the ``PATH`` (``$CC``, ``cc``, ``gcc`` or ``clang``) in a
   background thread (or at once when asked to wait), at the lowest CPU priority (``nice`` 19: it takes what the
-  solves leave). The file appears by an atomic rename, so a concurrent reader never sees half of it. A failed
-  build is remembered and never retried in the process.
+  solves leave). The file appears by an atomic rename, so a concurrent reader never sees half of it; a claim file
+  beside it keeps other processes from building the same library at once. A failed build is remembered and never
+  retried in the process.
 * The source is made in the build (by the callable the user passes): it is only paid when the library is missing.
 """
 
@@ -19,6 +20,7 @@ import shutil
 import subprocess
 import tempfile
 import threading
+import time
 from collections.abc import Callable
 from functools import cache
 from pathlib import Path
@@ -94,16 +96,44 @@ def _build(key: str, source: Callable[[], str], library: Path, flags: tuple[str,
                 ok = True
     except (OSError, subprocess.SubprocessError, RuntimeError):
         ok = False
+    _claim(library).unlink(missing_ok=True)
     with _LOCK:
         _THREADS.pop(key, None)
         if not ok:
             _FAILED.add(key)
 
 
+def _claim(library: Path) -> Path:
+    """The file that says a process is building ``library`` (so the other workers wait for it)."""
+    return library.with_suffix(".building")
+
+
+def _claimed_elsewhere(library: Path) -> bool:
+    """Whether another process claimed the build of ``library`` less than :data:`BUILD_TIMEOUT_S` ago; else claim
+    it (an older claim is a build that died)."""
+    claim = _claim(library)
+    try:
+        library.parent.mkdir(parents=True, exist_ok=True)
+        fd = os.open(claim, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
+    except FileExistsError:
+        try:
+            if time.time() - claim.stat().st_mtime < BUILD_TIMEOUT_S:
+                return True
+        except OSError:
+            return True
+        claim.touch()
+        return False
+    except OSError:
+        return False
+    os.close(fd)
+    return False
+
+
 def library(key: str, sub: str, source: Callable[[], str], flags: tuple[str, ...], wait: bool = False) -> Path | None:
     """The path of the library ``key`` in the sub-folder ``sub`` when it is on disk; else None after starting its
     build from ``source()`` with the compiler ``flags`` in the background (``wait``: build it now, or wait for the
-    build in flight). None too when its build failed in this process."""
+    build in flight), unless another process is building it (then it appears later). None too when its build
+    failed in this process."""
     path = cache_dir(sub) / f"{key}.so"
     with _LOCK:
         if key in _FAILED:
@@ -112,6 +142,8 @@ def library(key: str, sub: str, source: Callable[[], str], flags: tuple[str, ...
             return path
         thread = _THREADS.get(key)
         if thread is None:
+            if _claimed_elsewhere(path) and not wait:
+                return None
             thread = threading.Thread(target=_build, args=(key, source, path, flags), daemon=True, name=f"cc-{key}")
             _THREADS[key] = thread
             thread.start()

@@ -149,3 +149,17 @@ def test_the_flat_programs_compiled_functions_answer_as_the_virtual_machine(cach
     assert fast.method == vm.method == "sqp" and fast.success and vm.success
     assert fast.iterations == vm.iterations
     np.testing.assert_allclose(fast.x, vm.x, rtol=1e-9, atol=1e-12)
+
+
+def test_a_build_claimed_by_another_process_is_left_to_it(cache: Path) -> None:
+    """A fresh claim file (another worker building the same library) starts no build here; a claim older than the
+    build timeout is a build that died, and is taken over."""
+    cache.mkdir(parents=True)
+    (cache / "libx.building").touch()
+    assert native.library("libx", "nlp", lambda: "int x;", native_nlp.FLAGS) is None
+    assert "libx" not in native._THREADS and not (cache / "libx.so").exists()
+    old = 1e9
+    os.utime(cache / "libx.building", (old, old))
+    native.library("libx", "nlp", lambda: "int x;", native_nlp.FLAGS)
+    assert native.library("libx", "nlp", lambda: "int x;", native_nlp.FLAGS, wait=True) == cache / "libx.so"
+    assert not (cache / "libx.building").exists()
