@@ -5,22 +5,25 @@ builds in flight (used by :mod:`ocp.simulate.compiled` and :mod:`ocp.optimize.na
   version) and kept in a sub-folder of the cache directory (``$THRUSTSHAPE_CACHE_DIR``, else
   ``$XDG_CACHE_HOME/thrustshape``, else ``~/.cache/thrustshape``), so another process or a later run loads it at
   once. A sub-folder keeps at most :data:`MAX_LIBRARIES`; the oldest go first.
-* A library not on disk is built by the C compiler on the ``PATH`` (``$CC``, ``cc``, ``gcc`` or ``clang``) in a
-  background thread (or at once when asked to wait), at the lowest CPU priority (``nice`` 19: it takes what the
-  solves leave). The file appears by an atomic rename, so a concurrent reader never sees half of it; a claim file
-  beside it keeps other processes from building the same library at once. A failed build is remembered and never
-  retried in the process.
+* A library not on disk is built by the C compiler on the ``PATH`` (``$CC``, ``cc``, ``gcc`` or ``clang``),
+  started from a background thread (or at once when asked to wait), at the lowest CPU priority (``nice`` 19: it
+  takes what the solves leave), in a process of its own that holds the sub-folder's lock: one build at a time on
+  the machine (a compiler takes 0.3-0.7 GB for a flat program's source), none started twice, and one started by
+  a worker that is then stopped still lands its library (or gives up after :data:`BUILD_TIMEOUT_S`). The file
+  appears by an atomic rename, so a concurrent reader never sees half of it. A failed build is remembered and
+  never retried in the process; one that found the lock taken is tried again by a later call.
 * The source is made in the build (by the callable the user passes): it is only paid when the library is missing.
 """
 
 from __future__ import annotations
 
+import fcntl
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 import threading
-import time
 from collections.abc import Callable
 from functools import cache
 from pathlib import Path
@@ -77,63 +80,85 @@ def _prune(folder: Path, keep: int) -> None:
         pass
 
 
-def _build(key: str, source: Callable[[], str], library: Path, flags: tuple[str, ...]) -> None:
-    """Compile ``source()`` into ``library`` (atomic rename); a failure is remembered under ``key``."""
-    cc = compiler()
-    ok = False
+#: the build, a process of its own in a session of its own: it holds the sub-folder's lock (one build at a time
+#: on the machine), compiles into a temporary folder and renames the library into place, so it ends cleanly even
+#: when the worker that started it is gone; exit 75: another build holds the lock (try again later)
+_CHILD = r"""
+import fcntl, os, shutil, signal, subprocess, sys
+tmp, library, lock, timeout, wait = sys.argv[1:6]
+with open(lock, "a") as fh:
     try:
-        library.parent.mkdir(parents=True, exist_ok=True)
-        _prune(library.parent, MAX_LIBRARIES - 1)
-        with tempfile.TemporaryDirectory(dir=library.parent) as tmp:
-            c_file = Path(tmp) / f"{key}.c"
-            c_file.write_text(source(), encoding="utf-8")
-            out = Path(tmp) / library.name
-            nice = shutil.which("nice")
-            run = subprocess.run([*([nice, "-n", "19"] if nice else []), str(cc), *flags, str(c_file), "-o", str(out),
-                                  "-lm"], capture_output=True, timeout=BUILD_TIMEOUT_S, check=False)
-            if run.returncode == 0:
-                os.replace(out, library)
-                ok = True
-    except (OSError, subprocess.SubprocessError, RuntimeError):
-        ok = False
-    _claim(library).unlink(missing_ok=True)
-    with _LOCK:
-        _THREADS.pop(key, None)
-        if not ok:
-            _FAILED.add(key)
-
-
-def _claim(library: Path) -> Path:
-    """The file that says a process is building ``library`` (so the other workers wait for it)."""
-    return library.with_suffix(".building")
-
-
-def _claimed_elsewhere(library: Path) -> bool:
-    """Whether another process claimed the build of ``library`` less than :data:`BUILD_TIMEOUT_S` ago; else claim
-    it (an older claim is a build that died)."""
-    claim = _claim(library)
+        fcntl.flock(fh, fcntl.LOCK_EX | (0 if wait == "1" else fcntl.LOCK_NB))
+    except BlockingIOError:
+        shutil.rmtree(tmp, ignore_errors=True)
+        sys.exit(75)
     try:
-        library.parent.mkdir(parents=True, exist_ok=True)
-        fd = os.open(claim, os.O_CREAT | os.O_EXCL | os.O_WRONLY)
-    except FileExistsError:
-        try:
-            if time.time() - claim.stat().st_mtime < BUILD_TIMEOUT_S:
-                return True
-        except OSError:
-            return True
-        claim.touch()
-        return False
+        if not os.path.exists(library):
+            out = os.path.join(tmp, "out.so")
+            try:
+                run = subprocess.run(sys.argv[6:] + ["-o", out], timeout=float(timeout), capture_output=True)
+            except subprocess.TimeoutExpired:
+                shutil.rmtree(tmp, ignore_errors=True)
+                os.killpg(0, signal.SIGKILL)
+            if run.returncode:
+                sys.stderr.buffer.write(run.stderr[-4000:])
+                sys.exit(1)
+            os.replace(out, library)
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+"""
+BUSY = 75
+
+
+def _lock_file(folder: Path) -> Path:
+    return folder / "builds.lock"
+
+
+def _busy(folder: Path) -> bool:
+    """Whether a build holds the sub-folder's lock now (checked before a source is made for nothing)."""
+    try:
+        with open(_lock_file(folder), "a") as fh:
+            fcntl.flock(fh, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            fcntl.flock(fh, fcntl.LOCK_UN)
+    except BlockingIOError:
+        return True
     except OSError:
         return False
-    os.close(fd)
     return False
+
+
+def _build(key: str, source: Callable[[], str], library: Path, flags: tuple[str, ...], wait: bool) -> None:
+    """Compile ``source()`` into ``library`` in a build process (:data:`_CHILD`); a failure is remembered under
+    ``key``, a busy lock is not (a later call tries again)."""
+    ok = busy = False
+    try:
+        folder = library.parent
+        folder.mkdir(parents=True, exist_ok=True)
+        busy = not wait and _busy(folder)
+        if not busy:
+            _prune(folder, MAX_LIBRARIES - 1)
+            tmp = Path(tempfile.mkdtemp(dir=folder))
+            c_file = tmp / f"{key}.c"
+            c_file.write_text(source(), encoding="utf-8")
+            nice = shutil.which("nice")
+            compile_ = [*([nice, "-n", "19"] if nice else []), str(compiler()), *flags, str(c_file), "-lm"]
+            run = subprocess.run([sys.executable, "-c", _CHILD, str(tmp), str(library), str(_lock_file(folder)),
+                                  str(BUILD_TIMEOUT_S), "1" if wait else "0", *compile_], capture_output=True,
+                                 start_new_session=True, check=False)
+            busy, ok = run.returncode == BUSY, run.returncode == 0 and library.exists()
+    except (OSError, subprocess.SubprocessError, RuntimeError):
+        ok = False
+    with _LOCK:
+        _THREADS.pop(key, None)
+        if not ok and not busy:
+            _FAILED.add(key)
 
 
 def library(key: str, sub: str, source: Callable[[], str], flags: tuple[str, ...], wait: bool = False) -> Path | None:
     """The path of the library ``key`` in the sub-folder ``sub`` when it is on disk; else None after starting its
     build from ``source()`` with the compiler ``flags`` in the background (``wait``: build it now, or wait for the
-    build in flight), unless another process is building it (then it appears later). None too when its build
-    failed in this process."""
+    build in flight). None too when its build failed in this process; a build that found another one running is
+    started again by a later call."""
     path = cache_dir(sub) / f"{key}.so"
     with _LOCK:
         if key in _FAILED:
@@ -142,9 +167,8 @@ def library(key: str, sub: str, source: Callable[[], str], flags: tuple[str, ...
             return path
         thread = _THREADS.get(key)
         if thread is None:
-            if _claimed_elsewhere(path) and not wait:
-                return None
-            thread = threading.Thread(target=_build, args=(key, source, path, flags), daemon=True, name=f"cc-{key}")
+            thread = threading.Thread(target=_build, args=(key, source, path, flags, wait), daemon=True,
+                                      name=f"cc-{key}")
             _THREADS[key] = thread
             thread.start()
     if wait:
