@@ -185,6 +185,7 @@ class Solved:
         solve_time_s: wall time of the run [s]
         warm, warm_build_s: started from the program's last solution; time [s] spent building the warm solver
         method: the NLP solver of the answer: ``ipopt``, or ``sqp`` (the flat program's, :mod:`ocp.optimize.sqp`)
+        compiled: the SQP evaluated its functions compiled to C (:mod:`ocp.optimize.native_nlp`)
     """
 
     x: np.ndarray
@@ -197,6 +198,7 @@ class Solved:
     warm: bool = False
     warm_build_s: float = 0.0
     method: str = "ipopt"
+    compiled: bool = False
 
 
 

@@ -377,7 +377,8 @@ def solve(prog: FlatProgram, p: np.ndarray, lbx: np.ndarray, ubx: np.ndarray, x0
     return col.Solved(x=np.asarray(last.sol["x"]).ravel(), status=last.status, success=last.success,
                       iterations=sum(r.iterations for r in runs), objective=float(last.sol["f"]) / float(p[scale][0]),
                       constraint_violation=viol, solve_time_s=sum(r.seconds for r in runs), warm=start is not None,
-                      method="sqp" if last.solver is prog.sqp_solver else "ipopt")
+                      method="sqp" if last.solver is prog.sqp_solver else "ipopt",
+                      compiled=last.solver is prog.sqp_solver and prog.sqp_solver.compiled)
 
 
 def _with_solvers(prog: FlatProgram) -> FlatProgram:

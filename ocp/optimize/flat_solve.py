@@ -221,7 +221,7 @@ def solve_flat(problem: Problem, context: SolveContext = NO_CONTEXT,
 
 def _add_run(info: SolverStats, run: flat.col.Solved, rounds: int, backoff: float) -> None:
     """Fold one solve into the answer's report (times and iterations add up over the rounds)."""
-    info.status, info.method = Status.parse(run.status), run.method
+    info.status, info.method, info.compiled = Status.parse(run.status), run.method, run.compiled
     info.iterations += run.iterations
     info.solve_time_s += run.solve_time_s
     info.objective, info.constraint_violation = run.objective, run.constraint_violation

@@ -113,6 +113,8 @@ class SolverStats(Record):
                                                                  "words)"))
     method: str = field(default="ipopt", metadata=info(
         "", "NLP solver of the last solve: ipopt, or sqp (the flat program's first try: its own SQP, QPs by DAQP)"))
+    compiled: bool = field(default=False, metadata=info(
+        "", "the SQP evaluated its functions compiled to C (a program solved often; ocp.optimize.native_nlp)"))
     program: SolverProgram = field(default=SolverProgram.RADAU, metadata=info(
         "", "the program that produced the answer: flat (B-spline in the speed) or radau (collocation)"))
     flat_attempt_s: float = field(default=0.0, metadata=info(

@@ -226,6 +226,11 @@ class Solver:
         self.fns = self._native_fns or self.vm_fns
         return self._native_fns is not None
 
+    @property
+    def compiled(self) -> bool:
+        """Whether the last call evaluated the compiled functions."""
+        return self.fns is not self.vm_fns
+
     def stats(self) -> dict[str, Any]:
         """The last call's ``success``, ``iter_count``, ``return_status`` and the QP solver's share
         (``qp_iterations``, ``t_wall_qp`` [s])."""

@@ -150,6 +150,7 @@ def test_the_flat_programs_compiled_functions_answer_as_the_virtual_machine(cach
     fast = flat.solve(prog, data.p, data.lbx, data.ubx, data.x0, bounds)
     assert fast.method == vm.method == "sqp" and fast.success and vm.success
     assert fast.iterations == vm.iterations
+    assert fast.compiled and not vm.compiled  # what the answer's solver.compiled reports
     np.testing.assert_allclose(fast.x, vm.x, rtol=1e-9, atol=1e-12)
 
 
