@@ -10,6 +10,8 @@ import fcntl
 import json
 import math
 import os
+import subprocess
+import sys
 import time
 from pathlib import Path
 from types import SimpleNamespace
@@ -169,3 +171,30 @@ def test_one_build_at_a_time_and_a_busy_one_is_tried_again(cache: Path) -> None:
         assert not (cache / "libx.so").exists()
     assert native.library("libx", "nlp", lambda: "int x;", native_nlp.FLAGS, wait=True) == cache / "libx.so"
     assert [p.name for p in cache.iterdir() if p.is_dir()] == []  # no temporary folder left
+
+
+def test_a_build_outlives_the_worker_that_started_it(cache: Path) -> None:
+    """A worker that starts a build and then dies (a pool shut down, a deadline kill) leaves no orphaned compiler
+    and no temporary folder: the build process finishes, lands the library and cleans up."""
+    script = (
+        "import os, time\n"
+        "from ocp import native\n"
+        "body = '\\n'.join(f'  x = x * 1.0000001 + {i}.5 / (x + {i});' for i in range(4000))  # ~3 s of -O1\n"
+        "native.library('slow', 'nlp', lambda: 'double f(double x) {\\n' + body + '\\n  return x;\\n}', "
+        f"{native_nlp.FLAGS!r})\n"
+        "folder = os.path.join(os.environ['THRUSTSHAPE_CACHE_DIR'], 'nlp')\n"
+        "for _ in range(200):  # until the build process is started\n"
+        "    if os.path.isdir(folder) and [p for p in os.scandir(folder) if p.is_dir()]:\n"
+        "        break\n"
+        "    time.sleep(0.05)\n"
+        "time.sleep(0.3)\n"
+        "os._exit(0)\n")
+    subprocess.run([sys.executable, "-c", script], cwd=ROOT, check=True, timeout=60,
+                   env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert not (cache / "slow.so").exists()  # the worker is gone before its build ended
+    deadline = time.monotonic() + 120.0
+    while time.monotonic() < deadline and not (cache / "slow.so").exists():
+        time.sleep(0.2)
+    assert (cache / "slow.so").exists()
+    time.sleep(0.5)
+    assert [p.name for p in cache.iterdir() if p.is_dir()] == []
