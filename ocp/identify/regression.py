@@ -213,9 +213,12 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         cands = sorted({int(np.argmax(share)) + 1, int(np.argmax(slow)) + 1})
 
     # eq. dc_mechanical judged by the speed error it causes (speed_view), the others as they are; the
-    # edge rows are zeroed on both sides first (still an equation), so their transients do not spread
+    # edge rows are zeroed on both sides first (still an equation), so their transients do not spread, and the
+    # rows next to them tapered in (edge_taper: the low-passed J w' of a log cut off there holds the speed of one row)
+    taper = edge_taper(edge, tau / s.dt if s.dt > 0 else 0.0)
+
     def view(y: np.ndarray) -> np.ndarray:
-        return speed_view(np.where(edge, 0.0, y), s.dt, tau)
+        return speed_view(np.where(edge, 0.0, y) * taper, s.dt, tau)
 
     for y in (t, *(a for _, a in cols)):
         y[0] = view(y[0])
@@ -252,6 +255,25 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
                   independence, g_blocks=gb if gb is not None else np.zeros((0, 3, q, q)),
                   h_blocks=hb if hb is not None else np.zeros((0, 3, q)),
                   c_blocks=cb if cb is not None else np.zeros((0, 3)))
+
+
+def edge_taper(edge: np.ndarray, rows: float) -> np.ndarray:
+    """Row weights (M,) for the torque rows before :func:`speed_view`: 0 on the ``edge`` rows (M,), rising as a
+    raised cosine over ``rows`` (the rotor time constant in rows; at most a sixth of the log) on either side of
+    the rows between, 1 beyond. The view of a log cut off at a row weights ``J w'`` as ``J (w - w_low) / tau``,
+    the speed of that one row against its past: a coarse encoder's speed over one row (61 rad/s steps at 10 kHz
+    and 1024 counts) then ran through a rotor time constant's worth of rows as a torque error of ~100 noise units.
+    Tapered, the cut weights the speed over ``rows`` rows, its noise averaged as inside the log; every equation
+    row is scaled alike (still an equation)."""
+    inside = np.flatnonzero(~edge)
+    w = np.where(edge, 0.0, 1.0)
+    k = min(math.ceil(rows), inside.size // 6) if inside.size else 0
+    if k < 2:
+        return w
+    ramp = 0.5 * (1.0 - np.cos(np.pi * (np.arange(k) + 1.0) / (k + 1.0)))
+    w[inside[:k]] = ramp
+    w[inside[-k:]] = ramp[::-1]
+    return w
 
 
 def _blocks(test: np.ndarray, length: int) -> list[np.ndarray]:

@@ -13,7 +13,8 @@ weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a mo
 Forward selection adopts, while some equation's held-out RMS is above ``noise_floor``, the best-scoring item
 whose win passes its test (the tests differ by item, so the best-scoring one may fail where the next passes):
 the score falls beyond sampling noise (the pooled score's scatter, or one equation's
-own: :func:`_beyond_scatter`) -- for an effect also by at least ``min_improvement`` (its materiality); a
+own: :func:`_beyond_scatter`) -- for an effect also by at least ``min_improvement`` (its materiality, on the
+score with every equation the effect does not enter counted at most at its noise level: :func:`_material`); a
 constant's materiality is the tolerance itself (calibration already takes the first ``tol`` of its error, and
 beyond it the user wants the name), so a constant freed beyond it needs only to win beyond sampling noise --
 or, the models being nested and scored on the same rows, in a paired comparison over held-out blocks
@@ -231,7 +232,7 @@ def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], cur
     if not physical(f):
         return None
     for before in (current, single[a], single[b]):
-        if f.score > (1 - min_improvement) * before.score or not _beyond_scatter(design, before, f):
+        if not _material(design, before, f, (a, b), min_improvement) or not _beyond_scatter(design, before, f):
             return None
     return [Step(current, [(a, single[a]), *[e for e in tried if e[0] != a]], a), Step(single[a], [(b, f)], b)]
 
@@ -240,10 +241,32 @@ def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement
     """Whether adding ``item`` (fitted ``f``) to ``current`` wins on held-out data: beyond sampling noise
     (:func:`_beyond_scatter`), and for an effect by ``min_improvement`` too (a constant's materiality is the
     tolerance, module doc)."""
-    material = item in CONSTANTS or f.score <= (1 - min_improvement) * current.score
+    material = item in CONSTANTS or _material(design, current, f, (item,), min_improvement)
     if not material:
         return False
     return _beyond_scatter(design, current, f) or (item in CONSTANTS and _blocks_agree(design, current, item, f))
+
+
+def _material(design: Design, before: Fitted, after: Fitted, items: Sequence[str], min_improvement: float) -> bool:
+    """Whether ``after`` (``before`` plus the effects ``items``) cuts the held-out score by ``min_improvement``
+    (an effect's materiality), the score taken with every equation that no column of ``items`` enters counted at
+    most at its noise level (:func:`_capped_score`): an error there (a command timing the alignment left in the
+    armature equation, say) is one these effects can neither explain nor be blamed for, and averaged into the
+    score it would dilute the fall they bring where they act (a torque ripple halving the torque equation's
+    error beside an armature equation at 18 noise units moved the pooled score by 0.5 %)."""
+    js = [j for item in items for j in design.index(item)]
+    acts = np.any(design.g_train[:, js, js] > 0, axis=1)  # (3,): the equations their columns enter
+    return _capped_score(design, after, acts) <= (1.0 - min_improvement) * _capped_score(design, before, acts)
+
+
+def _capped_score(design: Design, f: Fitted, acts: np.ndarray) -> float:
+    """The held-out score of ``f`` (as :attr:`Fitted.score`) with the equations outside ``acts`` (3,) counted at
+    most at the noise level (1 in noise units)."""
+    live = design.n_test > 0
+    if not live.any():
+        return math.inf
+    per_eq = np.where(acts, f.per_eq, np.minimum(f.per_eq, 1.0))
+    return float(np.sqrt(np.mean(per_eq[live] ** 2)))
 
 
 def _blocks_agree(design: Design, current: Fitted, item: str, f: Fitted) -> bool:
