@@ -78,6 +78,16 @@ def angle_spectrum(resid: np.ndarray, theta: np.ndarray, triangle: bool, train: 
     return amp, share
 
 
+def ripple_independence(theta: np.ndarray, periods: int, floor: float, cap: float) -> float:
+    """Fraction of independent rows (0..1) of a ripple of ``periods`` per revolution of the angle ``theta``
+    (M + 1,) [rad] against a residual that decorrelates over ``1 / floor`` rows: a row's ripple moves by
+    ``n |dtheta| / (2 pi)`` periods and decorrelates over half a period, so a chance correlation with a slower
+    residual averages over that many independent pieces per row, at most ``cap`` (the rows' own low-pass),
+    at least ``floor`` (where the rotor stands still, the ripple is as slow as the residual). Mean over rows."""
+    step = np.abs(np.diff(theta)) * periods / math.pi
+    return float(np.mean(np.clip(step, floor, max(cap, floor)))) if step.size else floor
+
+
 def angle_limits(theta: np.ndarray | None, periods: int, logged: bool) -> dict[str, object]:
     """What a log whose rotor angle is ``theta`` (N,) [rad] can show of a ripple of ``periods`` per
     revolution: the fraction of rows on which it

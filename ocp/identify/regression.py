@@ -43,7 +43,7 @@ import numpy as np
 from scipy import signal
 
 from ocp.identify.align import cutoff_hz
-from ocp.identify.angle import angle_limits, angle_spectrum, instant_spectrum
+from ocp.identify.angle import angle_limits, angle_spectrum, instant_spectrum, ripple_independence
 from ocp.identify.columns import (
     Column,
     Signals,
@@ -245,6 +245,9 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
     n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
     independence = _independence(p, log, s, tau)
+    if angle:  # the ripple's own independence against the torque residual (select: its scatter test)
+        angle["independence"] = ripple_independence(theta, periods, float(independence[0]),
+                                                    1.0 if raw is not s else float(independence[1]))
     blocks = _blocks(test, math.ceil(BLOCK_INDEPENDENT / float(independence.min())))
     gb = np.stack([np.einsum("enq,enr->eqr", a_all[:, b], a_all[:, b]) for b in blocks]) if blocks else None
     hb = np.stack([np.einsum("enq,en->eq", a_all[:, b], tw[:, b]) for b in blocks]) if blocks else None

@@ -244,7 +244,17 @@ def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement
     material = item in CONSTANTS or _material(design, current, f, (item,), min_improvement)
     if not material:
         return False
-    return _beyond_scatter(design, current, f) or (item in CONSTANTS and _blocks_agree(design, current, item, f))
+    return _beyond_scatter(design, current, f) or (item in CONSTANTS and _blocks_agree(design, current, item, f)) \
+        or (item == "cogging" and _ripple_beyond(design, current, f))
+
+
+def _ripple_beyond(design: Design, before: Fitted, after: Fitted) -> bool:
+    """Whether an angle ripple's fall of the torque equation's held-out RMS is beyond two standard errors over
+    the rows independent for the ripple (``design.angle["independence"]``, :func:`.angle.ripple_independence`):
+    a fast ripple decorrelates from a slow residual within a period, not within the rotor time constant."""
+    frac = float(design.angle.get("independence", 0.0))  # type: ignore[arg-type]
+    n = max(float(design.n_test[0]) * frac, 1.0)
+    return before.per_eq[0] > 0 and 1.0 - after.per_eq[0] / before.per_eq[0] >= math.sqrt(2.0 / n)
 
 
 def _material(design: Design, before: Fitted, after: Fitted, items: Sequence[str], min_improvement: float) -> bool:
