@@ -6,16 +6,25 @@ angle is sampled too. Between two samples the angle moves (nearly) linearly, so 
 row is known in closed form (:func:`interval_ripple`): on slow rows it is the ripple itself, on fast rows
 it averages out (a sinc), never aliasing. The period count (1..64) is the one whose columns explain most of
 the torque residual on held-out rows (:func:`angle_spectrum`: a matched filter against the angle);
-:func:`angle_limits` says how much of the log can show a ripple of that count, and when it cannot.
+:func:`angle_limits` says how much of the log can show a ripple of that count, and when it cannot. An angle
+integrated from a speed column drifts as a random walk: there the ripple's phase may also be tracked between
+knots (:func:`drift_windows`, :func:`track_phase`), its amplitude one over the log.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 
 MAX_PERIODS = 64
+#: an angle integrated from a speed column drifts as a random walk; its ripple's phase is taken as known within
+#: this variance [rad^2] between two knots of :func:`drift_windows` (a coherence of exp(-0.25) = 0.78 there)
+DRIFT_VAR = 0.5
+#: ... knots never closer than this [s] (the held-out segments must lie between knots fitted on training rows)
+DRIFT_SPAN = 1.0
+MAX_PIECES = 12
 
 
 def _means(ea: np.ndarray, ed: np.ndarray, d: np.ndarray, triangle: bool) -> np.ndarray:
@@ -43,6 +52,28 @@ def interval_ripple(theta: np.ndarray, n: int, triangle: bool) -> tuple[np.ndarr
     return z.imag, z.real
 
 
+def speed_noise(omega: np.ndarray) -> float:
+    """Per-sample white noise [rad/s] of a speed column ``omega`` (N,) from its second differences (a smooth
+    speed's curvature left out by the median): ``sd(d2 w) = sqrt(6) sigma``."""
+    d2 = np.diff(omega, 2)
+    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0)) if d2.size else 0.0
+
+
+def drift_windows(t: np.ndarray, periods: int, sigma_w: float, dt: float) -> np.ndarray:
+    """Hat functions (M, K) over the row times ``t`` (M,) [s] for a ripple whose phase drifts: the angle integrated
+    from a speed with white noise ``sigma_w`` [rad/s] per sample of ``dt`` [s] wanders as a random walk, the
+    ripple's phase by ``n^2 sigma_w^2 dt`` [rad^2/s]; knots are spaced so that it wanders by :data:`DRIFT_VAR`
+    between them (at least :data:`DRIFT_SPAN` apart, at most :data:`MAX_PIECES` pieces), the ripple's complex
+    amplitude linear between knots. K = 1 (ones: one phase) where the whole log is within that variance."""
+    span = float(t[-1] - t[0]) if t.size > 1 else 0.0
+    rate = periods * periods * sigma_w * sigma_w * dt
+    pieces = min(MAX_PIECES, math.ceil(rate * span / DRIFT_VAR), int(span / DRIFT_SPAN))
+    if rate * span <= DRIFT_VAR or pieces < 1:
+        return np.ones((t.size, 1))
+    knots = np.linspace(t[0], t[-1], pieces + 1)
+    return np.clip(1.0 - np.abs(t[:, None] - knots[None, :]) / (knots[1] - knots[0]), 0.0, None)
+
+
 def instant_spectrum(resid: np.ndarray, theta: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """Amplitude [N m] of ``resid`` (N,) at 1..64 periods per revolution of ``theta`` (N,) on ``rows`` (the
     angle at the sample instants: what a low-passed torque residual holds of a slow ripple)."""
@@ -52,15 +83,16 @@ def instant_spectrum(resid: np.ndarray, theta: np.ndarray, rows: np.ndarray) -> 
     return np.asarray(2.0 * np.abs(ph @ r) / max(r.size, 1), float)
 
 
-def angle_spectrum(resid: np.ndarray, theta: np.ndarray, triangle: bool, train: np.ndarray,
-                   test: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def angle_spectrum(resid: np.ndarray, theta: np.ndarray, triangle: bool, train: np.ndarray, test: np.ndarray,
+                   windows: Callable[[int], np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """A torque ripple at 1..64 periods per revolution fitted to the torque residual ``resid`` (M,): per
     period count ``n``, the least-squares fit on the ``train`` rows by the row means of ``sin/cos(n theta)``
     (:func:`interval_ripple`; ``theta`` (M + 1,) [rad], ``triangle`` as there). The residual's spectrum
     against the rotor angle, as a matched filter: a ripple faster than the sampling averages out of its
     columns instead of aliasing. Returns (64,) each: the amplitude [N m] and the fraction of the residual's
     square sum it explains on the ``test`` rows (a ripple locked to the angle holds there, a slow residual
-    that happens to correlate with the angle does not)."""
+    that happens to correlate with the angle does not). ``windows(n)`` (M, K): hat functions over which a
+    drifting integrated angle's ripple phase is tracked (:func:`drift_windows`, :func:`track_phase`)."""
     amp, share = np.zeros(MAX_PERIODS), np.zeros(MAX_PERIODS)
     r, q = resid[train], resid[test]
     total = float(q @ q) or 1.0
@@ -70,12 +102,32 @@ def angle_spectrum(resid: np.ndarray, theta: np.ndarray, triangle: bool, train: 
     for n in range(1, MAX_PERIODS + 1):
         ea, ed = ea * e1a, ed * e1d  # exp(i n a), exp(i n d) by recurrence
         z = _means(ea, ed, n * step, triangle)
-        a = np.stack([z.imag[train], z.real[train]])  # (2, rows): sin, cos
-        g = a @ a.T + 1e-300 * np.eye(2)
-        x = np.linalg.lstsq(g, a @ r, rcond=1e-12)[0]
-        e = q - x[0] * z.imag[test] - x[1] * z.real[test]
-        amp[n - 1], share[n - 1] = math.hypot(*x), 1.0 - float(e @ e) / total
+        h = windows(n) if windows is not None else np.ones((z.size, 1))
+        # a drifting angle: the ripple's phase also tracked knot by knot (track_phase); the better held out
+        for v in (z, z * track_phase(z, h, resid, train)) if h.shape[1] > 1 else (z,):
+            a = np.stack([v.imag[train], v.real[train]])  # (2, rows): sin, cos
+            g = a @ a.T + 1e-300 * np.eye(2)
+            x = np.linalg.lstsq(g, a @ r, rcond=1e-12)[0]
+            e = q - x[0] * v.imag[test] - x[1] * v.real[test]
+            if v is z or 1.0 - float(e @ e) / total > share[n - 1]:
+                amp[n - 1], share[n - 1] = math.hypot(*x), 1.0 - float(e @ e) / total
     return amp, share
+
+
+def track_phase(z: np.ndarray, h: np.ndarray, resid: np.ndarray, train: np.ndarray,
+                view: Callable[[np.ndarray], np.ndarray] | None = None) -> np.ndarray:
+    """Unit phasors (M,) that turn a ripple ``z`` (M,) (complex: cos + i sin of its row means) to follow a
+    drifting angle: its complex amplitude fitted to ``resid`` (M,) on the ``train`` rows as K hat functions ``h``
+    (M, K) (:func:`drift_windows`; columns through ``view`` as the residual), interpolated between knots and
+    normalised. The ripple ``z w / |w|`` then has ONE amplitude over the log (a ripple's size does not drift,
+    its phase does): a window fitted to noise turns the phase, it cannot add amplitude; knots are fitted on
+    training rows only, so the held-out rows between them judge the tracking."""
+    k = h.shape[1]
+    cols = [*(z.imag * h[:, j] for j in range(k)), *(z.real * h[:, j] for j in range(k))]
+    a = np.column_stack([view(c) if view is not None else c for c in cols])
+    x = np.linalg.lstsq(a[train], resid[train], rcond=None)[0]
+    w = h @ (x[k:] - 1j * x[:k])  # Re[w z] = c Re z + s Im z, per knot
+    return np.asarray(w / np.maximum(np.abs(w), 1e-300))
 
 
 def ripple_independence(theta: np.ndarray, periods: int, floor: float, cap: float) -> float:

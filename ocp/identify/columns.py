@@ -7,12 +7,13 @@ model's residuals (:func:`targets`) and what each candidate leaves in them (:fun
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
 from ocp.identify.align import cutoff_hz, smooth
-from ocp.identify.angle import interval_ripple
+from ocp.identify.angle import drift_windows, interval_ripple, speed_noise, track_phase
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE, ThrustLag, make_effect
 from ocp.model.params import MotorParams
@@ -138,8 +139,31 @@ def _grid(lo: float, hi: float) -> np.ndarray:
     return np.geomspace(lo, hi, GRID)
 
 
-def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int) -> list[tuple[Column, np.ndarray]]:
-    """Columns of one effect (one per shape value for shaped effects)."""
+def ripple_windows(log: Log, s: Signals, periods: int) -> np.ndarray:
+    """(M, K) hat functions over the rows ``s`` for a ripple of ``periods``/rev (:func:`.angle.drift_windows`):
+    where the angle is integrated from the log's speed column (no angle logged), from that column's noise; else
+    (M, 1) ones."""
+    if log.theta is not None or s.dt == 0:
+        return np.ones((s.t.size, 1))
+    return drift_windows(s.t, periods, speed_noise(log.omega), s.dt)
+
+
+def ripple_phase(p: MotorParams, s: Signals, log: Log, periods: int, resid: np.ndarray, train: np.ndarray,
+                 view: Callable[[np.ndarray], np.ndarray]) -> np.ndarray | None:
+    """Unit phasors (M,) tracking a ripple of ``periods``/rev along an angle integrated from the speed column
+    (:func:`.angle.track_phase` on the torque residual ``resid`` (M,), columns seen through ``view``), or None
+    where the angle is logged or its drift stays within one phase (:func:`ripple_windows`)."""
+    h = ripple_windows(log, s, periods)
+    if h.shape[1] < 2:
+        return None
+    sin, cos = (a[0] for _, a in effect_columns("cogging", p, s, log, periods))
+    return track_phase(cos + 1j * sin, h, resid, train, view)
+
+
+def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int,
+                   phase: np.ndarray | None = None) -> list[tuple[Column, np.ndarray]]:
+    """Columns of one effect (one per shape value for shaped effects); cogging's turned by ``phase`` (M,) unit
+    phasors where given (:func:`ripple_phase`)."""
     w_peak = float(np.max(np.abs(s.w))) or 1.0
     v_peak = float(np.max(np.abs(s.v))) or 1.0
     if name == "stribeck":
@@ -172,6 +196,9 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
         if not s.triangle:  # low-passed rows (no logged angle): the ripple low-passed like them
             fc = cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
             means = [smooth(m, log.dt, fc) for m in means]
+        if phase is not None:  # a drifting integrated angle: the ripple's phase tracked (ripple_phase)
+            turned = (means[1] + 1j * means[0]) * phase
+            means = [turned.imag, turned.real]
         return [(Column(name, k, float(periods)), np.vstack([m, z, z]))
                 for k, m in zip(("tau_sin", "tau_cos"), means, strict=True)]
     key = CATALOGUE[name].fitted[0]

@@ -51,6 +51,8 @@ from ocp.identify.columns import (
     effect_columns,
     nuisance_columns,
     raw_signals,
+    ripple_phase,
+    ripple_windows,
     signals,
     targets,
 )
@@ -208,7 +210,8 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     if "cogging" in effects and s.theta is not None and raw.theta is not None and log.kind is LogKind.TIME_SERIES:
         theta = np.append(raw.theta, raw.theta[-1] + raw.w1[-1] * raw.dt)
         spectrum, share = angle_spectrum(_rich_residual(t[0], [cols[j][1][0] for j in keep], train), theta,
-                                         raw.triangle, train, test)  # the raw rows: a fast ripple kept
+                                         raw.triangle, train, test,  # the raw rows: a fast ripple kept
+                                         functools.partial(ripple_windows, log, raw))
         slow = instant_spectrum(_rich_residual(smooth_t, [cols[j][1][0] for j in keep], train), s.theta, train)
         cands = sorted({int(np.argmax(share)) + 1, int(np.argmax(slow)) + 1})
 
@@ -334,12 +337,17 @@ def _effect_columns_on(name: str, p: MotorParams, log: Log, s: Signals) -> list[
 def _pick_periods(cands: list[int], p: MotorParams, raw: Signals, log: Log, target: np.ndarray,
                   rich: list[np.ndarray], train: np.ndarray, test: np.ndarray,
                   view: Callable[[np.ndarray], np.ndarray]) -> tuple[int, list[tuple[Column, np.ndarray]]]:
-    """Of the candidate period counts, the one whose ripple (columns seen through ``view``) explains most
-    of the viewed torque residual ``target`` (M,) beyond the ``rich`` columns on the held-out rows."""
+    """Of the candidate period counts (and, along an integrated angle, phases: one, or tracked), the ripple whose
+    columns (seen through ``view``) explain most of the viewed torque residual ``target`` (M,) beyond the
+    ``rich`` columns on the held-out rows."""
     resid = _rich_residual(target, rich, train)
     best: tuple[float, int, list[tuple[Column, np.ndarray]]] = (-math.inf, 0, [])
-    for n in cands:
-        cols = effect_columns("cogging", p, raw, log, n)
+    tries: list[tuple[int, np.ndarray | None]] = []
+    for n in cands:  # a drifting integrated angle: also the ripple with its phase tracked (ripple_phase)
+        phase = ripple_phase(p, raw, log, n, resid, train, view)
+        tries += [(n, None)] if phase is None else [(n, None), (n, phase)]
+    for n, phase in tries:
+        cols = effect_columns("cogging", p, raw, log, n, phase)
         for _, a in cols:
             a[0] = view(a[0])
         sc = np.column_stack([a[0] for _, a in cols])
