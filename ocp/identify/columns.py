@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ocp.identify.align import cutoff_hz, smooth
+from ocp.identify.align import cutoff_hz, shifted, smooth
 from ocp.identify.angle import drift_windows, interval_ripple, speed_noise, track_phase
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE, ThrustLag, make_effect
@@ -20,6 +20,8 @@ from ocp.model.params import MotorParams
 from ocp.model.plant import NUMPY
 
 GRID = 12  # shape values per shaped effect (geometric grid)
+#: saturating voltage drops (:func:`drop_columns`)
+DROPS = ("brush_drop", "voltage_deadband")
 
 
 @dataclass(frozen=True)
@@ -160,24 +162,46 @@ def ripple_phase(p: MotorParams, s: Signals, log: Log, periods: int, resid: np.n
     return track_phase(cos + 1j * sin, h, resid, train, view)
 
 
+def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
+                 held: tuple[np.ndarray, float] | None = None) -> list[tuple[Column, np.ndarray]]:
+    """A saturating voltage drop (:data:`DROPS`) per width [V] on a grid, (3, M) at unit amplitude, eq.
+    dc_electrical. A driver dead band (no output below ``v_db``) drops ``clip(V, +-v_db)`` (the command's sign;
+    the catalogue's smooth ``V - v_db tanh(V / v_db)`` is for the optimiser); brushes drop ``v_b`` against the
+    current, and while ``|V - k_e w| < v_b`` no current flows and the drop is ``V - k_e w``:
+    ``clip(V - k_e w, +-v_b)`` (quasi-static). The drop acts on the held command, before the low-pass the
+    equations see: it is formed on the log's command and low-passed like it (clipped after the low-pass, a step of
+    the command, a PRBS edge, passes through the band within a row, not over the low-pass's rise, and leaves a
+    residual at every edge). ``held``: the log's command (N,) [V] before the alignment shifted it by that many
+    samples: the dead band acts on each held level, before the shift mixes two of them in a row. A width no row
+    falls inside is not offered: there the drop is the command's sign times its width, on a two-level command a
+    drive gain, which no dead band or brush contact can be told from."""
+    v = log.voltage[:s.v.size] if s.dt > 0 else s.v
+    x, lag = (held[0], held[1]) if held is not None and name == "voltage_deadband" and s.dt > 0 else (v, 0.0)
+    if name == "brush_drop":
+        x = v - p.k_e * s.w
+    fc = cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) if s.dt > 0 else 0.0
+    z = np.zeros_like(s.w)
+    key = "v_b" if name == "brush_drop" else "v_db"
+    v_peak = float(np.max(np.abs(s.v))) or 1.0
+    return [(Column(name, key, b), np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size], s.dt, fc), z]))
+            for b in _grid(0.005 * v_peak, 0.3 * v_peak) if np.any(np.abs(x) < b)]
+
+
+def _low(y: np.ndarray, dt: float, fc: float) -> np.ndarray:
+    """``y`` (M,) low-passed as :func:`signals` low-passes the log's channels (as it is on a sweep, ``dt`` = 0)."""
+    return smooth(y, dt, fc) if dt > 0 else y
+
+
 def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int,
                    phase: np.ndarray | None = None) -> list[tuple[Column, np.ndarray]]:
     """Columns of one effect (one per shape value for shaped effects); cogging's turned by ``phase`` (M,) unit
     phasors where given (:func:`ripple_phase`)."""
     w_peak = float(np.max(np.abs(s.w))) or 1.0
-    v_peak = float(np.max(np.abs(s.v))) or 1.0
     if name == "stribeck":
         return [(Column(name, "tau_s", ws), _effect(name, {"tau_s": 1.0, "omega_s": ws}, p, s))
                 for ws in _grid(0.003 * w_peak, 0.15 * w_peak)]
-    if name == "brush_drop":  # the drop follows the current's sign, and while |V - k_e w| < v_b no current
-        u = s.v - p.k_e * s.w  # flows: the drop is V - k_e w there, so clip(V - k_e w, +-v_b) (quasi-static)
-        z = np.zeros_like(s.w)
-        return [(Column(name, "v_b", vb), np.vstack([z, np.clip(u, -vb, vb) / vb, z]))
-                for vb in _grid(0.005 * v_peak, 0.3 * v_peak)]
-    if name == "voltage_deadband":  # a driver's dead zone: no output below v_db, the drop clip(V, +-v_db)
-        z = np.zeros_like(s.w)  # (the catalogue's smooth V - v_db tanh(V / v_db) is for the optimiser)
-        return [(Column(name, "v_db", vd), np.vstack([z, np.clip(s.v, -vd, vd) / vd, z]))
-                for vd in _grid(0.005 * v_peak, 0.3 * v_peak)]
+    if name in DROPS:
+        return drop_columns(name, p, s, log)
     if name == "thrust_lag":
         if log.kind is LogKind.STEADY_STATE:
             return []

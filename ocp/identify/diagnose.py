@@ -234,7 +234,8 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     delay = (align.samples - own) * log.dt if align.delay and "input_delay" in _allowed(opt) else None
     aligned = realign(log, align.samples - own)  # the equations always see the command when it acts
     work = log if delay is not None else aligned  # free runs: the delay, if called, is in the plant
-    design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align)
+    held = (log.voltage, max(align.samples - own, 0.0))  # (the drive's dead band acts before the shift)
+    design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align, held)
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:
@@ -276,11 +277,12 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],
              noise: dict[str, float], opt: DiagnoseOptions, delayed: bool,
-             progress: Callable[[float], None] | None, align: Alignment) -> tuple[Design, Selection]:
+             progress: Callable[[float], None] | None, align: Alignment,
+             held: tuple[np.ndarray, float] | None = None) -> tuple[Design, Selection]:
     """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
     ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
     search residual), ``L`` is judged beside the timing error it cannot be told from (:func:`_open_timing`)."""
-    design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True)
+    design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True, held=held)
     if not align.identified and log.kind is LogKind.TIME_SERIES:
         _open_timing(design, plant, log, opt)
     if progress is not None:

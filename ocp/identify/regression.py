@@ -45,9 +45,11 @@ from scipy import signal
 from ocp.identify.align import cutoff_hz
 from ocp.identify.angle import angle_limits, angle_spectrum, instant_spectrum, ripple_independence
 from ocp.identify.columns import (
+    DROPS,
     Column,
     Signals,
     constant_columns,
+    drop_columns,
     effect_columns,
     nuisance_columns,
     raw_signals,
@@ -184,11 +186,13 @@ def visible_torque(p: MotorParams, s: Signals, noise: dict[str, float]) -> float
 
 
 def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects: tuple[str, ...],
-          noise: dict[str, float] | None = None, raw_torque: bool = False) -> Design:
+          noise: dict[str, float] | None = None, raw_torque: bool = False,
+          held: tuple[np.ndarray, float] | None = None) -> Design:
     """Gram matrices (module doc) of the constants and ``effects`` on the ``train``/``test`` masks (N,).
     ``noise`` (per-sample channel noise, :func:`ocp.identify.predict.noise_levels`) floors the torque
     equation's weight at the smallest torque error a free run would show (:func:`visible_torque`).
-    ``raw_torque``: eq. dc_mechanical on the raw rows where an angle is logged (module doc)."""
+    ``raw_torque``: eq. dc_mechanical on the raw rows where an angle is logged (module doc). ``held``: the command
+    (N,) [V] before the alignment shifted it, and the shift [samples] (:func:`.columns.drop_columns`)."""
     s = signals(log, p)
     use_raw = raw_torque and log.kind is LogKind.TIME_SERIES and log.theta is not None
     raw = raw_signals(log, log.theta) if use_raw and log.theta is not None else s
@@ -201,7 +205,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         m = min(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt)), rows // 6)
         edge[:m] = edge[rows - m:] = True
     train, test = train[:rows] & ~edge, test[:rows] & ~edge
-    cols = _columns(p, s, raw, log, effects)
+    cols = _columns(p, s, raw, log, effects, held)
     # noise level per equation: what the richest fit (one shape per effect) leaves on training rows
     # (the motor constant is left out: with it, J, B and c_tau the torque balance scales to zero)
     keep = [j for j, (c, _) in enumerate(cols)
@@ -305,8 +309,8 @@ def _independence(p: MotorParams, log: Log, s: Signals, tau: float) -> np.ndarra
     return np.array([min(low, s.dt / (2.0 * tau) if tau > 0 else 1.0), low, low])
 
 
-def _columns(p: MotorParams, s: Signals, raw: Signals, log: Log,
-             effects: tuple[str, ...]) -> list[tuple[Column, np.ndarray]]:
+def _columns(p: MotorParams, s: Signals, raw: Signals, log: Log, effects: tuple[str, ...],
+             held: tuple[np.ndarray, float] | None = None) -> list[tuple[Column, np.ndarray]]:
     """Columns (3, M) of the constants, nuisances and ``effects`` (but cogging) on the low-passed rows ``s``,
     their torque rows on the ``raw`` rows (module doc)."""
     def both(make: Callable[[Signals], list[tuple[Column, np.ndarray]]]) -> list[tuple[Column, np.ndarray]]:
@@ -323,7 +327,9 @@ def _columns(p: MotorParams, s: Signals, raw: Signals, log: Log,
     for name in effects:
         if name == "cogging":
             continue
-        if CATALOGUE[name].channel in ("mechanical", "current-sensor"):
+        if name in DROPS:
+            cols += drop_columns(name, p, s, log, held)
+        elif CATALOGUE[name].channel in ("mechanical", "current-sensor"):
             cols += both(functools.partial(_effect_columns_on, name, p, log))
         else:  # no torque part: its torque rows are zero either way
             cols += effect_columns(name, p, s, log, 0)
