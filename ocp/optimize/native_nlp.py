@@ -10,8 +10,9 @@ machine: objective, rows, gradient, Jacobian and the Hessian of the Lagrangian (
   outputs at a fixed pseudo-random point, computed in the virtual machine: two different graphs cannot agree on
   all of them by chance) with the flags and CasADi's version, and kept on disk (:mod:`ocp.native`, sub-folder
   ``nlp``): a later process, or another worker, loads it at once;
-* a program looks for its library on every solve; it starts the build (in the background, at the lowest CPU
-  priority) only after :data:`HOT_CALLS` solves in the process, so one-off structures never pay for it;
+* a program looks for its library on its first solve and every :data:`HOT_CALLS` solves after; it starts the
+  build (in the background, at the lowest CPU priority) only after :data:`HOT_CALLS` solves in the process, so
+  one-off structures never pay for it;
 * a loaded library is **checked** against the virtual machine at the fingerprint point (relative
   :data:`CHECK_RTOL`; the same arithmetic gives the same numbers); a library that fails is removed and never used;
 * ``THRUSTSHAPE_NLP_COMPILE=0`` turns the compiled path off (the solver keeps the virtual machine).
@@ -77,13 +78,15 @@ class NativeNLP:
 
     def poll(self) -> dict[str, ca.Function] | None:
         """Count a solve; the compiled functions when their library is on disk (built here or elsewhere), after
-        starting its build once the program is hot (:data:`HOT_CALLS`). None meanwhile, when turned off, or when
-        the library failed."""
+        starting its build once the program is hot (:data:`HOT_CALLS`). The disk is looked at on the first solve and
+        every :data:`HOT_CALLS` solves after, not on every one (a build another worker holds the lock for is then
+        retried as rarely). None meanwhile, when turned off, or when the library failed."""
         self.calls += 1
-        if self.failed or not native.enabled(SWITCH):
-            return None
-        path = native.cache_dir("nlp") / f"{self.key}.so"
-        if path.exists() or self.calls >= HOT_CALLS:
+        if self.loaded is not None or self.failed or not native.enabled(SWITCH):
+            return self.loaded
+        if self.calls % HOT_CALLS == 0:
+            return self.get()
+        if self.calls == 1 and (native.cache_dir("nlp") / f"{self.key}.so").exists():
             return self.get()
         return None
 
