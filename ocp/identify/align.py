@@ -15,8 +15,16 @@ command drives k -> k+1). The dead-band term is the held commands' dead band shi
 acts on each held level before two of them share a sample). A minimum that is not sharp (residual within 1 % one
 sample either side) is a plateau: bounded inside the search and at most two samples wide (a slow two-level
 command, whose rare level changes tell the lag only to within about a sample), its midpoint is the alignment;
-wider or reaching an end of the search (slow, smooth excitation), the lag is unidentifiable: none is assumed
-then, and none is called a delay.
+wider or reaching an end of the search (slow, smooth excitation), the free fit cannot tell the lag: a smooth
+command delayed by ``d`` samples looks like one through an armature lag ``L/R`` longer by ``d`` samples, and the
+free ``a1`` takes either. The datasheet can, where the armature is fast: given the nominal ``L/R`` (at most
+:data:`NOMINAL_TAU` samples, so that a 50 % inductance error moves the lag by at most a sample) and ``k_e``, the
+search is repeated with both held at nominal, as an output error (the current simulated from the command through
+that first-order lag, eq. dc_electrical, with free gains: noise in the logged current then biases nothing):
+:func:`_nominal_curve`. A lag found so is reported as resting on the nominal armature (:attr:`Alignment.nominal`),
+and the caller must not judge ``L`` from the same log as if the timing were measured. Where that search is flat
+too (no fast enough command change at all), the lag is unidentifiable: none is assumed then, and none is called a
+delay.
 
 Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
 conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
@@ -29,6 +37,7 @@ caller's, :mod:`.diagnose`).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -44,6 +53,9 @@ MIN_LAG_S = 0.005
 MAX_LAG = 64
 #: the fraction of a sample a drive's update instant adds to the logging skew (the rule, module doc)
 SKEW_FRACTION = 0.75
+#: longest nominal armature time constant L/R [samples] for which a lag is measured with it held
+#: (:func:`_nominal_curve`): a 50 % inductance error then moves the lag by at most a sample
+NOMINAL_TAU = 2.0
 #: widest flat minimum [samples] taken as a measured lag (its midpoint): a level change of a two-level command
 #: pins the lag to within about a sample on either side; a wider one is a smooth excitation's (no lag measured)
 PLATEAU = 2.0
@@ -60,6 +72,7 @@ class Alignment:
         rule: the rule in words
         curve: (lags [samples], normalised residual RMS) of the search, for plots
         identified: False when the search's residual is flat (then ``samples`` is 0 by assumption, not measured)
+        nominal: True when the lag was found only with the armature's nominal ``L/R`` and ``k_e`` (module doc)
     """
 
     samples: float
@@ -68,10 +81,11 @@ class Alignment:
     rule: str
     curve: tuple[tuple[float, ...], tuple[float, ...]] = ((), ())
     identified: bool = True
+    nominal: bool = False
 
     def to_dict(self) -> dict[str, Any]:
-        return {"samples": round(self.samples, 3), "seconds": self.seconds,
-                "called_input_delay": self.delay, "rule": self.rule, "identified": self.identified}
+        return {"samples": round(self.samples, 3), "seconds": self.seconds, "called_input_delay": self.delay,
+                "rule": self.rule, "identified": self.identified, "from_nominal_armature": self.nominal}
 
 
 def smooth(y: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
@@ -119,8 +133,9 @@ def _residual(target: np.ndarray, gram: np.ndarray, cross: np.ndarray, cols: np.
     return math.sqrt(max(ss, 0.0) / target.size)
 
 
-def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
-    """Alignment of a time-series log (see module doc); steady-state sweeps have none."""
+def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, float] | None = None) -> Alignment:
+    """Alignment of a time-series log (see module doc); steady-state sweeps have none. ``armature``: the nominal
+    ``(L/R [s], k_e [V s/rad])``, used only where the free search is flat."""
     rule = (f"lags up to {max_logging_skew:g} + {SKEW_FRACTION:g} samples are logging conventions, removed and "
             "reported; a longer lag is an input_delay (the whole lag)")
     if log.kind is LogKind.STEADY_STATE:
@@ -141,18 +156,53 @@ def estimate(log: Log, max_logging_skew: float = 2.0) -> Alignment:
         return np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k], shifted(band, lag)[k])
                          for lag in lags])
 
-    coarse = np.arange(0.0, top + 1e-9, 1.0)  # whole samples over the range, then 1/8 sample near the best
-    res = curve(coarse)
-    best = float(coarse[int(np.argmin(res))])
-    fine = np.setdiff1d(np.arange(max(best - 1.5, 0.0), min(best + 1.5, top) + 1e-9, LAG_STEP), coarse)
-    order = np.argsort(np.concatenate([coarse, fine]))
-    lags, res = np.concatenate([coarse, fine])[order], np.concatenate([res, curve(fine)])[order]
+    lags, res = _search(curve, top)
     samples, sharp = _pick(lags, res)
+    nominal = False
+    if not sharp and armature is not None and armature[0] <= NOMINAL_TAU * log.dt:
+        lags, res = _search(_nominal_curve(log, armature[0] / log.dt, armature[1], k), top)
+        samples, sharp = _pick(lags, res)
+        nominal = sharp
+        rule += ("; the free search was flat (a smooth command: a delay looks like a longer armature lag), so the lag "
+                 "was measured with the armature's time constant held at its nominal L/R" if sharp else "")
     if not sharp:
         rule += "; here the lag is not identifiable (flat residual), none is assumed"
     plot = (tuple(float(x) for x in lags), tuple(float(x / (np.std(i) or 1.0)) for x in res))
     return Alignment(float(samples), float(samples * log.dt), bool(samples > max_logging_skew + SKEW_FRACTION), rule,
-                     plot, sharp)
+                     plot, sharp, nominal)
+
+
+def _search(curve: Callable[[np.ndarray], np.ndarray], top: int) -> tuple[np.ndarray, np.ndarray]:
+    """``curve`` (residual per lag) over whole samples 0..``top``, then every 1/8 sample within 1.5 samples of
+    the best: the lags (K,) increasing and their residuals (K,)."""
+    coarse = np.arange(0.0, top + 1e-9, 1.0)
+    res = curve(coarse)
+    best = float(coarse[int(np.argmin(res))])
+    fine = np.setdiff1d(np.arange(max(best - 1.5, 0.0), min(best + 1.5, top) + 1e-9, LAG_STEP), coarse)
+    order = np.argsort(np.concatenate([coarse, fine]))
+    return np.concatenate([coarse, fine])[order], np.concatenate([res, curve(fine)])[order]
+
+
+def _nominal_curve(log: Log, tau: float, k_e: float, k: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """The output-error residual per lag (module doc): the logged current on rows ``k`` (M,) fitted by the
+    back-EMF-corrected command ``V[n - lag] - k_e w[n]`` [V], its dead-band term, the current's sign (a brush
+    drop) and a constant, each passed through the armature's first-order lag ``i[n+1] = p i[n] + (1 - p) x[n]``,
+    ``p = exp(-1/tau)``, ``tau`` [samples] the nominal ``L/R``, exact under a zero-order hold (eq. dc_electrical).
+    ``tau`` is held, not fitted: with it free, lag and ``tau`` trade along a valley, and a longer ``tau`` wins by
+    smoothing the speed's noise (a lag biased short by most of ``L/R``)."""
+    v, i, w = log.voltage, log.current, log.omega
+    band = np.tanh(v / (0.05 * np.std(v) + 1e-12))
+    sign = np.tanh(i / (0.05 * np.std(i) + 1e-12))
+    p = math.exp(-1.0 / max(tau, 1e-3))
+    rows = k[k >= min(k[-1], k[0] + int(10 * tau) + 1)]  # (the filters' start-up transient left out)
+
+    def one(lag: float) -> float:
+        x = np.column_stack([shifted(v, lag) - k_e * w, shifted(band, lag), sign, np.ones(v.size)])
+        a = signal.lfilter([0.0, 1.0 - p], [1.0, -p], x, axis=0)[rows]
+        coef = np.linalg.lstsq(a, i[rows], rcond=None)[0]
+        return float(np.sqrt(np.mean((i[rows] - a @ coef) ** 2)))
+
+    return lambda lags: np.array([one(float(lag)) for lag in lags])
 
 
 def _pick(lags: np.ndarray, res: np.ndarray) -> tuple[float, bool]:

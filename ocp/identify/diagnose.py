@@ -224,7 +224,8 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         return diagnose_points(plant, log, opt)
     effects, pool = _pool(plant, opt)
     own = sum(float(getattr(e, "delay", 0.0)) for e in plant.effects if e.name == "input_delay") / log.dt
-    align = estimate(log, opt.max_logging_skew + own if log.kind is LogKind.TIME_SERIES else 0.0)
+    armature = (plant.params.L / plant.params.R, plant.params.k_e)
+    align = estimate(log, opt.max_logging_skew + own if log.kind is LogKind.TIME_SERIES else 0.0, armature)
     seg = min(opt.segment_s, log.n * log.dt / (3 * opt.holdout_every)) if log.kind is LogKind.TIME_SERIES \
         else opt.segment_s  # short logs: shorter segments, so that some are held out
     sp = split(log, seg, opt.holdout_every)
@@ -281,9 +282,10 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
              held: tuple[np.ndarray, float] | None = None) -> tuple[Design, Selection]:
     """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
     ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
-    search residual), ``L`` is judged beside the timing error it cannot be told from (:func:`_open_timing`)."""
+    search residual) or was found only with the nominal armature (:attr:`.align.Alignment.nominal`: it assumed
+    ``L``), ``L`` is judged beside the timing error it cannot be told from (:func:`_open_timing`)."""
     design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True, held=held)
-    if not align.identified and log.kind is LogKind.TIME_SERIES:
+    if (not align.identified or align.nominal) and log.kind is LogKind.TIME_SERIES:
         _open_timing(design, plant, log, opt)
     if progress is not None:
         progress(0.2)
