@@ -119,10 +119,18 @@ def constant_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
 
 
 def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
-    """(3, M) per logger artefact (:data:`NUISANCES`) at one unit: a one-sample current lag leaves
-    ``-k_t di`` in the torque residual (``di`` the current's step over the interval)."""
+    """(3, M) per logger artefact (:data:`NUISANCES`) at one unit: a current sensor's first-order filter of lag
+    ``lam`` samples, ``i_f[n] = i_f[n-1] + (i[n] - i_f[n-1]) / (1 + lam)``, is undone exactly by
+    ``i[n] = i_f[n] + lam (i_f[n] - i_f[n-1])``: a BACKWARD difference. A row averages the current at its two
+    ends (or three samples under a triangle), so it leaves ``-k_t lam`` times the mean of the backward differences
+    at those samples in the torque residual: ``(di + di_prev) / 2`` with ``di = i1 - i0`` the row's own step. (The
+    row's own step alone is that derivative half a sample late: the same for a smooth current, but a current that
+    steps, a fast armature under a stepped command, then leaves a residual the acceleration's column takes: ``J``
+    was named 11-14 % low on tuning logs with a right J, at a mechanical time constant of four samples.)"""
     z = np.zeros_like(s.w)
-    return {"current_lag": np.vstack([-p.k_t * (s.i1 - s.i0) if s.dt > 0 else z, z, z])}
+    d = s.i1 - s.i0
+    d = 0.5 * (d + np.concatenate([d[:1], d[:-1]]))  # (M,): the first row has no previous step: its own
+    return {"current_lag": np.vstack([-p.k_t * d if s.dt > 0 else z, z, z])}
 
 
 def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> np.ndarray:
