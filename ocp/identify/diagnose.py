@@ -260,11 +260,12 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         if step.adopted is not None:
             verdict.append(item_name(step.adopted))
             explanations.append(f"{entries[0].explanation} Held-out error down {100 * entries[0].improvement:.0f} %.")
-    for c in sel.dropped:  # (named in a forward step, no longer needed beside what came after: not named)
+    for c in sel.dropped:  # (named in a forward step, no longer needed beside the others: not named)
         k = verdict.index(item_name(c))
         del verdict[k]
-        explanations[k] = (f"{item_name(c)} is not named: adopted first, it no longer wins on held-out data beside "
-                           f"{', '.join(verdict) or 'nothing'} (calibrated instead)")
+        explanations[k] = (f"{item_name(c)} is not named: adopted in an early round, it no longer wins on held-out "
+                           f"data beside {', '.join(verdict) or 'nothing'}"
+                           + (" (calibrated instead)" if c in CONSTANTS else ""))
         explanations.append(explanations.pop(k))
     if progress is not None:
         progress(1.0)

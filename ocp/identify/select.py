@@ -18,8 +18,10 @@ score with every equation the effect does not enter counted at most at its noise
 constant's materiality is the tolerance itself (calibration already takes the first ``tol`` of its error, and
 beyond it the user wants the name), so a constant freed beyond it needs only to win beyond sampling noise --
 or, the models being nested and scored on the same rows, in a paired comparison over held-out blocks
-(:func:`_blocks_agree`). After the forward rounds, each adopted constant is tested again beside the items adopted
-after it, and dropped (calibrated, not named) where it no longer wins.
+(:func:`_blocks_agree`). After the forward rounds, each adopted constant, then each effect but the last one adopted,
+is tested again beside all the other adopted items, and dropped (a constant: calibrated, not named) where it no longer
+wins: a greedy first pick that stood for a mix of the items adopted after it (a thrust asymmetry taken first for a
+wake lag and a force offset) leaves nothing of its own once they are in.
 Where no item clears that alone, two that clear it only together (and each against the other alone) are adopted
 as a pair (:func:`_pair`).
 A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` yields to an effect that fits as
@@ -168,7 +170,7 @@ class Selection:
     final: Fitted
     steps: list[Step]
     ambiguous: list[dict[str, object]]
-    #: constants adopted in a forward step that no longer win beside the items adopted after them (not named)
+    #: items adopted in a forward step that no longer win beside the other adopted items (not named)
     dropped: list[str] = field(default_factory=list)
 
 
@@ -208,8 +210,9 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
         items.append(tried[0][0])
         current = tried[0][1]
     dropped = []
-    for c in [i for i in items if i in CONSTANTS]:  # backward: a constant adopted before the effects that follow
-        rest = fit_model(design, [i for i in items if i != c], tol)  # it, tested again beside them
+    # backward: each constant, then each effect but the last adopted one, tested again beside all the others
+    for c in [i for i in items if i in CONSTANTS] + [i for i in items if i not in CONSTANTS][:-1]:
+        rest = fit_model(design, [i for i in items if i != c], tol)
         if not _wins(design, rest, c, current, min_improvement):
             items.remove(c)
             dropped.append(c)
