@@ -11,7 +11,8 @@ Its score is the held-out RMS of the three
 weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise).
 
 Forward selection adopts, while some equation's held-out RMS is above ``noise_floor``, the best-scoring item
-whose win passes its test (the tests differ by item, so the best-scoring one may fail where the next passes):
+that enters such an equation (:func:`_room`: one at its noise has nothing left for an item acting there alone)
+and whose win passes its test (the tests differ by item, so the best-scoring one may fail where the next passes):
 the score falls beyond sampling noise (the pooled score's scatter, or one equation's
 own: :func:`_beyond_scatter`) -- for an effect also by at least ``min_improvement`` (its materiality, on the
 score with every equation the effect does not enter counted at most at its noise level: :func:`_material`); a
@@ -193,7 +194,8 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
             progress((len(items) + 1) / (max_items + 1))
         # the best-scoring item whose win passes its test (they differ: materiality, one equation's scatter)
         win = next((k for k, (c, f) in enumerate(tried) if _wins(design, current, c, f, min_improvement)
-                    and physical(f)), None) if _worst(design, current) > noise_floor else None
+                    and physical(f) and _room(design, current, (c,), noise_floor)), None) \
+            if _worst(design, current) > noise_floor else None
         if win is not None:
             tried = [tried[win], *tried[:win], *tried[win + 1:]]
         ok = win is not None
@@ -232,12 +234,25 @@ def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], cur
     single = dict(tried[:PAIR_TOP])
     fits = [(a, b, fit_model(design, [*items, a, b], tol)) for a, b in itertools.combinations(single, 2)]
     a, b, f = min(fits, key=lambda e: e[2].score)
-    if not physical(f):
+    if not physical(f) or not _room(design, current, (a, b), noise_floor):
         return None
     for before in (current, single[a], single[b]):
         if not _material(design, before, f, (a, b), min_improvement) or not _beyond_scatter(design, before, f):
             return None
     return [Step(current, [(a, single[a]), *[e for e in tried if e[0] != a]], a), Step(single[a], [(b, f)], b)]
+
+
+def _acts(design: Design, items: Sequence[str]) -> np.ndarray:
+    """(3,) the equations some column of ``items`` enters."""
+    js = [j for item in items for j in design.index(item)]
+    return np.any(design.g_train[:, js, js] > 0, axis=1)
+
+
+def _room(design: Design, current: Fitted, items: Sequence[str], noise_floor: float) -> bool:
+    """Whether some equation ``items`` enter is above ``noise_floor`` in ``current`` (held-out RMS, noise units):
+    an equation already at its noise has nothing left for them to explain, whatever another equation holds."""
+    live = (design.n_test > 0) & _acts(design, items)
+    return bool(np.any(current.per_eq[live] > noise_floor))
 
 
 def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float) -> bool:
@@ -267,8 +282,7 @@ def _material(design: Design, before: Fitted, after: Fitted, items: Sequence[str
     armature equation, say) is one these effects can neither explain nor be blamed for, and averaged into the
     score it would dilute the fall they bring where they act (a torque ripple halving the torque equation's
     error beside an armature equation at 18 noise units moved the pooled score by 0.5 %)."""
-    js = [j for item in items for j in design.index(item)]
-    acts = np.any(design.g_train[:, js, js] > 0, axis=1)  # (3,): the equations their columns enter
+    acts = _acts(design, items)
     return _capped_score(design, after, acts) <= (1.0 - min_improvement) * _capped_score(design, before, acts)
 
 
