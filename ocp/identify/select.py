@@ -76,8 +76,10 @@ class Fitted:
         return float(self.x[self.cols.index(j)]) if j in self.cols else 0.0
 
 
-def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float) -> tuple[np.ndarray, np.ndarray]:
+def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float,
+            above: dict[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
     lo, hi = [], []
+    above = design.above if above is None else above
     for j in cols:
         c = design.columns[j]
         if c.item in NUISANCES:
@@ -87,7 +89,7 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float) ->
             # what it stands for (a current filter for L) to be explained by a wrong item
             box = tol + design.slack.get(c.item, 0.0)  # (wider where a nuisance could mimic the error)
             a, b = (NAMED_BOUNDS[0], np.inf) if c.item in design.unresolved else \
-                NAMED_BOUNDS if c.item in named else (-box, box)
+                NAMED_BOUNDS if c.item in named else (-box, box + above.get(c.item, 0.0))
         elif c.item in SATURATING:  # the drop saturates at its width: amplitude = width (module doc)
             a, b = c.shape / SATURATION_SLACK, c.shape * SATURATION_SLACK
         else:
@@ -97,14 +99,16 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float) ->
     return np.array(lo), np.array(hi)
 
 
-def solve(design: Design, cols: Sequence[int], named: set[str], tol: float) -> Fitted:
-    """Bounded least squares on the training Gram matrices (``min x'Gx - 2h'x``) of columns ``cols``."""
+def solve(design: Design, cols: Sequence[int], named: set[str], tol: float,
+          above: dict[str, float] | None = None) -> Fitted:
+    """Bounded least squares on the training Gram matrices (``min x'Gx - 2h'x``) of columns ``cols`` (``above``:
+    the boxes' widening above nominal, :attr:`.regression.Design.above` when None)."""
     idx = np.array(cols, dtype=int)
     g = design.g_train.sum(axis=0)[np.ix_(idx, idx)]
     h = design.h_train.sum(axis=0)[idx]
     d = np.sqrt(np.maximum(np.diag(g), 1e-300))
     gs = g / np.outer(d, d) + 1e-10 * np.eye(idx.size)
-    lo, hi = _bounds(design, cols, named, tol)
+    lo, hi = _bounds(design, cols, named, tol, above)
     try:
         r = np.linalg.cholesky(gs).T
     except np.linalg.LinAlgError:
@@ -137,8 +141,23 @@ def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
             chosen += js
             continue
         chosen += _shape_columns(design, chosen, js, named, tol, mix=item not in SATURATING)
-    f = solve(design, chosen, named, tol)
+    f = _filtered(design, solve(design, chosen, named, tol), chosen, named, tol)
     return Fitted(tuple(items), f.cols, f.x, f.train_cost, f.score, f.per_eq)
+
+
+def _filtered(design: Design, f: Fitted, chosen: list[int], named: set[str], tol: float) -> Fitted:
+    """``f`` refitted with ``L``'s box widened above by the current filter it fits: a current lag of ``l`` samples
+    (``current_lag``, eq. dc_mechanical) raises the apparent inductance in eq. dc_electrical by ``l dt R / L``
+    (:attr:`.regression.Design.lag_inductance`), the logger's. One refit where L's box binds suffices."""
+    js, lag_j = design.index("L"), design.index("current_lag")
+    if design.lag_inductance <= 0 or "L" in named or not js or not lag_j or "L" in design.unresolved:
+        return f
+    lag, x = f.coefficient(lag_j[0]), f.coefficient(js[0])
+    top = tol + design.slack.get("L", 0.0) + design.above.get("L", 0.0)
+    if lag <= 0 or x < top - 1e-9:
+        return f
+    return solve(design, chosen, named, tol, {**design.above, "L": design.above.get("L", 0.0)
+                                              + lag * design.lag_inductance})
 
 
 def _shape_columns(design: Design, chosen: list[int], js: list[int], named: set[str], tol: float,
