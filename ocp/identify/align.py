@@ -234,6 +234,26 @@ def _pick(lags: np.ndarray, res: np.ndarray) -> tuple[float, bool]:
     return 0.0, False
 
 
+def spread(align: Alignment) -> float:
+    """How far [samples] the command timing may be off after ``align``: half the width of the lags whose search
+    residual is within the 1 % :func:`_pick` uses of the residual at the lag taken (a PRBS whose rare level changes
+    leave a plateau: half its width), at least :data:`LAG_STEP` (the grid); ``inf`` where the timing was not
+    measured (no search, flat residual) or some lag of the search fits beyond that 1 % better than the one taken
+    (the lag was held to the logging conventions by :func:`within`, not found there)."""
+    lags, res = (np.asarray(x, float) for x in align.curve)
+    if not align.identified or lags.size < 2:
+        return math.inf
+    j = int(np.clip(np.searchsorted(lags, align.samples), 1, lags.size - 1))
+    j = j - 1 if res[j - 1] <= res[j] else j  # the better grid point bracketing the lag taken
+    r0 = float(res[j])
+    if res.min() * 1.01 < r0:
+        return math.inf
+    near = np.flatnonzero(res <= 1.01 * r0)
+    runs = np.split(near, np.flatnonzero(np.diff(near) > 1) + 1)
+    run = min(runs, key=lambda r: float(np.min(np.abs(r - j)))) if near.size else np.array([j])
+    return max(LAG_STEP, 0.5 * float(lags[run[-1]] - lags[run[0]]))
+
+
 def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
     """``align`` restricted to what logging conventions explain (lags up to ``max_logging_skew`` + 0.75
     samples): the best lag of its search curve there, never a delay (a longer lag was not confirmed)."""

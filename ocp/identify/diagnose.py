@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from ocp.identify.align import SKEW_FRACTION, Alignment, estimate, realign, within
+from ocp.identify.align import SKEW_FRACTION, Alignment, estimate, realign, spread, within
 from ocp.identify.candidates import candidate
 from ocp.identify.explain import (
     KEYS,
@@ -290,8 +290,12 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
     search residual) or was found only with the nominal armature (:attr:`.align.Alignment.nominal`: it assumed
     ``L``), ``L`` is judged beside the timing error it cannot be told from (:func:`_open_timing`)."""
     design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True, held=held)
-    if (not align.identified or align.nominal) and log.kind is LogKind.TIME_SERIES:
-        _open_timing(design, plant, log, opt)
+    if log.kind is LogKind.TIME_SERIES:
+        if not align.identified or align.nominal:  # (a lag found with the nominal armature assumed L)
+            _open_timing(design, plant, log, opt)
+        elif "L" in design.unresolved:
+            _timed_inductance(design, plant, log, opt, spread(align))
+        _filter_headroom(design, plant, log)
     if progress is not None:
         progress(0.2)
     ok = functools.partial(physical, design)
@@ -301,7 +305,10 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
         # beyond a factor two under an open timing: a timing error beyond the conventions (an unconfirmed
         # delay) is the likelier explanation (the prior of .select): L is unresolved, the selection redone
         del design.slack["L"]
-        design.unresolved["L"] = ("the command timing is not identifiable in this log (flat alignment residual) and "
+        design.above.pop("L", None)
+        design.one_sided.pop("L", None)
+        design.unresolved["L"] = (("the command timing is not identifiable in this log (flat alignment residual) and "
+                                   if not align.identified else "L/R is under two samples and ") +
                                   "L would have to be off by more than a factor two: a timing error beyond the "
                                   "logging conventions explains the armature equation as well")
         sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
@@ -330,6 +337,34 @@ def _open_timing(design: Design, plant: DCMotorPlant, log: Log, opt: DiagnoseOpt
         return
     design.unresolved.setdefault("L", "the command timing is not identifiable in this log (flat alignment "
                                       "residual): an inductance error cannot be told from a sub-sample timing error")
+
+
+def _timed_inductance(design: Design, plant: DCMotorPlant, log: Log, opt: DiagnoseOptions, timing: float) -> None:
+    """``L`` where L/R is under two samples but the command timing is measured (to ``timing`` samples,
+    :func:`.align.spread`): a current filter of time constant ``t_f`` (eq. dc_electrical on the filtered current:
+    ``L i' + R (i + t_f i')``) only RAISES the apparent inductance, by ``R t_f``; what can lower it is a timing
+    error ``d`` the alignment left, ``-d dt R i'``. So ``L`` stays free above nominal (a nuisance, as when
+    unresolved) and is boxed below at ``tol`` widened by that timing error, ``x = timing dt R / L``: an apparent
+    ``L`` clearly below both can only be a smaller inductance, and is named. Where that box would reach a factor two
+    below nominal (L/R under about a third of a sample on a sharp alignment), nothing plausible is left to name."""
+    x = timing * log.dt * plant.params.R / plant.params.L
+    if opt.tolerance + x >= 1.0 - 1.0 / IMPLAUSIBLE_FACTOR:
+        return
+    design.one_sided["L"] = (design.unresolved.pop("L") + f"; free above nominal (a filter raises L), named only "
+                             f"below it by more than {100 * (opt.tolerance + x):.0f} % (the timing measured to "
+                             f"{timing:.2g} samples)")
+    design.slack["L"] = x
+    design.above["L"] = math.inf
+
+
+def _filter_headroom(design: Design, plant: DCMotorPlant, log: Log) -> None:
+    """``L``'s calibration box widened ABOVE nominal by the current filter the torque equation measures: the
+    current lag ``l`` [samples] each model fits (the ``current_lag`` nuisance, where the true current is
+    ``i + l dt i'``) raises the apparent inductance in eq. dc_electrical by ``R l dt``, a relative ``l dt R / L``
+    that is the logger's, not the motor's (a clean 10 kHz log with a 0.3-sample filter showed ``L`` 20 % high). A
+    lead (``l < 0``) widens nothing (:func:`.select.fit_model`)."""
+    if "L" not in design.unresolved and "L" not in design.above:
+        design.lag_inductance = log.dt * plant.params.R / plant.params.L
 
 
 def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt: DiagnoseOptions, sp: Split,

@@ -104,7 +104,7 @@ def calibration(p: MotorParams, design: Design, f: Fitted, tol: float) -> dict[s
         nominal = float(getattr(p, KEYS[c][0]))
         out[c] = {"nominal": nominal, "fitted": nominal * (1.0 + x), "relative": x, "unit": UNITS[c],
                   "named": c in f.items, "within_tolerance": bool(abs(x) <= tol + 1e-9),
-                  "unresolved": design.unresolved.get(c),  # a free nuisance, never named (reason)
+                  "unresolved": design.unresolved.get(c) or design.one_sided.get(c),  # free (reason)
                   "slack": design.slack.get(c)}  # the box widened by what a nuisance mimics (Design.slack)
     return out
 

@@ -118,6 +118,15 @@ class Design:
     #: per constant, the relative error a nuisance the log leaves open could mimic (``L`` under an unidentified
     #: command timing): its calibration box is ``tol`` wider by this, so it is named only beyond both
     slack: dict[str, float] = field(default_factory=dict)
+    #: per constant, a further widening of its calibration box ABOVE nominal only (``inf``: open above): what a
+    #: logger artefact that can only raise the apparent value mimics (a first-order current filter of time
+    #: constant ``t_f`` adds ``R t_f`` to the apparent inductance, never less)
+    above: dict[str, float] = field(default_factory=dict)
+    #: the apparent inductance's relative rise per sample of current lag, ``dt R / L`` (0: not used): a model's
+    #: ``L`` box is widened above by the ``current_lag`` that model fits (:func:`.select.fit_model`)
+    lag_inductance: float = 0.0
+    #: constants the log resolves on one side only (free above nominal, named only below), with the reason
+    one_sided: dict[str, str] = field(default_factory=dict)
     #: the held-out rows cut into blocks (contiguous, each at least a few independent torque rows long,
     #: :func:`_blocks`): per block b and equation e, ``g_blocks[b, e]`` (B, 3, Q, Q), ``h_blocks`` (B, 3, Q),
     #: ``c_blocks`` (B, 3), as ``g_test`` etc. (they sum to them): a paired comparison's scatter between blocks
