@@ -34,6 +34,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.identify.align import SKEW_FRACTION, Alignment, estimate, realign, spread, within
 from ocp.identify.candidates import candidate
+from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted
 from ocp.identify.explain import (
     KEYS,
     calibration,
@@ -48,7 +49,7 @@ from ocp.identify.explain import (
 )
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
-from ocp.identify.select import IMPLAUSIBLE_FACTOR, Fitted, Selection, select
+from ocp.identify.select import Selection, select
 from ocp.logs import Log, LogKind
 from ocp.model.effects import make_effect
 from ocp.model.plant import DCMotorPlant
@@ -317,7 +318,7 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
 
 
 def _implausible(design: Design, f: Fitted, item: str) -> bool:
-    """Whether constant ``item`` is fitted in ``f`` beyond :data:`.select.IMPLAUSIBLE_FACTOR` of its nominal."""
+    """Whether constant ``item`` is fitted in ``f`` beyond :data:`.evidence.IMPLAUSIBLE_FACTOR` of its nominal."""
     factor = 1.0 + f.coefficient(design.index(item)[0])
     return max(factor, 1.0 / max(factor, 1e-9)) > IMPLAUSIBLE_FACTOR
 

@@ -1,4 +1,4 @@
-"""From a fitted explanation (:class:`.select.Fitted`) back to physics: effect parameters, the calibrated
+"""From a fitted explanation (:class:`.evidence.Fitted`) back to physics: effect parameters, the calibrated
 plant, the calibration table, and words."""
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ import numpy as np
 
 from ocp.errors import ParameterError
 from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
+from ocp.identify.evidence import Fitted
 from ocp.identify.regression import CONSTANTS, Design
-from ocp.identify.select import Fitted
 from ocp.model.effects import CATALOGUE, EffectBase, make_effect
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant

@@ -4,7 +4,7 @@ Hand-made from a clean proving-ground draw constructed for this test (``make_cas
 tachometer log; never the reported nor the tuning seeds): its first half only, so that the torque equation's
 held-out rows are few and correlated, and the datasheet ``B`` told 40 % too high (true = 0.6 nominal, as the
 proving ground states a wrong constant). The former tests (each RMS against its own scatter, and the block test's
-Student quantile over a handful of blocks) left it unnamed; ``select.ratio_z`` judges the fall against the
+Student quantile over a handful of blocks) left it unnamed; ``evidence.ratio_z`` judges the fall against the
 residual's own scatter. The same half log with the right ``B`` names nothing.
 """
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ocp.identify import diagnose
-from ocp.identify.select import _capped_score, _material
+from ocp.identify.evidence import capped_score, is_material
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams
@@ -35,7 +35,7 @@ def test_ripple_named_beside_an_armature_error_it_cannot_touch() -> None:
 
 
 class _Design:
-    """The two attributes :func:`_capped_score` reads: three live equations, columns of one item in eq. 0."""
+    """The two attributes :func:`capped_score` reads: three live equations, columns of one item in eq. 0."""
 
     n_test = np.array([100, 100, 100])
     g_train = np.zeros((3, 1, 1))
@@ -54,7 +54,7 @@ def test_capped_score_counts_untouched_equations_at_most_at_the_noise() -> None:
     d = _Design()
     before, after = _Fit([2.3, 18.5, 1.08]), _Fit([1.3, 18.5, 1.08])
     acts = np.array([True, False, False])
-    assert abs(_capped_score(d, before, acts) - np.sqrt((2.3**2 + 1 + 1) / 3)) < 1e-12  # type: ignore[arg-type]
-    assert _material(d, before, after, ("ripple",), 0.12)  # type: ignore[arg-type]
+    assert abs(capped_score(d, before, acts) - np.sqrt((2.3**2 + 1 + 1) / 3)) < 1e-12  # type: ignore[arg-type]
+    assert is_material(d, before, after, ("ripple",), 0.12)  # type: ignore[arg-type]
     # an equation below the noise keeps its value; the rule never makes a small fall material
-    assert not _material(d, _Fit([1.2, 0.9, 0.9]), _Fit([1.1, 0.9, 0.9]), ("ripple",), 0.12)  # type: ignore[arg-type]
+    assert not is_material(d, _Fit([1.2, 0.9, 0.9]), _Fit([1.1, 0.9, 0.9]), ("ripple",), 0.12)  # type: ignore[arg-type]

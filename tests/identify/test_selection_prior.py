@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ocp.identify.evidence import Fitted
 from ocp.identify.regression import Column, Design
-from ocp.identify.select import Fitted, _prefer_effects, _prior_note
+from ocp.identify.select import _prefer_effects, _prior_note
 
 
 def _design() -> Design:

@@ -1,0 +1,183 @@
+"""Held-out evidence that one fitted model beats another, over the Gram matrices of :mod:`.regression`: the
+fit record (:class:`Fitted`) and the tests :mod:`.select` combines. A fall of the held-out error counts when it is
+beyond sampling noise (:func:`beyond_scatter`, :func:`ripple_beyond`), material (:func:`is_material`), or, for nested
+models scored on the same rows, beyond a paired comparison over held-out blocks (:func:`blocks_agree`) or a
+likelihood ratio (:func:`ratio_agrees`). Scores are in noise units (about 1 for a model at the noise)."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+from ocp.identify.regression import CONSTANTS, Design
+
+#: a constant off by more than this factor (either way) is a less likely error than a missing effect that fits
+#: the held-out data as well: the prior on constant errors behind :func:`.select._prefer_effects`
+IMPLAUSIBLE_FACTOR = 2.0
+#: the paired block test of a constant (:func:`blocks_agree`): one-sided level, and the fewest held-out blocks
+BLOCK_ALPHA = 0.01
+BLOCK_MIN = 4
+#: ... and the fall of that equation's held-out RMS it needs (the tolerance's own 10 %: a constant's materiality)
+BLOCK_FALL = 0.10
+
+
+@dataclass(frozen=True)
+class Fitted:
+    """A model fitted on training rows: its items, chosen columns, coefficients, training cost, held-out score."""
+
+    items: tuple[str, ...]
+    cols: tuple[int, ...]
+    x: np.ndarray
+    train_cost: float
+    score: float
+    per_eq: np.ndarray  # held-out RMS per equation [sigma units], (3,)
+
+    def coefficient(self, j: int) -> float:
+        return float(self.x[self.cols.index(j)]) if j in self.cols else 0.0
+
+
+def equations_of(design: Design, items: Sequence[str]) -> np.ndarray:
+    """(3,) the equations some column of ``items`` enters."""
+    js = [j for item in items for j in design.index(item)]
+    return np.any(design.g_train[:, js, js] > 0, axis=1)
+
+
+def ripple_beyond(design: Design, before: Fitted, after: Fitted) -> bool:
+    """Whether an angle ripple's fall of the torque equation's held-out RMS is beyond two standard errors over
+    the rows independent for the ripple (``design.angle["independence"]``, :func:`.angle.ripple_independence`):
+    a fast ripple decorrelates from a slow residual within a period, not within the rotor time constant."""
+    frac = float(design.angle.get("independence", 0.0))  # type: ignore[arg-type]
+    n = max(float(design.n_test[0]) * frac, 1.0)
+    return before.per_eq[0] > 0 and 1.0 - after.per_eq[0] / before.per_eq[0] >= math.sqrt(2.0 / n)
+
+
+def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[str], min_improvement: float) -> bool:
+    """Whether ``after`` (``before`` plus the effects ``items``) cuts the held-out score by ``min_improvement``
+    (an effect's materiality), the score taken with every equation that no column of ``items`` enters counted at
+    most at its noise level (:func:`capped_score`): an error there (a command timing the alignment left in the
+    armature equation, say) is one these effects can neither explain nor be blamed for, and averaged into the
+    score it would dilute the fall they bring where they act (a torque ripple halving the torque equation's
+    error beside an armature equation at 18 noise units moved the pooled score by 0.5 %)."""
+    acts = equations_of(design, items)
+    return capped_score(design, after, acts) <= (1.0 - min_improvement) * capped_score(design, before, acts)
+
+
+def capped_score(design: Design, f: Fitted, acts: np.ndarray) -> float:
+    """The held-out score of ``f`` (as :attr:`Fitted.score`) with the equations outside ``acts`` (3,) counted at
+    most at the noise level (1 in noise units)."""
+    live = design.n_test > 0
+    if not live.any():
+        return math.inf
+    per_eq = np.where(acts, f.per_eq, np.minimum(f.per_eq, 1.0))
+    return float(np.sqrt(np.mean(per_eq[live] ** 2)))
+
+
+def blocks_agree(design: Design, current: Fitted, item: str, f: Fitted) -> bool:
+    """Whether a constant freed beyond the tolerance (``f``) fits the held-out data better than ``current`` in a
+    PAIRED comparison over the held-out blocks (:func:`block_t`): some equation's squared error falls, block by
+    block, beyond the one-sided :data:`BLOCK_ALPHA` quantile of Student's t (the blocks' own scatter; nested models
+    compared on the same rows need far less than the unpaired :func:`beyond_scatter`, which holds each RMS to its
+    own sampling noise). Only a plausible error (within :data:`IMPLAUSIBLE_FACTOR` of nominal) is named so."""
+    if implausible_factor(design, f, item) is not None:
+        return False
+    t, nb = block_t(design, current, f)
+    if nb < BLOCK_MIN:
+        return False
+    material = (design.n_test > 0) & (f.per_eq <= (1.0 - BLOCK_FALL) * current.per_eq)
+    return bool(np.any(material & (t >= stats.t.ppf(1.0 - BLOCK_ALPHA, nb - 1))))
+
+
+def ratio_agrees(design: Design, current: Fitted, item: str, f: Fitted) -> bool:
+    """Whether a constant freed beyond the tolerance (``f``, nested over ``current``: one box opened) wins a
+    held-out likelihood-ratio test (:func:`ratio_z`) in the TORQUE equation, if its column enters it: the held-out
+    squared error falls beyond the one-sided :data:`BLOCK_ALPHA` normal quantile, by :data:`BLOCK_FALL` of its RMS
+    at least, the blocks agreeing in sign (:func:`block_t`). The speed view's rows are few and correlated: with four
+    to six blocks the block test's Student quantile (3.4-4.5) left a change of a third of the torque error unnamed,
+    while the fall's scatter is known from the residual. (Not the armature equation: a current filter the torque
+    rows do not show adds ``R t_f i'`` there, L's own column, so its residual is not noise alone.) Only a plausible
+    error (within :data:`IMPLAUSIBLE_FACTOR`) is named so."""
+    if implausible_factor(design, f, item) is not None:
+        return False
+    (t, nb), js = block_t(design, current, f), design.index(item)
+    enters = bool(np.any(design.g_train[0, js, js] > 0)) and design.n_test[0] > 0  # eq. dc_mechanical only
+    return enters and bool(nb < 2 or t[0] > 0) and f.per_eq[0] <= (1.0 - BLOCK_FALL) * current.per_eq[0] \
+        and ratio_z(design, current, f)[0] >= stats.norm.ppf(1.0 - BLOCK_ALPHA)
+
+
+def ratio_z(design: Design, before: Fitted, after: Fitted) -> np.ndarray:
+    """Per equation (3,): the held-out squared error's fall from ``before`` to ``after`` (nested) in standard
+    errors: with ``d`` the fitted prediction's change on the held-out rows and ``r`` ``after``'s residual there, the
+    fall is ``2 r'd + d'd``, and ``r'd`` scatters by ``s sqrt(d'd / q)`` over rows of noise ``s`` independent in a
+    fraction ``q`` (:attr:`.regression.Design.independence`); conservative under ``before`` (``2 r'd - d'd``)."""
+    cols = sorted(set(before.cols) | set(after.cols))
+
+    def full(f: Fitted) -> np.ndarray:
+        v = np.zeros(len(cols))
+        v[[cols.index(j) for j in f.cols]] = f.x
+        return v
+
+    d = full(after) - full(before)
+    idx = np.array(cols, dtype=int)
+    dd = np.array([float(d @ design.g_test[e][np.ix_(idx, idx)] @ d) for e in range(3)])
+    fall = (before.per_eq ** 2 - after.per_eq ** 2) * design.n_test
+    sd = 2.0 * after.per_eq * np.sqrt(np.maximum(dd, 0.0) / np.maximum(design.independence, 1e-12))
+    return np.where(sd > 0, fall / np.maximum(sd, 1e-300), 0.0)
+
+
+def scatter(design: Design) -> float:
+    """Two standard errors of a held-out RMS over its independent rows, ``2 / sqrt(2 n)`` (relative), the rows of
+    all equations pooled at the torque rows' independence (the fewest): a smaller fall of the score is
+    sampling noise (low-passed rows are correlated, :attr:`Design.independence`)."""
+    live = design.n_test > 0
+    return 2.0 / math.sqrt(2.0 * max(float(design.n_test[live].sum() * design.independence.min()), 1.0))
+
+
+def beyond_scatter(design: Design, before: Fitted, after: Fitted) -> bool:
+    """Whether ``after``'s held-out fit is better than ``before``'s beyond sampling noise: the score falls by more
+    than :func:`scatter`, or one equation's held-out RMS falls by more than two standard errors over ITS
+    independent rows (``sqrt(2 / n_e)``): an electrical item need not clear the torque rows' scatter."""
+    if after.score <= (1.0 - scatter(design)) * before.score:
+        return True
+    live = (design.n_test > 0) & (before.per_eq > 0)
+    n = np.maximum(design.n_test * design.independence, 1.0)
+    fall = 1.0 - after.per_eq[live] / before.per_eq[live]
+    return bool(np.any(fall >= np.sqrt(2.0 / n[live])))
+
+
+def block_t(design: Design, before: Fitted, after: Fitted) -> tuple[np.ndarray, int]:
+    """Paired comparison over the held-out blocks (:attr:`.regression.Design.g_blocks`): per equation (3,), the
+    mean fall of the squared error from ``before`` to ``after`` over the blocks, in standard errors of that mean
+    (the blocks' own scatter: whatever the rows' correlation and whatever the residual holds); and the number
+    of blocks. Gram-matrix algebra only."""
+    nb = design.c_blocks.shape[0]
+    if nb < 2:
+        return np.zeros(3), nb
+
+    def sse(f: Fitted) -> np.ndarray:  # (nb, 3)
+        idx = np.array(f.cols, dtype=int)
+        g = design.g_blocks[:, :, idx][:, :, :, idx]
+        return design.c_blocks - 2 * design.h_blocks[:, :, idx] @ f.x + np.einsum("q,beqr,r->be", f.x, g, f.x)
+
+    d = sse(before) - sse(after)
+    sd = d.std(axis=0, ddof=1)
+    t = np.where(sd > 0, d.mean(axis=0) / np.maximum(sd, 1e-300) * math.sqrt(nb), 0.0)
+    return t, nb
+
+
+def worst(design: Design, f: Fitted) -> float:
+    """The worst-fitting equation's held-out RMS [noise units]: one equation above the noise is enough to go
+    on (the combined score averages it with the equations that already fit)."""
+    live = design.n_test > 0
+    return float(np.max(f.per_eq[live])) if live.any() else math.inf
+
+
+def implausible_factor(design: Design, f: Fitted, item: str) -> float | None:
+    """True / nominal of constant ``item`` in ``f`` where beyond :data:`IMPLAUSIBLE_FACTOR` either way, else None."""
+    if item not in CONSTANTS:
+        return None
+    factor = 1.0 + f.coefficient(design.index(item)[0])
+    return factor if max(factor, 1.0 / max(factor, 1e-9)) > IMPLAUSIBLE_FACTOR else None
