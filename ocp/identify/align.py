@@ -264,7 +264,8 @@ def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
     samples, known = _pick(lags[keep], res[keep])
     return Alignment(samples, samples * dt, False, align.rule + f"; the {align.samples:.2f}-sample lag of the "
                      "search did not predict the held-out data better than one within the conventions, so the "
-                     "best lag within them is used and no input_delay is called", align.curve, known)
+                     "best lag within them is used and no input_delay is called", align.curve, known,
+                     align.nominal and known)
 
 
 def realign(log: Log, samples: float) -> Log:

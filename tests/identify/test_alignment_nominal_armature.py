@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from ocp.identify import diagnose
-from ocp.identify.align import NOMINAL_TAU, estimate
+from ocp.identify.align import NOMINAL_TAU, estimate, within
 from ocp.logs import Log, log_from_arrays
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -72,3 +72,10 @@ def test_diagnose_calls_the_delay_and_leaves_l_open() -> None:
     res = diagnose(DCMotorPlant(p), log)
     assert res.alignment is not None and res.alignment.nominal
     assert res.verdict == ["input_delay"], res.verdict
+
+
+def test_a_lag_held_to_the_conventions_still_says_it_rests_on_the_nominal_armature() -> None:
+    """:func:`within` (a delay that did not predict better) keeps the flag: ``L`` stays open beside such a lag."""
+    log, truth = _chirp_log(4313)
+    held = within(estimate(log, 2.0, (truth.L / truth.R, truth.k)), 2.0, log.dt)
+    assert held.nominal and not held.delay and held.samples <= 2.75
