@@ -39,8 +39,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import lsq_linear
 
+from ocp.identify.boxqp import box_qp
 from ocp.identify.evidence import (
     IMPLAUSIBLE_FACTOR,
     Fitted,
@@ -102,12 +102,12 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float,
     gs = g / np.outer(d, d) + 1e-10 * np.eye(idx.size)
     lo, hi = _bounds(design, cols, named, tol, above)
     try:
-        r = np.linalg.cholesky(gs).T
+        np.linalg.cholesky(gs)
     except np.linalg.LinAlgError:
-        r = np.linalg.cholesky(gs + 1e-6 * np.eye(idx.size)).T
+        gs = gs + 1e-6 * np.eye(idx.size)
     y = np.linalg.solve(gs, h / d)  # unconstrained first; bounded only when a bound binds
     if not np.all(np.isfinite(y)) or np.any(y < lo * d) or np.any(y > hi * d):  # (near-singular: bounded too)
-        y = lsq_linear(r, np.linalg.solve(r.T, h / d), bounds=(lo * d, hi * d), method="bvls").x
+        y = box_qp(gs, h / d, lo * d, hi * d, y)
     x = np.where(d > 1e-9 * d.max(), y / d, 0.0)  # a column the log leaves empty (L far under a sample): 0
     cost = float(design.c_train.sum() - 2 * h @ x + x @ g @ x)
     ms = np.array([(design.c_test[e] - 2 * design.h_test[e][idx] @ x + x @ design.g_test[e][np.ix_(idx, idx)] @ x)
