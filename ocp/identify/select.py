@@ -223,7 +223,7 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
     # backward: each constant, then each effect but the last adopted one, tested again beside all the others
     for c in [i for i in items if i in CONSTANTS] + [i for i in items if i not in CONSTANTS][:-1]:
         rest = fit_model(design, [i for i in items if i != c], tol)
-        if not _wins(design, rest, c, current, min_improvement):
+        if physical(rest) and not _wins(design, rest, c, current, min_improvement):  # (refit unphysical: kept)
             items.remove(c)
             dropped.append(c)
             current = rest

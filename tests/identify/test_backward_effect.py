@@ -44,3 +44,14 @@ def test_a_first_pick_standing_for_the_later_items_is_dropped() -> None:
 def test_effects_needed_beside_each_other_are_kept() -> None:
     sel = select(_design(), list(TRUE), tol=0.1, min_improvement=0.12, noise_floor=1.0, max_items=4, margin=0.02)
     assert set(sel.final.items) == set(TRUE) and sel.dropped == []
+
+
+def test_a_drop_whose_refit_the_catalogue_refuses_is_not_made() -> None:
+    """Where the model without the first pick is unphysical (an effect fitted outside its catalogue range: on
+    proving-ground draw 6050 a Stribeck level of 3.4e4 N m, and building the calibrated plant raised), the first
+    pick is kept: a refit the catalogue refuses is no better explanation."""
+    physical = lambda f: WRONG in f.items or len(f.items) < 2  # noqa: E731  (the true pair alone: refused)
+    sel = select(_design(), [WRONG, *TRUE], tol=0.1, min_improvement=0.12, noise_floor=1.0, max_items=4, margin=0.02,
+                 physical=physical)
+    assert sel.steps[0].adopted == WRONG
+    assert WRONG in sel.final.items and sel.dropped == []
