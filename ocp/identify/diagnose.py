@@ -6,7 +6,9 @@ Procedure:
    beyond what logging conventions explain (stated rule there) is called ``input_delay``, and only when it
    predicts the held-out speed and current better (by ``min_improvement``) than the best lag within them.
 2. Split the log into segments of ``segment_s`` seconds; every ``holdout_every``-th is held out
-   (steady-state sweeps: rows).
+   (steady-state sweeps: rows). Competing models are scored by cross-validation (``cross_validate``): each
+   of the ``holdout_every`` classes of segments is held out in turn, the model fitted on the others, so that
+   every row is held out once (evidence at one slow reversal counts wherever it falls).
 3. **Regression** (:mod:`.regression`): the nominal model's equation residuals against the columns of
    every candidate -- catalogue effects (shaped ones on a grid; angle-periodic torque with its period
    count from the residual's spectrum against rotor angle) and relative errors of the constants.
@@ -62,6 +64,9 @@ class DiagnoseOptions(BaseModel):
 
     segment_s: float = Field(default=0.5, gt=0)
     holdout_every: int = Field(default=3, ge=2)
+    # competing models are scored by cross-validation: each class of segments held out in turn (every row held out
+    # once), rather than on the one class of held-out segments (evidence at a few slow reversals fell in training)
+    cross_validate: bool = True
     min_improvement: float = Field(default=0.12, gt=0, lt=1)  # an effect's held-out score must fall by this
     # [noise units] a model whose every equation is within this of its noise level is done, and an item is adopted
     # only where it enters an equation above it (select._room). 1: the noise level itself. (Until session 10,
@@ -88,20 +93,21 @@ def finite(x: float) -> float | None:
 
 @dataclass(frozen=True)
 class Split:
-    """Training and held-out masks (N,) over log samples."""
+    """Training and held-out masks (N,) over log samples; ``folds``: the held-out masks of cross-validation, each
+    segment class in turn (empty: one split)."""
 
     train: np.ndarray
     test: np.ndarray
+    folds: tuple[np.ndarray, ...] = ()
 
 
-def split(log: Log, segment_s: float, every: int) -> Split:
-    """Every ``every``-th segment (row for sweeps) held out."""
-    if log.kind is LogKind.STEADY_STATE:
-        test = np.arange(log.n) % every == every - 1
-        return Split(~test, test)
-    length = max(2, round(segment_s / log.dt))
-    test = (np.arange(log.n) // length) % every == every - 1
-    return Split(~test, test)
+def split(log: Log, segment_s: float, every: int, cross: bool = False) -> Split:
+    """Every ``every``-th segment (row for sweeps) held out; ``cross``: and as folds, each class of segments in
+    turn."""
+    length = 1 if log.kind is LogKind.STEADY_STATE else max(2, round(segment_s / log.dt))
+    cls = (np.arange(log.n) // length) % every
+    test = cls == every - 1
+    return Split(~test, test, tuple(cls == k for k in range(every)) if cross else ())
 
 
 @dataclass(frozen=True)
@@ -233,7 +239,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     align = estimate(log, opt.max_logging_skew + own if log.kind is LogKind.TIME_SERIES else 0.0, armature)
     seg = min(opt.segment_s, log.n * log.dt / (3 * opt.holdout_every)) if log.kind is LogKind.TIME_SERIES \
         else opt.segment_s  # short logs: shorter segments, so that some are held out
-    sp = split(log, seg, opt.holdout_every)
+    sp = split(log, seg, opt.holdout_every, opt.cross_validate)
     noise = noise_levels(log)
     if align.delay and "input_delay" in _allowed(opt) and not _delay_wins(plant, log, align, own, opt, sp, noise, seg):
         align = within(align, opt.max_logging_skew + own, log.dt)  # a longer lag predicts no better: not a delay
@@ -290,7 +296,8 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
     ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
     search residual) or was found only with the nominal armature (:attr:`.align.Alignment.nominal`: it assumed
     ``L``), ``L`` is judged beside the timing error it cannot be told from (:func:`_open_timing`)."""
-    design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True, held=held)
+    design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True, held=held,
+                   folds=list(sp.folds) or None)
     if log.kind is LogKind.TIME_SERIES:
         if not align.identified or align.nominal:  # (a lag found with the nominal armature assumed L)
             _open_timing(design, plant, log, opt)

@@ -35,6 +35,9 @@ class Fitted:
     train_cost: float
     score: float
     per_eq: np.ndarray  # held-out RMS per equation [sigma units], (3,)
+    #: under cross-validation (:attr:`.regression.Design.g_fold`), the model fitted for each fold (whose held-out
+    #: errors make ``per_eq``); ``cols``/``x`` are then fitted on all rows
+    folds: tuple[Fitted, ...] = ()
 
     def coefficient(self, j: int) -> float:
         return float(self.x[self.cols.index(j)]) if j in self.cols else 0.0
@@ -51,7 +54,7 @@ def ripple_beyond(design: Design, before: Fitted, after: Fitted) -> bool:
     the rows independent for the ripple (``design.angle["independence"]``, :func:`.angle.ripple_independence`):
     a fast ripple decorrelates from a slow residual within a period, not within the rotor time constant."""
     frac = float(design.angle.get("independence", 0.0))  # type: ignore[arg-type]
-    n = max(float(design.n_test[0]) * frac, 1.0)
+    n = max(float(design.n_held[0]) * frac, 1.0)
     return before.per_eq[0] > 0 and 1.0 - after.per_eq[0] / before.per_eq[0] >= math.sqrt(2.0 / n)
 
 
@@ -113,6 +116,15 @@ def ratio_z(design: Design, before: Fitted, after: Fitted) -> np.ndarray:
     errors: with ``d`` the fitted prediction's change on the held-out rows and ``r`` ``after``'s residual there, the
     fall is ``2 r'd + d'd``, and ``r'd`` scatters by ``s sqrt(d'd / q)`` over rows of noise ``s`` independent in a
     fraction ``q`` (:attr:`.regression.Design.independence`); conservative under ``before`` (``2 r'd - d'd``)."""
+    dd = sum(_change(design.fold(k), before.folds[k], after.folds[k]) for k in range(design.folds)) \
+        if design.folds else _change(design, before, after)
+    fall = (before.per_eq ** 2 - after.per_eq ** 2) * design.n_test
+    sd = 2.0 * after.per_eq * np.sqrt(np.maximum(dd, 0.0) / np.maximum(design.independence, 1e-12))
+    return np.where(sd > 0, fall / np.maximum(sd, 1e-300), 0.0) / math.sqrt(max(design.folds, 1))  # (Design.n_held)
+
+
+def _change(design: Design, before: Fitted, after: Fitted) -> np.ndarray:
+    """(3,) per equation, the squared norm of the fitted prediction's change on the held-out rows."""
     cols = sorted(set(before.cols) | set(after.cols))
 
     def full(f: Fitted) -> np.ndarray:
@@ -122,10 +134,7 @@ def ratio_z(design: Design, before: Fitted, after: Fitted) -> np.ndarray:
 
     d = full(after) - full(before)
     idx = np.array(cols, dtype=int)
-    dd = np.array([float(d @ design.g_test[e][np.ix_(idx, idx)] @ d) for e in range(3)])
-    fall = (before.per_eq ** 2 - after.per_eq ** 2) * design.n_test
-    sd = 2.0 * after.per_eq * np.sqrt(np.maximum(dd, 0.0) / np.maximum(design.independence, 1e-12))
-    return np.where(sd > 0, fall / np.maximum(sd, 1e-300), 0.0)
+    return np.array([float(d @ design.g_test[e][np.ix_(idx, idx)] @ d) for e in range(3)])
 
 
 def scatter(design: Design) -> float:
@@ -133,17 +142,19 @@ def scatter(design: Design) -> float:
     all equations pooled at the torque rows' independence (the fewest): a smaller fall of the score is
     sampling noise (low-passed rows are correlated, :attr:`Design.independence`)."""
     live = design.n_test > 0
-    return 2.0 / math.sqrt(2.0 * max(float(design.n_test[live].sum() * design.independence.min()), 1.0))
+    return 2.0 / math.sqrt(2.0 * max(float(design.n_held[live].sum() * design.independence.min()), 1.0))
 
 
-def beyond_scatter(design: Design, before: Fitted, after: Fitted) -> bool:
+def beyond_scatter(design: Design, before: Fitted, after: Fitted, items: Sequence[str] = ()) -> bool:
     """Whether ``after``'s held-out fit is better than ``before``'s beyond sampling noise: the score falls by more
     than :func:`scatter`, or one equation's held-out RMS falls by more than two standard errors over ITS
-    independent rows (``sqrt(2 / n_e)``): an electrical item need not clear the torque rows' scatter."""
+    independent rows (``sqrt(2 / n_e)``): an electrical item need not clear the torque rows' scatter. With the added
+    ``items`` given, only an equation they enter counts alone: another one's fall is the shared constants refitted
+    (a load torque freeing the motor constant for the armature equation), not theirs."""
     if after.score <= (1.0 - scatter(design)) * before.score:
         return True
-    live = (design.n_test > 0) & (before.per_eq > 0)
-    n = np.maximum(design.n_test * design.independence, 1.0)
+    live = (design.n_test > 0) & (before.per_eq > 0) & (equations_of(design, items) if items else True)
+    n = np.maximum(design.n_held * design.independence, 1.0)
     fall = 1.0 - after.per_eq[live] / before.per_eq[live]
     return bool(np.any(fall >= np.sqrt(2.0 / n[live])))
 
@@ -156,16 +167,22 @@ def block_t(design: Design, before: Fitted, after: Fitted) -> tuple[np.ndarray, 
     nb = design.c_blocks.shape[0]
     if nb < 2:
         return np.zeros(3), nb
+    d = np.concatenate([block_falls(design.fold(k), before.folds[k], after.folds[k]) for k in range(design.folds)]) \
+        if design.folds else block_falls(design, before, after)
+    sd = d.std(axis=0, ddof=1)
+    t = np.where(sd > 0, d.mean(axis=0) / np.maximum(sd, 1e-300) * math.sqrt(nb), 0.0)
+    return t, nb
 
-    def sse(f: Fitted) -> np.ndarray:  # (nb, 3)
+
+def block_falls(design: Design, before: Fitted, after: Fitted) -> np.ndarray:
+    """(B, 3) per held-out block and equation, the fall of the squared error from ``before`` to ``after``."""
+
+    def sse(f: Fitted) -> np.ndarray:
         idx = np.array(f.cols, dtype=int)
         g = design.g_blocks[:, :, idx][:, :, :, idx]
         return design.c_blocks - 2 * design.h_blocks[:, :, idx] @ f.x + np.einsum("q,beqr,r->be", f.x, g, f.x)
 
-    d = sse(before) - sse(after)
-    sd = d.std(axis=0, ddof=1)
-    t = np.where(sd > 0, d.mean(axis=0) / np.maximum(sd, 1e-300) * math.sqrt(nb), 0.0)
-    return t, nb
+    return sse(before) - sse(after)
 
 
 def worst(design: Design, f: Fitted) -> float:

@@ -27,9 +27,10 @@ means over each row (:func:`interval_ripple`), so a ripple faster than the sampl
 of aliasing, and its period count is found in the angle domain (:func:`angle_spectrum`; :func:`angle_limits`
 says when the log cannot show it).
 
-Rows are split into training and held-out samples (every ``holdout_every``-th segment); each
-equation is weighted by its noise level. Only Gram matrices leave this module: fitting a model (a
-subset of columns, bounded) and scoring it on held-out rows are ``P x P`` algebra (:mod:`.select`).
+Rows are split into training and held-out samples (every ``holdout_every``-th segment), or into folds held out
+in turn (cross-validation, :attr:`Design.g_fold`); each equation is weighted by its noise level. Only Gram matrices
+leave this module: fitting a model (a subset of columns, bounded) and scoring it on held-out rows are ``P x P``
+algebra (:mod:`.select`).
 """
 
 from __future__ import annotations
@@ -37,7 +38,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy import signal
@@ -133,9 +134,40 @@ class Design:
     g_blocks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0, 0)))
     h_blocks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0)))
     c_blocks: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    #: cross-validation over K folds (each a set of held-out segments, every row held out once): per fold k the
+    #: Gram matrices of its rows, ``g_fold`` (K, 3, Q, Q), ``h_fold`` (K, 3, Q), ``c_fold`` (K, 3), ``n_fold`` (K, 3),
+    #: and each block's fold, ``block_fold`` (B,); ``g_train``/``g_test`` etc. then both hold ALL rows (a model's
+    #: coefficients are fitted on all of them, its score is the folds' held-out error, :meth:`fold`). K = 0: one
+    #: split, ``g_test`` its held-out rows.
+    g_fold: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0, 0)))
+    h_fold: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 0)))
+    c_fold: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    n_fold: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    block_fold: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
+
+    @property
+    def folds(self) -> int:
+        return int(self.g_fold.shape[0])
+
+    @property
+    def n_held(self) -> np.ndarray:
+        """(3,) the held-out rows the sampling-noise formulas of :mod:`.evidence` count: under cross-validation
+        one fold's (the pooled error of K folds comes from K overlapping fits, and the naive variance of a
+        cross-validated comparison understates its scatter: the thresholds stay those of one held-out fold)."""
+        return self.n_test / max(self.folds, 1)
+
+    def fold(self, k: int) -> Design:
+        """Fold ``k`` as a one-split design: trained on every other row, held out on the fold's (its blocks)."""
+        b, o = self.block_fold == k, np.arange(self.folds) != k  # (the other folds summed: no cancellation)
+        return replace(self, g_train=self.g_fold[o].sum(axis=0), h_train=self.h_fold[o].sum(axis=0),
+                       c_train=self.c_fold[o].sum(axis=0), n_train=self.n_fold[o].sum(axis=0),
+                       g_test=self.g_fold[k], h_test=self.h_fold[k], c_test=self.c_fold[k], n_test=self.n_fold[k],
+                       g_blocks=self.g_blocks[b], h_blocks=self.h_blocks[b], c_blocks=self.c_blocks[b],
+                       g_fold=self.g_fold[:0], h_fold=self.h_fold[:0], c_fold=self.c_fold[:0], n_fold=self.n_fold[:0],
+                       block_fold=self.block_fold[:0])
 
 
 def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
@@ -196,8 +228,10 @@ def visible_torque(p: MotorParams, s: Signals, noise: dict[str, float]) -> float
 
 def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects: tuple[str, ...],
           noise: dict[str, float] | None = None, raw_torque: bool = False,
-          held: tuple[np.ndarray, float] | None = None) -> Design:
+          held: tuple[np.ndarray, float] | None = None, folds: list[np.ndarray] | None = None) -> Design:
     """Gram matrices (module doc) of the constants and ``effects`` on the ``train``/``test`` masks (N,).
+    ``folds``: held-out masks (N,) for cross-validation (:attr:`Design.g_fold`; ``train``/``test`` then only serve
+    the noise levels and the ripple's period count).
     ``noise`` (per-sample channel noise, :func:`ocp.identify.predict.noise_levels`) floors the torque
     equation's weight at the smallest torque error a free run would show (:func:`visible_torque`).
     ``raw_torque``: eq. dc_mechanical on the raw rows where an angle is logged (module doc). ``held``: the command
@@ -256,24 +290,46 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         sigma[0] = max(sigma[0], VISIBLE_FRACTION * visible_torque(p, s, noise))
     a_all = np.stack([a for _, a in cols], axis=2) / sigma[:, None, None]  # (3, N, Q)
     tw = t / sigma[:, None]
-    g = {k: np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for k, m in (("tr", train), ("te", test))}
-    h = {k: np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
-    c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in (("tr", train), ("te", test))}
-    n = {"tr": np.full(3, int(train.sum())), "te": np.full(3, int(test.sum()))}
+    tests = [m[:rows] & ~edge for m in folds] if folds else [test]
+    sets = {} if folds else {"tr": train, "te": test}  # (cross-validation: the folds summed, below)
+    g = {k: np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for k, m in sets.items()}
+    h = {k: np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for k, m in sets.items()}
+    c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in sets.items()}
+    n = {k: np.full(3, int(m.sum())) for k, m in sets.items()}
     independence = _independence(p, log, s, tau)
     if angle:  # the ripple's own independence against the torque residual (select: its scatter test)
         angle["independence"] = ripple_independence(theta, periods, float(independence[0]),
                                                     1.0 if raw is not s else float(independence[1]))
-    blocks = _blocks(test, math.ceil(BLOCK_INDEPENDENT / float(independence.min())))
+    per_fold = [_blocks(m, math.ceil(BLOCK_INDEPENDENT / float(independence.min()))) for m in tests]
+    blocks = [b for bs in per_fold for b in bs]
+    cv = _fold_grams(a_all, tw, tests, per_fold) if folds else {}
+    if cv:  # cross-validation: every row is fitted on, the folds are held out in turn (Design.fold)
+        for d_, key in ((g, "g_fold"), (h, "h_fold"), (c, "c_fold"), (n, "n_fold")):
+            d_["tr"] = d_["te"] = cv[key].sum(axis=0)
     gb = np.stack([np.einsum("enq,enr->eqr", a_all[:, b], a_all[:, b]) for b in blocks]) if blocks else None
     hb = np.stack([np.einsum("enq,en->eq", a_all[:, b], tw[:, b]) for b in blocks]) if blocks else None
     cb = np.stack([np.einsum("en,en->e", tw[:, b], tw[:, b]) for b in blocks]) if blocks else None
     q = len(cols)
-    return Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
+    design = Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
                   sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
                   independence, g_blocks=gb if gb is not None else np.zeros((0, 3, q, q)),
                   h_blocks=hb if hb is not None else np.zeros((0, 3, q)),
                   c_blocks=cb if cb is not None else np.zeros((0, 3)))
+    if not cv:
+        return design
+    return replace(design, g_fold=cv["g_fold"], h_fold=cv["h_fold"], c_fold=cv["c_fold"], n_fold=cv["n_fold"],
+                   block_fold=cv["block_fold"])
+
+
+def _fold_grams(a_all: np.ndarray, tw: np.ndarray, tests: list[np.ndarray],
+                per_fold: list[list[np.ndarray]]) -> dict[str, np.ndarray]:
+    """The cross-validation fields of :class:`Design` from the weighted columns ``a_all`` (3, N, Q), targets ``tw``
+    (3, N), the folds' held-out masks (N,) and their blocks."""
+    return {"g_fold": np.stack([np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for m in tests]),
+            "h_fold": np.stack([np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for m in tests]),
+            "c_fold": np.stack([np.einsum("en,en->e", tw[:, m], tw[:, m]) for m in tests]),
+            "n_fold": np.array([np.full(3, int(m.sum())) for m in tests]),
+            "block_fold": np.array([k for k, bs in enumerate(per_fold) for _ in bs], dtype=int)}
 
 
 def edge_taper(edge: np.ndarray, rows: float) -> np.ndarray:

@@ -8,7 +8,9 @@ sign-bounded as the catalogue's lower bounds say; effects outside it are zero. A
 (:attr:`.regression.Design.unresolved`, e.g. ``L`` under a current filter) is a free nuisance (-80 % .. any):
 boxed in, what it stands for would be explained by a wrong item (brush drop, dead band, ``R``).
 Its score is the held-out RMS of the three
-weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise).
+weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise); under
+cross-validation (:attr:`.regression.Design.g_fold`) the model is fitted once per fold on the other folds' rows and
+scored on the fold's, the squared errors pooled (every row held out once); its coefficients are fitted on all rows.
 
 Forward selection adopts, while some equation's held-out RMS is above ``noise_floor``, the best-scoring item
 that enters such an equation (:func:`_room`: one at its noise has nothing left for an item acting there alone)
@@ -134,7 +136,16 @@ def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
             continue
         chosen += _shape_columns(design, chosen, js, named, tol, mix=item not in SATURATING)
     f = _filtered(design, solve(design, chosen, named, tol), chosen, named, tol)
-    return Fitted(tuple(items), f.cols, f.x, f.train_cost, f.score, f.per_eq)
+    if not design.folds:
+        return Fitted(tuple(items), f.cols, f.x, f.train_cost, f.score, f.per_eq)
+    # cross-validation: each fold's held-out error from the same model (shapes chosen, boxes widened) fitted on
+    # every other row; the score pools the folds' squared errors
+    parts = tuple(fit_model(design.fold(k), items, tol) for k in range(design.folds))
+    sse = sum(p.per_eq ** 2 * design.n_fold[k] for k, p in enumerate(parts))
+    ms = sse / np.maximum(design.n_test, 1)
+    live = design.n_test > 0
+    return Fitted(tuple(items), f.cols, f.x, f.train_cost, float(np.sqrt(np.mean(ms[live]))) if live.any()
+                  else math.inf, np.sqrt(ms), parts)
 
 
 def _filtered(design: Design, f: Fitted, chosen: list[int], named: set[str], tol: float) -> Fitted:
@@ -245,7 +256,7 @@ def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], cur
     if not physical(f) or not _room(design, current, (a, b), noise_floor):
         return None
     for before in (current, single[a], single[b]):
-        if not is_material(design, before, f, (a, b), min_improvement) or not beyond_scatter(design, before, f):
+        if not (is_material(design, before, f, (a, b), min_improvement) and beyond_scatter(design, before, f, (a, b))):
             return None
     return [Step(current, [(a, single[a]), *[e for e in tried if e[0] != a]], a), Step(single[a], [(b, f)], b)]
 
@@ -264,7 +275,7 @@ def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement
     material = item in CONSTANTS or is_material(design, current, f, (item,), min_improvement)
     if not material:
         return False
-    return beyond_scatter(design, current, f) or (item in CONSTANTS and (blocks_agree(design, current, item, f)
+    return beyond_scatter(design, current, f, (item,)) or (item in CONSTANTS and (blocks_agree(design, current, item, f)
                                                                          or ratio_agrees(design, current, item, f))) \
         or (item == "cogging" and ripple_beyond(design, current, f))
 
