@@ -83,7 +83,7 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float,
             # what it stands for (a current filter for L) to be explained by a wrong item
             box = tol + design.slack.get(c.item, 0.0)  # (wider where a nuisance could mimic the error)
             a, b = (NAMED_BOUNDS[0], np.inf) if c.item in design.unresolved else \
-                NAMED_BOUNDS if c.item in named else (-box, box + above.get(c.item, 0.0))
+                NAMED_BOUNDS if c.item in named else (-box, min(box + above.get(c.item, 0.0), IMPLAUSIBLE_FACTOR - 1.0))
         elif c.item in SATURATING:  # the drop saturates at its width: amplitude = width (module doc)
             a, b = c.shape / SATURATION_SLACK, c.shape * SATURATION_SLACK
         else:

@@ -42,3 +42,20 @@ def test_the_ambiguity_reason_says_why_the_effect_was_preferred() -> None:
                                                                          "coulomb_friction", "B")
     assert _prior_note(_design(), _fit(1.0, 0.3), "coulomb_friction", "B") == ""
     assert _prior_note(_design(), _fit(1.0, 2.5), "R", "B") == ""  # a constant adopted: no effect was preferred
+
+
+def test_a_calibration_box_open_above_stops_at_the_implausible_factor() -> None:
+    """``L`` free above nominal (a current filter could raise the apparent inductance, Design.above) is still
+    calibrated at most to twice its nominal: one fold of a 10 kHz clean log (6056) put it at 4.5x, and the
+    held-out error of that fold made a current offset look needed."""
+    from ocp.identify.evidence import IMPLAUSIBLE_FACTOR
+    from ocp.identify.select import _bounds
+
+    d = _design()
+    d.columns[0] = Column("L", "L")
+    lo, hi = _bounds(d, [0], set(), 0.1, {"L": np.inf})
+    assert lo[0] == -0.1 and hi[0] == IMPLAUSIBLE_FACTOR - 1.0
+    lo, hi = _bounds(d, [0], set(), 0.1, {"L": 0.25})  # a finite widening below the cap is kept
+    assert hi[0] == 0.35
+    lo, hi = _bounds(d, [0], {"L"}, 0.1, {"L": np.inf})  # named: the named bounds
+    assert (lo[0], hi[0]) == (-0.8, 3.0)
