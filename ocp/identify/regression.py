@@ -291,45 +291,37 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     a_all = np.stack([a for _, a in cols], axis=2) / sigma[:, None, None]  # (3, N, Q)
     tw = t / sigma[:, None]
     tests = [m[:rows] & ~edge for m in folds] if folds else [test]
-    sets = {} if folds else {"tr": train, "te": test}  # (cross-validation: the folds summed, below)
-    g = {k: np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for k, m in sets.items()}
-    h = {k: np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for k, m in sets.items()}
-    c = {k: np.einsum("en,en->e", tw[:, m], tw[:, m]) for k, m in sets.items()}
-    n = {k: np.full(3, int(m.sum())) for k, m in sets.items()}
+    fg, fh, fc = _grams(a_all, tw, tests)  # (one set when not cross-validating: the held-out rows)
+    if folds:  # cross-validation: every row is fitted on, the folds are held out in turn (Design.fold)
+        (g_tr, h_tr, c_tr), n_tr = (fg.sum(axis=0), fh.sum(axis=0), fc.sum(axis=0)), sum(int(m.sum()) for m in tests)
+        g_te, h_te, c_te, n_te = g_tr, h_tr, c_tr, n_tr
+    else:
+        (g_tr, h_tr, c_tr), n_tr = (x[0] for x in _grams(a_all, tw, [train])), int(train.sum())
+        g_te, h_te, c_te, n_te = fg[0], fh[0], fc[0], int(test.sum())
     independence = _independence(p, log, s, tau)
     if angle:  # the ripple's own independence against the torque residual (select: its scatter test)
         angle["independence"] = ripple_independence(theta, periods, float(independence[0]),
                                                     1.0 if raw is not s else float(independence[1]))
     per_fold = [_blocks(m, math.ceil(BLOCK_INDEPENDENT / float(independence.min()))) for m in tests]
-    blocks = [b for bs in per_fold for b in bs]
-    cv = _fold_grams(a_all, tw, tests, per_fold) if folds else {}
-    if cv:  # cross-validation: every row is fitted on, the folds are held out in turn (Design.fold)
-        for d_, key in ((g, "g_fold"), (h, "h_fold"), (c, "c_fold"), (n, "n_fold")):
-            d_["tr"] = d_["te"] = cv[key].sum(axis=0)
-    gb = np.stack([np.einsum("enq,enr->eqr", a_all[:, b], a_all[:, b]) for b in blocks]) if blocks else None
-    hb = np.stack([np.einsum("enq,en->eq", a_all[:, b], tw[:, b]) for b in blocks]) if blocks else None
-    cb = np.stack([np.einsum("en,en->e", tw[:, b], tw[:, b]) for b in blocks]) if blocks else None
-    q = len(cols)
-    design = Design([c_ for c_, _ in cols], g["tr"], g["te"], h["tr"], h["te"], c["tr"], c["te"], n["tr"], n["te"],
-                  sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
-                  independence, g_blocks=gb if gb is not None else np.zeros((0, 3, q, q)),
-                  h_blocks=hb if hb is not None else np.zeros((0, 3, q)),
-                  c_blocks=cb if cb is not None else np.zeros((0, 3)))
-    if not cv:
+    gb, hb, cb = _grams(a_all, tw, [b for bs in per_fold for b in bs])
+    design = Design([c_ for c_, _ in cols], g_tr, g_te, h_tr, h_te, c_tr, c_te, np.full(3, n_tr), np.full(3, n_te),
+                    sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
+                    independence, g_blocks=gb, h_blocks=hb, c_blocks=cb)
+    if not folds:
         return design
-    return replace(design, g_fold=cv["g_fold"], h_fold=cv["h_fold"], c_fold=cv["c_fold"], n_fold=cv["n_fold"],
-                   block_fold=cv["block_fold"])
+    return replace(design, g_fold=fg, h_fold=fh, c_fold=fc, n_fold=np.array([np.full(3, int(m.sum())) for m in tests]),
+                   block_fold=np.array([k for k, bs in enumerate(per_fold) for _ in bs], dtype=int))
 
 
-def _fold_grams(a_all: np.ndarray, tw: np.ndarray, tests: list[np.ndarray],
-                per_fold: list[list[np.ndarray]]) -> dict[str, np.ndarray]:
-    """The cross-validation fields of :class:`Design` from the weighted columns ``a_all`` (3, N, Q), targets ``tw``
-    (3, N), the folds' held-out masks (N,) and their blocks."""
-    return {"g_fold": np.stack([np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for m in tests]),
-            "h_fold": np.stack([np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for m in tests]),
-            "c_fold": np.stack([np.einsum("en,en->e", tw[:, m], tw[:, m]) for m in tests]),
-            "n_fold": np.array([np.full(3, int(m.sum())) for m in tests]),
-            "block_fold": np.array([k for k, bs in enumerate(per_fold) for _ in bs], dtype=int)}
+def _grams(a_all: np.ndarray, tw: np.ndarray, rows: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per set of rows (K masks or index arrays over N): from the weighted columns ``a_all`` (3, N, Q) and targets
+    ``tw`` (3, N), the Gram matrices ``A'A`` (K, 3, Q, Q), ``A'r`` (K, 3, Q) and ``r'r`` (K, 3) per equation."""
+    q = a_all.shape[2]
+    if not rows:
+        return np.zeros((0, 3, q, q)), np.zeros((0, 3, q)), np.zeros((0, 3))
+    return (np.stack([np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for m in rows]),
+            np.stack([np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for m in rows]),
+            np.stack([np.einsum("en,en->e", tw[:, m], tw[:, m]) for m in rows]))
 
 
 def edge_taper(edge: np.ndarray, rows: float) -> np.ndarray:

@@ -8,7 +8,7 @@ from dataclasses import replace
 import numpy as np
 
 from ocp.identify.evidence import Fitted, beyond_scatter, block_t, ratio_z
-from ocp.identify.regression import Column, Design, _blocks, _fold_grams
+from ocp.identify.regression import Column, Design, _blocks
 from ocp.identify.select import fit_model
 
 N, K = 600, 3
@@ -34,7 +34,11 @@ def _design(a: np.ndarray, t: np.ndarray, folds: list[np.ndarray]) -> Design:
                   np.ones(3), g_blocks=np.stack([np.einsum("enq,enr->eqr", a[:, b], a[:, b]) for b in blocks]),
                   h_blocks=np.stack([np.einsum("enq,en->eq", a[:, b], t[:, b]) for b in blocks]),
                   c_blocks=np.stack([np.einsum("en,en->e", t[:, b], t[:, b]) for b in blocks]),
-                  **_fold_grams(a, t, folds, per_fold))
+                  g_fold=np.stack([np.einsum("enq,enr->eqr", a[:, m], a[:, m]) for m in folds]),
+                  h_fold=np.stack([np.einsum("enq,en->eq", a[:, m], t[:, m]) for m in folds]),
+                  c_fold=np.stack([np.einsum("en,en->e", t[:, m], t[:, m]) for m in folds]),
+                  n_fold=np.array([np.full(3, int(m.sum())) for m in folds]),
+                  block_fold=np.array([k for k, bs in enumerate(per_fold) for _ in bs]))
 
 
 def _oracle(a: np.ndarray, t: np.ndarray, folds: list[np.ndarray], cols: list[int]) -> np.ndarray:
