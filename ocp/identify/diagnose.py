@@ -36,7 +36,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.identify.align import SKEW_FRACTION, Alignment, estimate, realign, spread, within
 from ocp.identify.candidates import candidate
-from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted
+from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
     KEYS,
     calibration,
@@ -309,7 +309,7 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
     ok = functools.partial(physical, design)
     sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
                  opt.ambiguity_margin, None if progress is None else (lambda f: progress(0.2 + 0.6 * f)), ok)
-    if "L" in design.slack and "L" in sel.final.items and _implausible(design, sel.final, "L"):
+    if "L" in design.slack and "L" in sel.final.items and implausible_factor(design, sel.final, "L") is not None:
         # beyond a factor two under an open timing: a timing error beyond the conventions (an unconfirmed
         # delay) is the likelier explanation (the prior of .select): L is unresolved, the selection redone
         del design.slack["L"]
@@ -322,12 +322,6 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
         sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
                      opt.ambiguity_margin, physical=ok)
     return design, sel
-
-
-def _implausible(design: Design, f: Fitted, item: str) -> bool:
-    """Whether constant ``item`` is fitted in ``f`` beyond :data:`.evidence.IMPLAUSIBLE_FACTOR` of its nominal."""
-    factor = 1.0 + f.coefficient(design.index(item)[0])
-    return max(factor, 1.0 / max(factor, 1e-9)) > IMPLAUSIBLE_FACTOR
 
 
 def _open_timing(design: Design, plant: DCMotorPlant, log: Log, opt: DiagnoseOptions) -> None:

@@ -114,10 +114,13 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float,
     cost = float(design.c_train.sum() - 2 * h @ x + x @ g @ x)
     ms = np.array([(design.c_test[e] - 2 * design.h_test[e][idx] @ x + x @ design.g_test[e][np.ix_(idx, idx)] @ x)
                    / max(design.n_test[e], 1) for e in range(3)])
+    return Fitted((), tuple(int(j) for j in idx), x, cost, _score(design, ms), np.sqrt(np.maximum(ms, 0.0)))
+
+
+def _score(design: Design, ms: np.ndarray) -> float:
+    """The held-out score from the equations' mean squared errors ``ms`` (3,) [noise units squared] (module doc)."""
     live = design.n_test > 0
-    per_eq = np.sqrt(np.maximum(ms, 0.0))
-    score = float(np.sqrt(np.mean(ms[live]))) if live.any() else math.inf
-    return Fitted((), tuple(int(j) for j in idx), x, cost, score, per_eq)
+    return float(np.sqrt(np.mean(ms[live]))) if live.any() else math.inf
 
 
 def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
@@ -143,9 +146,7 @@ def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
     parts = tuple(fit_model(design.fold(k), items, tol) for k in range(design.folds))
     sse = sum(p.per_eq ** 2 * design.n_fold[k] for k, p in enumerate(parts))
     ms = sse / np.maximum(design.n_test, 1)
-    live = design.n_test > 0
-    return Fitted(tuple(items), f.cols, f.x, f.train_cost, float(np.sqrt(np.mean(ms[live]))) if live.any()
-                  else math.inf, np.sqrt(ms), parts)
+    return Fitted(tuple(items), f.cols, f.x, f.train_cost, _score(design, ms), np.sqrt(ms), parts)
 
 
 def _filtered(design: Design, f: Fitted, chosen: list[int], named: set[str], tol: float) -> Fitted:
