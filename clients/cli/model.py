@@ -100,6 +100,15 @@ def _print_points(d: dict[str, Any]) -> None:
               f"idle power {_g(drive.get('idle_power_W'), '.3g')} W")
 
 
+def _kept(c: dict[str, Any]) -> str:
+    """A calibration row's note when the calibrated plant does not take the fitted value (the log cannot
+    resolve the constant, or that side of it: ``applied`` differs from ``relative``)."""
+    a, r = c.get("applied"), c.get("relative")
+    if not isinstance(a, int | float) or not isinstance(r, int | float) or abs(a - r) <= 1e-12:
+        return ""
+    return "  (not resolved by this log: the plant keeps " + ("nominal)" if a == 0 else f"{100 * a:+.1f} %)")
+
+
 def _print_equations(d: dict[str, Any]) -> None:
     """The equations checked and those that could not be, with why (text output)."""
     for note in d.get("notes", []):
@@ -330,7 +339,7 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
         for k, c in cal.items():
             rel = 100 * c["relative"] if isinstance(c["relative"], int | float) else None
             print(f"  {k:6s} {_g(c['nominal'], '.4g'):>10s} -> {_g(c['fitted'], '.4g'):>10s} {c['unit']:16s} "
-                  f"{_g(rel, '+6.1f')} %{'  NAMED' if c['named'] else ''}")
+                  f"{_g(rel, '+6.1f')} %{'  NAMED' if c['named'] else ''}{_kept(c)}")
     ap = d.get("angle_periodic")
     if ap:
         print(f"angle-periodic torque: best fit at {ap['periods']} periods/rev, "

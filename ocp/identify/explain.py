@@ -63,12 +63,26 @@ def _blend(parts: list[tuple[float, float]]) -> tuple[float, float]:
     return math.exp(sum(x * math.log(s) for s, x in parts) / total), total
 
 
+def applied(design: Design, f: Fitted, const: str) -> float:
+    """The relative error of ``const`` the calibrated plant takes: the fitted one, except where the log cannot
+    resolve the constant (:attr:`.regression.Design.unresolved`: its column is then a free nuisance, e.g. ``L``
+    under two samples taking up a current filter, fitted at 5x or 3e7x nominal) or only one side of it
+    (:attr:`.regression.Design.one_sided`: ``L`` above nominal is the logger's filter or timing): there the
+    nominal value stays. A plant optimised under current limits with a filter's apparent inductance would
+    under-predict its current peaks."""
+    x = relative(design, f, const)
+    if const in design.unresolved:
+        return 0.0
+    return min(x, 0.0) if const in design.one_sided else x
+
+
 def params_of(p: MotorParams, design: Design, f: Fitted) -> MotorParams:
-    """Nominal constants scaled by their fitted relative errors (calibration and named corrections)."""
+    """Nominal constants scaled by the relative errors the plant takes (:func:`applied`: calibration and named
+    corrections)."""
     data = p.model_dump()
     for c in CONSTANTS:
         for key in KEYS[c]:
-            data[key] = float(data[key]) * (1.0 + relative(design, f, c))
+            data[key] = float(data[key]) * (1.0 + applied(design, f, c))
     data["B"] = max(data["B"], 0.0)
     return MotorParams(**data)
 
@@ -97,12 +111,14 @@ def plant_of(plant: DCMotorPlant, design: Design, f: Fitted, delay: float | None
 
 
 def calibration(p: MotorParams, design: Design, f: Fitted, tol: float) -> dict[str, dict[str, Any]]:
-    """Per constant: nominal, fitted, relative change, and whether it is named (beyond ``tol``)."""
+    """Per constant: nominal, fitted (the column's apparent value), relative change, the relative change the
+    calibrated plant takes (:func:`applied`), and whether it is named (beyond ``tol``)."""
     out = {}
     for c in CONSTANTS:
         x = relative(design, f, c)
         nominal = float(getattr(p, KEYS[c][0]))
         out[c] = {"nominal": nominal, "fitted": nominal * (1.0 + x), "relative": x, "unit": UNITS[c],
+                  "applied": applied(design, f, c),  # the relative error the calibrated plant takes
                   "named": c in f.items, "within_tolerance": bool(abs(x) <= tol + 1e-9),
                   "unresolved": design.unresolved.get(c) or design.one_sided.get(c),  # free (reason)
                   "slack": design.slack.get(c)}  # the box widened by what a nuisance mimics (Design.slack)

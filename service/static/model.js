@@ -206,7 +206,9 @@ function showDiagnosisDetails(res, after) {
   const keys = Object.keys(cal);
   if (keys.length) {
     const tol = 100 * (res.tolerance ?? 0.1);
-    const parts = keys.map((k) => `${k} ${fmt(100 * cal[k].relative, 2)} %${cal[k].named ? " (named)" : ""}`);
+    const kept = (c) => (typeof c.applied === "number" && Math.abs(c.applied - c.relative) > 1e-12
+      ? ` (not resolved by this log: plant keeps ${c.applied === 0 ? "nominal" : fmt(100 * c.applied, 2) + " %"})` : "");
+    const parts = keys.map((k) => `${k} ${fmt(100 * cal[k].relative, 2)} %${cal[k].named ? " (named)" : ""}${kept(cal[k])}`);
     line(`Calibration (within ±${fmt(tol, 2)} % a constant is refined, not named): ${parts.join(", ")}`, "m-calibration");
   }
   const ap = res.angle_periodic;
