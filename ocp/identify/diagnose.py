@@ -68,10 +68,10 @@ class DiagnoseOptions(BaseModel):
     # once), rather than on the one class of held-out segments (evidence at a few slow reversals fell in training)
     cross_validate: bool = True
     min_improvement: float = Field(default=0.12, gt=0, lt=1)  # an effect's held-out score must fall by this
-    # [noise units] a model whose every equation is within this of its noise level is done, and an item is adopted
-    # only where it enters an equation above it (select._room). 1: the noise level itself. (Until session 10,
-    # 1.15 for the worst equation alone: a viscous B error halving a torque equation at 1.149 noise units was
-    # not looked at, while an inductance error could be named beside a thrust equation at 1.07.)
+    # [noise units] a model whose every equation is within this of its noise level is done. 1: the noise level
+    # itself. (Until session 10, 1.15: a viscous B error halving a torque equation at 1.149 noise units was not
+    # looked at.) A constant is named only for an equation above it; an effect's material fall may also show an
+    # equation's noise level overestimated (module doc of .select).
     noise_floor: float = Field(default=1.0, gt=0)
     max_effects: int = Field(default=3, ge=1, le=10)  # at most this many items in the verdict
     include_params: bool = True  # constants may be named beyond the tolerance (else: calibration only)
