@@ -2,8 +2,8 @@
 is above it (1: the noise level itself). An effect then wins in whichever equation it enters: a noise level is an
 estimate, and an effect's material fall below it shows that it was too high (until session 12, effects too were
 held to the equations above the floor, and a 10 kHz log's angle ripple cutting its torque equation from 0.86 to
-0.25 noise units was never named); a constant, named without a material fall, only in an equation above it. Hand-made regressions (rows independent, residuals in noise units, 4000 rows a
-third held out)."""
+0.25 noise units was never named); a constant, named without a material fall, only in an equation above it.
+Hand-made regressions (rows independent, residuals in noise units, 4000 rows a third held out)."""
 
 from __future__ import annotations
 
@@ -32,8 +32,8 @@ def _design(eq: int, signal: float, noise: float, other: float, seed: int = 5, i
         for g, h, c, rows in ((g_tr, h_tr, c_tr, train), (g_te, h_te, c_te, test)):
             g[k], h[k], c[k] = cols[rows].T @ cols[rows], cols[rows].T @ y[rows], y[rows] @ y[rows]
     live = np.array([k in {p[0] for p in parts} for k in range(3)], int)
-    return Design([Column(item, "f0" if item == EFFECT else item), Column("c_f", "c_f")], g_tr, g_te, h_tr, h_te, c_tr, c_te,
-                  live * int(train.sum()), live * int(test.sum()), np.ones(3))
+    return Design([Column(item, "f0" if item == EFFECT else item), Column("c_f", "c_f")], g_tr, g_te, h_tr, h_te,
+                  c_tr, c_te, live * int(train.sum()), live * int(test.sum()), np.ones(3))
 
 
 def _adopted(d: Design, floor: float, item: str = EFFECT) -> tuple[str, ...]:
