@@ -95,14 +95,16 @@ def blocks_agree(design: Design, current: Fitted, item: str, f: Fitted) -> bool:
 
 
 def ratio_agrees(design: Design, current: Fitted, item: str, f: Fitted) -> bool:
-    """Whether a constant freed beyond the tolerance (``f``, nested over ``current``: one box opened) wins a
+    """Whether a constant freed beyond the tolerance, or an effect added (``f``, nested over ``current``) wins a
     held-out likelihood-ratio test (:func:`ratio_z`) in the TORQUE equation, if its column enters it: the held-out
     squared error falls beyond the one-sided :data:`BLOCK_ALPHA` normal quantile, by :data:`BLOCK_FALL` of its RMS
     at least, the blocks agreeing in sign (:func:`block_t`). The speed view's rows are few and correlated: with four
     to six blocks the block test's Student quantile (3.4-4.5) left a change of a third of the torque error unnamed,
-    while the fall's scatter is known from the residual. (Not the armature equation: a current filter the torque
-    rows do not show adds ``R t_f i'`` there, L's own column, so its residual is not noise alone.) Only a plausible
-    error (within :data:`IMPLAUSIBLE_FACTOR`) is named so."""
+    while the fall's scatter is known from the residual; an effect that cut a 10 kHz log's torque equation by 97 %
+    was held to ``sqrt(2 / n_e)`` over one or two independent rows. (Not the armature equation: a current filter
+    the torque rows do not show adds ``R t_f i'`` there, L's own column, so its residual is not noise alone.) Only
+    a plausible error (within :data:`IMPLAUSIBLE_FACTOR`) is named so; an effect must be material as well
+    (:func:`is_material`, the caller's)."""
     if implausible_factor(design, f, item) is not None:
         return False
     (t, nb), js = block_t(design, current, f), design.index(item)

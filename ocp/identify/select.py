@@ -23,11 +23,12 @@ equation's own) -- for an effect also by at least ``min_improvement`` (its mater
 equation the effect does not enter counted at most at its noise level); a constant's materiality is the tolerance
 itself (calibration already takes the first ``tol`` of its error, and beyond it the user wants the name), so a
 constant freed beyond it needs only to win beyond sampling noise -- or, the models being nested and scored on the
-same rows, in a paired comparison over held-out blocks or a likelihood ratio. After the forward rounds, each
-adopted constant, then each effect but the last one adopted, is tested again beside all the other adopted items,
-and dropped (a constant: calibrated, not named) where it no longer wins: a greedy first pick that stood for a mix
-of the items adopted after it (a thrust asymmetry taken first for a wake lag and a force offset) leaves nothing of
-its own once they are in.
+same rows, in a paired comparison over held-out blocks or a likelihood ratio (the torque equation's likelihood
+ratio judges an effect's material fall too: on a fast, short log its rows are too few for any other test).
+After the forward rounds, each adopted constant, then each effect but the last one adopted, is tested again
+beside all the other adopted items, and dropped (a constant: calibrated, not named) where it no longer wins: a
+greedy first pick that stood for a mix of the items adopted after it (a thrust asymmetry taken first for a wake lag
+and a force offset) leaves nothing of its own once they are in.
 Where no item clears that alone, two that clear it only together (and each against the other alone) are adopted
 as a pair (:func:`_pair`).
 A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` yields to an effect that fits as
@@ -281,8 +282,8 @@ def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement
     material = item in CONSTANTS or is_material(design, current, f, (item,), min_improvement)
     if not material:
         return False
-    return beyond_scatter(design, current, f, (item,)) or (item in CONSTANTS and (blocks_agree(design, current, item, f)
-                                                                         or ratio_agrees(design, current, item, f))) \
+    return beyond_scatter(design, current, f, (item,)) or ratio_agrees(design, current, item, f) \
+        or (item in CONSTANTS and blocks_agree(design, current, item, f)) \
         or (item == "cogging" and ripple_beyond(design, current, f))
 
 
