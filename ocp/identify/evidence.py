@@ -20,6 +20,11 @@ from ocp.identify.regression import CONSTANTS, Design
 IMPLAUSIBLE_FACTOR = 2.0
 #: the paired block test of a constant (:func:`blocks_agree`): one-sided level, and the fewest held-out blocks
 BLOCK_ALPHA = 0.01
+#: ... the level an EFFECT's likelihood ratio is held to (:func:`ratio_agrees`): a round tries about ten effects
+#: (and shapes of each) against one constant's freed box, so each at a tenth of a constant's level keeps a round's
+#: chance of a false adoption near :data:`BLOCK_ALPHA` (at 1 % a drag asymmetry was named for the 1.8-noise-unit
+#: residual a Coulomb column leaves on the project's own rig log, z = 2.39)
+EFFECT_ALPHA = 0.001
 BLOCK_MIN = 4
 #: ... and the fall of that equation's held-out RMS it needs (the tolerance's own 10 %: a constant's materiality)
 BLOCK_FALL = 0.10
@@ -103,14 +108,15 @@ def ratio_agrees(design: Design, current: Fitted, item: str, f: Fitted) -> bool:
     while the fall's scatter is known from the residual; an effect that cut a 10 kHz log's torque equation by 97 %
     was held to ``sqrt(2 / n_e)`` over one or two independent rows. (Not the armature equation: a current filter
     the torque rows do not show adds ``R t_f i'`` there, L's own column, so its residual is not noise alone.) Only
-    a plausible error (within :data:`IMPLAUSIBLE_FACTOR`) is named so; an effect must be material as well
-    (:func:`is_material`, the caller's)."""
+    a plausible error (within :data:`IMPLAUSIBLE_FACTOR`) is named so; an effect is held to :data:`EFFECT_ALPHA`
+    and must be material as well (:func:`is_material`, the caller's)."""
     if implausible_factor(design, f, item) is not None:
         return False
     (t, nb), js = block_t(design, current, f), design.index(item)
     enters = bool(np.any(design.g_train[0, js, js] > 0)) and design.n_test[0] > 0  # eq. dc_mechanical only
+    alpha = BLOCK_ALPHA if item in CONSTANTS else EFFECT_ALPHA
     return enters and bool(nb < 2 or t[0] > 0) and f.per_eq[0] <= (1.0 - BLOCK_FALL) * current.per_eq[0] \
-        and ratio_z(design, current, f)[0] >= stats.norm.ppf(1.0 - BLOCK_ALPHA)
+        and ratio_z(design, current, f)[0] >= stats.norm.ppf(1.0 - alpha)
 
 
 def ratio_z(design: Design, before: Fitted, after: Fitted) -> np.ndarray:

@@ -4,7 +4,9 @@ With one held-out class of segments, an effect that shows at one or two slow rev
 segments only: where those reversals fall in training segments, the held-out rows carry almost none of it and the
 effect is not named. Cross-validation holds every class out in turn, so every row is held out once. Proving-ground
 draws from the session's tuning seeds (never the reported seeds 0..199): a 500 Hz log (PRBS, sweep, ramp) and a
-10 kHz log (chirp, steps) of a motor with Stribeck friction and nothing else; the single split misses both.
+10 kHz log (chirp, steps) of a motor with Stribeck friction and nothing else; the single split missed both until
+session 12, when effects too could win by the torque equation's likelihood ratio: that test names the 10 kHz one
+on the single split as well (its torque rows are few: one held-out class of them is enough for a ratio).
 """
 
 from __future__ import annotations
@@ -20,14 +22,14 @@ from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import make_case
 
 
-@pytest.mark.parametrize("seed", [2043, 2100])
-def test_stribeck_at_few_reversals_is_named_under_cross_validation(seed: int) -> None:
+@pytest.mark.parametrize(("seed", "single"), [(2043, []), (2100, ["stribeck"])])
+def test_stribeck_at_few_reversals_is_named_under_cross_validation(seed: int, single: list[str]) -> None:
     case = make_case(seed)
     assert case.expected == {"stribeck"}
     t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
     log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
     plant = DCMotorPlant(MotorParams(**case.nominal))
-    assert diagnose(plant, log, DiagnoseOptions(cross_validate=False)).verdict == []  # the single split
+    assert diagnose(plant, log, DiagnoseOptions(cross_validate=False)).verdict == single  # the single split
     res = diagnose(plant, log)
     assert res.verdict == ["stribeck"]
     fitted = [e for e in res.plant.effects if e.name == "stribeck"]
