@@ -32,7 +32,7 @@ HELD = 2000
 Q = 2 / HELD
 
 
-def _design(signal: float, noise: float, seed: int = 3, q: float = Q) -> Design:
+def _design(signal: float, noise: float, seed: int = 3) -> Design:
     rng = np.random.default_rng(seed)
     n = 3 * HELD
     x, e = rng.standard_normal((2, n))
@@ -43,7 +43,7 @@ def _design(signal: float, noise: float, seed: int = 3, q: float = Q) -> Design:
         g[k, 0, 0, 0], h[k, 0, 0], c[k, 0] = x[rows] @ x[rows], x[rows] @ y[rows], y[rows] @ y[rows]
     live = np.array([1, 0, 0])
     return Design([Column(EFFECT, "tau_c"), Column("J", "J")], g[0], g[1], h[0], h[1], c[0], c[1],
-                  live * int((~test).sum()), live * HELD, np.ones(3), independence=np.array([q, 1.0, 1.0]))
+                  live * int((~test).sum()), live * HELD, np.ones(3), independence=np.array([Q, 1.0, 1.0]))
 
 
 def _chosen(d: Design) -> tuple[str, ...]:
