@@ -9,6 +9,9 @@ nominal constants; its verdict is compared with the truth.
     python bench/modelcheck.py                 # 200 logs, seeds 0..199, 2 processes
     python bench/modelcheck.py --n 40 --first 1000   # a tuning set (keep tuning seeds apart from these)
     python bench/modelcheck.py --n 100 --first 1000 --cache /tmp/pg   # keep generated logs for the next run
+    python bench/modelcheck.py --n 200 --first 2000 --json new.json   # every record, for the two below
+    python bench/modelcheck.py --records a.json b.json   # the table of recorded runs (merged), nothing diagnosed
+    python bench/modelcheck.py --compare old.json new.json   # seed by seed: the logs a change fixed and broke
 
 Prints: verdicts exactly right, false alarms on clean logs, per label (effect or named constant)
 precision and recall with counts, alignment error, time per log (diagnose only, and generating).
@@ -106,6 +109,40 @@ def table(rows: list[dict[str, Any]]) -> str:
     return "\n".join(lines)
 
 
+def compare(old: list[dict[str, Any]], new: list[dict[str, Any]]) -> str:
+    """Seed by seed over the seeds both recorded runs hold: each log whose verdict changed (FIXED: now exactly
+    right, BROKE: no longer, CHANGED: wrong either way), then the exact verdicts and the false alarms on clean logs
+    before and after (how a change to the identifier is judged: no set's total falls, no clean log gains a verdict)."""
+    a, b = ({r["seed"]: r for r in rows} for rows in (old, new))
+    seeds = sorted(set(a) & set(b))
+    right = lambda r: set(r["verdict"]) == set(r["expected"])  # noqa: E731
+    lines = []
+    for s in (s for s in seeds if set(a[s]["verdict"]) != set(b[s]["verdict"])):
+        tag = "FIXED" if right(b[s]) and not right(a[s]) else "BROKE" if right(a[s]) and not right(b[s]) else "CHANGED"
+        lines.append(f"{tag:8s}{s:6d} {b[s]['kind']:13s} expected {b[s]['expected']} {a[s]['verdict']} -> "
+                     f"{b[s]['verdict']} rate {b[s]['rate']:g} {b[s]['excitations']}")
+    alarms = lambda d: sum(1 for s in seeds if not d[s]["expected"] and d[s]["verdict"])  # noqa: E731
+    lines.append(f"{len(seeds)} logs: exactly right {sum(right(a[s]) for s in seeds)} -> "
+                 f"{sum(right(b[s]) for s in seeds)}, false alarms on clean logs {alarms(a)} -> {alarms(b)}")
+    return "\n".join(lines)
+
+
+def _records(paths: list[str]) -> list[dict[str, Any]]:
+    rows = {r["seed"]: r for p in paths for r in json.loads(Path(p).read_text(encoding="utf-8"))}
+    return [rows[s] for s in sorted(rows)]
+
+
+def _run(seeds: range, args: argparse.Namespace) -> list[dict[str, Any]]:
+    """Every seed's record (:func:`one`) in ``args.procs`` processes, by seed."""
+    with multiprocessing.get_context("spawn").Pool(args.procs) as pool:
+        rows = []
+        for k, r in enumerate(pool.imap_unordered(functools.partial(one, cache=args.cache), seeds), 1):
+            rows.append(r)
+            print(f"\r{k}/{len(seeds)}", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    return sorted(rows, key=lambda r: r["seed"])
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=200, help="number of logs")
@@ -116,18 +153,18 @@ def main(argv: list[str] | None = None) -> int:
                     help="folder of generated logs: read a seed's log from it, write it there when missing "
                          "(only the diagnosis is then timed afresh; the generator's code is not checked)")
     ap.add_argument("--misses", action="store_true", help="list the wrong verdicts")
+    ap.add_argument("--records", nargs="+", metavar="JSON", help="print the table of these recorded runs (--json "
+                    "files, merged by seed) instead of diagnosing")
+    ap.add_argument("--compare", nargs=2, metavar=("OLD", "NEW"), help="compare two recorded runs seed by seed")
     args = ap.parse_args(argv)
-    seeds = range(args.first, args.first + args.n)
+    if args.compare:
+        print(compare(*(_records([p]) for p in args.compare)))
+        return 0
     t0 = time.perf_counter()
-    with multiprocessing.get_context("spawn").Pool(args.procs) as pool:
-        rows = []
-        for k, r in enumerate(pool.imap_unordered(functools.partial(one, cache=args.cache), seeds), 1):
-            rows.append(r)
-            print(f"\r{k}/{args.n}", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
-    rows.sort(key=lambda r: r["seed"])
+    rows = _records(args.records) if args.records else _run(range(args.first, args.first + args.n), args)
     print(table(rows))
-    print(f"wall time {time.perf_counter() - t0:.0f} s with {args.procs} processes")
+    if not args.records:
+        print(f"wall time {time.perf_counter() - t0:.0f} s with {args.procs} processes")
     if args.misses:
         for r in rows:
             if set(r["verdict"]) != set(r["expected"]):

@@ -1,0 +1,52 @@
+"""``bench/modelcheck.py`` on recorded runs: ``--records`` re-tabulates ``--json`` files (merged by seed) without
+diagnosing, ``--compare`` lists seed by seed what a change fixed and broke -- how a change to the identifier is judged
+(README, Model check). Hand-made records; the module is loaded from its file (``bench`` is no package)."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+from pathlib import Path
+from types import ModuleType
+from typing import Any
+
+import pytest
+
+BENCH = Path(__file__).resolve().parents[2] / "bench" / "modelcheck.py"
+
+
+def _bench() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("modelcheck_bench", BENCH)
+    assert spec is not None and spec.loader is not None
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def _rec(seed: int, expected: list[str], verdict: list[str]) -> dict[str, Any]:
+    return {"seed": seed, "kind": "one" if expected else "clean", "expected": expected, "verdict": verdict,
+            "error": None, "ambiguous": False, "rate": 1000.0, "n": 3000, "speed": "encoder", "excitations": ["prbs"],
+            "true_lag": 1.0, "alignment": 1.0, "constant_error": {}, "t_generate": 0.1, "t_diagnose": 0.5}
+
+
+OLD = [_rec(1, ["stribeck"], []), _rec(2, ["cogging"], ["cogging"]), _rec(3, [], []), _rec(4, ["B"], ["R"]),
+       _rec(5, ["R"], ["R"])]
+NEW = [_rec(1, ["stribeck"], ["stribeck"]), _rec(2, ["cogging"], []), _rec(3, [], ["param:L"]),
+       _rec(4, ["B"], ["J"]), _rec(6, ["k"], ["k"])]
+
+
+def test_compare_lists_what_a_change_fixed_and_broke() -> None:
+    out = _bench().compare(OLD, NEW).splitlines()
+    tags = {int(line.split()[1]): line.split()[0] for line in out[:-1]}
+    assert tags == {1: "FIXED", 2: "BROKE", 3: "BROKE", 4: "CHANGED"}  # 5 unchanged; 6 in one run only
+    assert out[-1] == "4 logs: exactly right 2 -> 1, false alarms on clean logs 0 -> 1"
+
+
+def test_records_are_tabulated_merged_by_seed(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    a, b = tmp_path / "a.json", tmp_path / "b.json"
+    a.write_text(json.dumps(OLD[:3]), encoding="utf-8")
+    b.write_text(json.dumps([*OLD[3:], *NEW[4:]]), encoding="utf-8")
+    assert _bench().main(["--records", str(a), str(b), "--misses"]) == 0
+    out = capsys.readouterr().out
+    assert "logs: 6   verdicts exactly right: 4/6 (66.7 %)" in out
+    assert "seed    1 one" in out and "seed    4 one" in out and "seed    2" not in out
