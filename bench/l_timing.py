@@ -1,20 +1,22 @@
 """Can a sub-sample command timing hide an inductance error? For each proving-ground log whose wrong ``L`` the model
 check missed (from ``bench/modelcheck.py --json`` records), replay the true rig and the rig with the nominal ``L``
-under the logged commands, the second with the command timing shifted (a grid around the shift that moves each
-current transient's charge as the ``L`` error does, ``(L - L_nominal) / R``), and report the difference in noise
-levels (the generator's visibility measure, largest over speed, current and thrust) at the true timing and at the
-best shift. Where the best shift brings a visible difference under ``VISIBLE``, the log cannot tell the ``L`` error
-from command timing; where it does not, ``L`` is identifiable in principle.
+under the logged commands, the second with the command timing shifted (by 0.75, 1 and 1.25 times the shift that
+moves each current transient's charge as the ``L`` error does, ``(L - L_nominal) / R``), and report the difference
+in noise levels (the generator's visibility measure, largest over speed, current and thrust) at the true timing
+and at the best shift. Where the best shift brings a visible difference under ``VISIBLE``, the log cannot tell the
+``L`` error from command timing; where it does not, ``L`` is identifiable in principle.
 
-    python bench/l_timing.py --records a.json b.json --cache DIR [--samples 1500]
+    python bench/l_timing.py --records a.json b.json --cache DIR [--samples 800]
 
-Replays the first ``--samples`` samples with at least 50 sub-steps per sample (timing resolution 0.02 samples).
+Replays the first ``--samples`` samples, the command switching on sub-steps fine enough to resolve a twentieth of
+that shift (at least 50 and at most 4000 per sample).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -34,7 +36,11 @@ def gap(seed: int, cache: str | None, samples: int) -> tuple[float, float, float
     t, lg = case.truth, case.logger
     cmds = case.columns["voltage"][:samples]
     sig = np.array([lg.speed_noise(), lg.noise_i, lg.noise_f])
-    lag, sub = pg._lag(t, lg), max(50, pg._substeps(t, lg, case.meta["tau_m"]))
+    nominal = replace(t, L=t.L / (1.0 + case.constant_error["L"]))
+    charge = (t.L - nominal.L) / t.R / lg.dt  # the timing shift [samples] that moves each transient's charge alike
+    # the command switches on sub-step boundaries: resolve a twentieth of that shift
+    sub = max(50, pg._substeps(t, lg, case.meta["tau_m"]), min(math.ceil(20.0 / max(abs(charge), 1e-9)), 4000))
+    lag = pg._lag(t, lg)
 
     def replay(x: pg.Truth, at: float) -> np.ndarray:
         return run(x, lambda k, _s: float(cmds[k]), cmds.size, lg.dt, max(at, 0.0), sub)[0][[0, 1, 3]]
@@ -43,9 +49,7 @@ def gap(seed: int, cache: str | None, samples: int) -> tuple[float, float, float
         return float(np.max(np.sqrt(np.mean((a - b) ** 2, axis=1)) / sig))
 
     a = replay(t, lag)
-    nominal = replace(t, L=t.L / (1.0 + case.constant_error["L"]))
-    charge = (t.L - nominal.L) / t.R / lg.dt
-    best = min((seen(replay(nominal, lag + s * lg.dt)), s) for s in charge + np.arange(-0.04, 0.041, 0.02))
+    best = min((seen(replay(nominal, lag + s * lg.dt)), s) for s in charge * np.array([0.75, 1.0, 1.25]))
     return t.L / t.R / lg.dt, seen(replay(nominal, lag)), *best
 
 
@@ -53,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--records", nargs="+", required=True, metavar="JSON", help="bench/modelcheck.py --json records")
     ap.add_argument("--cache", default=None, help="the generated logs' folder (bench/modelcheck.py --cache)")
-    ap.add_argument("--samples", type=int, default=1500)
+    ap.add_argument("--samples", type=int, default=800)
     args = ap.parse_args(argv)
     rows = [r for p in args.records for r in json.loads(Path(p).read_text(encoding="utf-8"))
             if "param:L" in r["expected"] and "param:L" not in r["verdict"]]
