@@ -25,14 +25,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bench.modelcheck import _case
+from bench.modelcheck import load_case
 from tests.proving_ground import cases as pg
 from tests.proving_ground.physics import run
 
 
 def gap(seed: int, cache: str | None, samples: int) -> tuple[float, float, float, float]:
     """(L/R [samples], visibility at the true timing, best visibility over timing shifts, that shift [samples])."""
-    case = _case(seed, cache)
+    case = load_case(seed, cache)
     t, lg = case.truth, case.logger
     cmds = case.columns["voltage"][:samples]
     sig = np.array([lg.speed_noise(), lg.noise_i, lg.noise_f])

@@ -33,7 +33,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
-def _case(seed: int, cache: str | None) -> Any:
+def load_case(seed: int, cache: str | None) -> Any:
     """Proving-ground case ``seed``, generated, or read from (and written to) the ``cache`` folder."""
     from tests.proving_ground import make_case
 
@@ -57,7 +57,7 @@ def one(seed: int, cache: str | None = None) -> dict[str, Any]:
     from ocp.model.plant import DCMotorPlant
 
     t0 = time.perf_counter()
-    case = _case(seed, cache)
+    case = load_case(seed, cache)
     t1 = time.perf_counter()
     # a jittery logger's time stamps are resampled to a uniform grid, as the file readers do (and say)
     t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
@@ -78,9 +78,14 @@ def one(seed: int, cache: str | None = None) -> dict[str, Any]:
             "constant_error": case.constant_error, "t_generate": t1 - t0, "t_diagnose": t2 - t1}
 
 
+def right(r: dict[str, Any]) -> bool:
+    """Whether record ``r``'s verdict is exactly the truth."""
+    return set(r["verdict"]) == set(r["expected"])
+
+
 def table(rows: list[dict[str, Any]]) -> str:
     """The confusion summary as text."""
-    exact = sum(set(r["verdict"]) == set(r["expected"]) for r in rows)
+    exact = sum(right(r) for r in rows)
     clean = [r for r in rows if not r["expected"]]
     alarms = sum(bool(r["verdict"]) for r in clean)
     tp: Counter[str] = Counter()
@@ -104,8 +109,8 @@ def table(rows: list[dict[str, Any]]) -> str:
         rc = tp[lb] / (tp[lb] + fn[lb]) if tp[lb] + fn[lb] else float("nan")
         lines.append(f"{lb:22s} {tp[lb]:4d} {fp[lb]:4d} {fn[lb]:4d} {100 * p:8.1f}% {100 * rc:6.1f}%")
     kinds = Counter(r["kind"] for r in rows)
-    right = Counter(r["kind"] for r in rows if set(r["verdict"]) == set(r["expected"]))
-    lines += ["", "by case kind: " + ", ".join(f"{k} {right[k]}/{kinds[k]}" for k in sorted(kinds))]
+    ok = Counter(r["kind"] for r in rows if right(r))
+    lines += ["", "by case kind: " + ", ".join(f"{k} {ok[k]}/{kinds[k]}" for k in sorted(kinds))]
     return "\n".join(lines)
 
 
@@ -115,7 +120,6 @@ def compare(old: list[dict[str, Any]], new: list[dict[str, Any]]) -> str:
     before and after (how a change to the identifier is judged: no set's total falls, no clean log gains a verdict)."""
     a, b = ({r["seed"]: r for r in rows} for rows in (old, new))
     seeds = sorted(set(a) & set(b))
-    right = lambda r: set(r["verdict"]) == set(r["expected"])  # noqa: E731
     lines = []
     for s in (s for s in seeds if set(a[s]["verdict"]) != set(b[s]["verdict"])):
         tag = "FIXED" if right(b[s]) and not right(a[s]) else "BROKE" if right(a[s]) and not right(b[s]) else "CHANGED"
@@ -167,7 +171,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"wall time {time.perf_counter() - t0:.0f} s with {args.procs} processes")
     if args.misses:
         for r in rows:
-            if set(r["verdict"]) != set(r["expected"]):
+            if not right(r):
                 print(f"  seed {r['seed']:4d} {r['kind']:13s} expected {r['expected']} got {r['verdict']} "
                       f"rate {r['rate']:g} lag {r['true_lag']:.2f}->{r['alignment']:.2f} {r['excitations']} "
                       f"{r['constant_error'] or ''} {r['error'] or ''}")
