@@ -218,7 +218,7 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
             progress((len(items) + 1) / (max_items + 1))
         # the best-scoring item whose win passes its test (they differ: materiality, one equation's scatter)
         win = next((k for k, (c, f) in enumerate(tried) if _wins(design, current, c, f, min_improvement)
-                    and physical(f) and (c not in CONSTANTS or _room(design, current, (c,), noise_floor))), None) \
+                    and physical(f) and _room(design, current, (c,), noise_floor)), None) \
             if worst(design, current) > noise_floor else None
         if win is not None:
             tried = [tried[win], *tried[:win], *tried[win + 1:]]
@@ -258,7 +258,7 @@ def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], cur
     single = dict(tried[:PAIR_TOP])
     fits = [(a, b, fit_model(design, [*items, a, b], tol)) for a, b in itertools.combinations(single, 2)]
     a, b, f = min(fits, key=lambda e: e[2].score)
-    if not physical(f):
+    if not physical(f) or not _room(design, current, (a, b), noise_floor):
         return None
     for before in (current, single[a], single[b]):
         if not (is_material(design, before, f, (a, b), min_improvement) and beyond_scatter(design, before, f, (a, b))):
@@ -267,11 +267,15 @@ def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], cur
 
 
 def _room(design: Design, current: Fitted, items: Sequence[str], noise_floor: float) -> bool:
-    """Whether some equation ``items`` enter is above ``noise_floor`` in ``current`` (held-out RMS, noise units):
-    a constant, named without a material fall (its materiality is the tolerance), has nothing to explain in an
-    equation at its noise, whatever another equation holds (an ``L`` named for an armature equation at its noise
-    beside a thrust equation above it: tuning seeds 1134, 7093)."""
-    live = (design.n_test > 0) & equations_of(design, items)
+    """Whether some equation the constants among ``items`` enter is above ``noise_floor`` in ``current`` (held-out
+    RMS, noise units): a constant, named without a material fall (its materiality is the tolerance), has nothing to
+    explain in an equation at its noise, whatever another equation holds (an ``L`` named for an armature equation at
+    its noise beside a thrust equation above it: tuning seeds 1134, 7093). Effects need no room (module doc): True
+    where ``items`` hold no constant. Single items and pairs (:func:`_pair`) are held to it alike."""
+    named = [i for i in items if i in CONSTANTS]
+    if not named:
+        return True
+    live = (design.n_test > 0) & equations_of(design, named)
     return bool(np.any(current.per_eq[live] > noise_floor))
 
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from ocp.identify import DiagnoseOptions
 from ocp.identify.regression import Column, Design
-from ocp.identify.select import select
+from ocp.identify.select import _room, fit_model, select
 
 EFFECT = "force_offset"
 
@@ -62,3 +62,15 @@ def test_the_search_stops_when_every_equation_is_within_the_floor() -> None:
 def test_an_equation_just_above_its_noise_is_still_explained() -> None:
     d = _design(eq=0, signal=0.8, noise=0.75, other=0.0)  # torque at ~1.10 noise units, half of it the effect
     assert _adopted(d, DiagnoseOptions().noise_floor) == (EFFECT,)
+
+
+def test_a_pair_is_held_to_the_floor_through_its_constants_only() -> None:
+    """The rule is one for single items and for pairs (``select._room``, which ``_pair`` shares): an effect needs
+    no room, a constant does, and a pair holding a constant needs it for that constant's equations."""
+    d = _design(eq=1, signal=0.8, noise=0.45, other=1.5, item="R")  # armature within the floor, thrust above
+    now = fit_model(d, [], 0.1)
+    assert now.per_eq[1] < 1.0 < now.per_eq[2]
+    assert _room(d, now, (EFFECT,), 1.0)  # (EFFECT has no column here: an effect is never held)
+    assert not _room(d, now, ("R",), 1.0)
+    assert not _room(d, now, (EFFECT, "R"), 1.0)
+    assert _room(d, now, ("c_f",), 1.0)  # the thrust equation, above the floor
