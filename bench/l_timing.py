@@ -27,6 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.modelcheck import load_case
 from tests.proving_ground import cases as pg
+from tests.proving_ground.logger import logged, noise_levels
 from tests.proving_ground.physics import run
 
 
@@ -35,7 +36,7 @@ def gap(seed: int, cache: str | None, samples: int) -> tuple[float, float, float
     case = load_case(seed, cache)
     t, lg = case.truth, case.logger
     cmds = case.columns["voltage"][:samples]
-    sig = np.array([lg.speed_noise(), lg.noise_i, lg.noise_f])
+    sig = noise_levels(lg)
     nominal = replace(t, L=t.L / (1.0 + case.constant_error["L"]))
     charge = (t.L - nominal.L) / t.R / lg.dt  # the timing shift [samples] that moves each transient's charge alike
     # the command switches on sub-step boundaries: resolve a twentieth of that shift
@@ -43,7 +44,7 @@ def gap(seed: int, cache: str | None, samples: int) -> tuple[float, float, float
     lag = pg._lag(t, lg)
 
     def replay(x: pg.Truth, at: float) -> np.ndarray:
-        return run(x, lambda k, _s: float(cmds[k]), cmds.size, lg.dt, max(at, 0.0), sub)[0][[0, 1, 3]]
+        return logged(lg, run(x, lambda k, _s: float(cmds[k]), cmds.size, lg.dt, max(at, 0.0), sub)[0])
 
     def seen(b: np.ndarray) -> float:
         return float(np.max(np.sqrt(np.mean((a - b) ** 2, axis=1)) / sig))

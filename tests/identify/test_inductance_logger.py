@@ -6,7 +6,7 @@ constructed for this test (``make_case(seed, kind="clean")``, seeds >= 3000, nev
 seeds), a wrong constant made by telling ``diagnose`` a wrong nominal (as the proving ground does: true =
 nominal (1 + e)):
 
-* 3090: a clean 10 kHz log, L/R = 4.3 samples, the current filtered over 0.59 samples (apparent L 14 % high). The
+* 3090: a clean 10 kHz log, L/R = 4.3 samples, the current filtered over 0.59 samples (apparent L 13.6 % high). The
   former code named ``param:L`` on it; the torque equation's current lag now widens L's box above nominal.
 * 3094: a 2 kHz log, true L/R = 1.06 samples, a sharp alignment. Told L 40 % too high (true = 0.6 nominal, nominal
   L/R 1.8 samples), the former code left L unresolved (L/R under two samples); an apparent L that far BELOW
@@ -50,7 +50,9 @@ def test_current_filter_is_not_an_inductance_error() -> None:
     _, _, filt, l_over_r = _clean(3090)
     assert filt == pytest.approx(0.59, abs=0.02) and l_over_r == pytest.approx(4.34, abs=0.05)
     res = diagnose(DCMotorPlant(p), log)
-    assert res.calibration["L"]["relative"] > 0.15  # the filter shows as an inductance 14-19 % high ...
+    # the filter shows as an inductance R t_f / L = 0.59 / 4.34 = 13.6 % high, beyond the 10 % tolerance (the
+    # proving ground's integrator before session 14 lagged the current further: 15-19 % then) ...
+    assert res.calibration["L"]["relative"] == pytest.approx(filt / l_over_r, abs=0.02)
     assert res.verdict == []  # ... which the current lag the torque equation measures accounts for
 
 

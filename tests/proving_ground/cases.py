@@ -3,7 +3,9 @@
 Motors span a 5 W hobby motor to a 500 W drive (J, R, L, k over decades). A case is clean, one effect,
 two effects, one wrong nominal constant (5-50 %), or an effect plus a wrong constant. Every drawn
 discrepancy must be visible: replayed open loop under the logged commands, the log without it must differ
-from the log with it by at least ``VISIBLE`` noise levels (RMS, in some channel); amplitudes are doubled
+from the log with it by at least ``VISIBLE`` noise levels (RMS, in some channel as the logger records it: an
+encoder's speed is a difference of angles, the current filtered; a ripple the rig shows at its sample instants
+but the log averages out is not a discrepancy of the log); amplitudes are doubled
 (up to twice) until it is, a constant error raised to 50 %, else the draw is replaced (the next draw of the
 same seed); the criterion is checked again under the commands the final log holds. ``expected`` is the exact
 verdict a correct model check gives: the effects, plus ``param:<name>`` for a constant off by more than
@@ -20,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from tests.proving_ground.excite import OPEN_LOOP, open_loop, pi_loop
-from tests.proving_ground.logger import Logger, draw_logger, record
+from tests.proving_ground.logger import Logger, draw_logger, logged, noise_levels, record
 from tests.proving_ground.physics import Truth, run
 
 EFFECTS = ("coulomb_friction", "stribeck", "drag_asymmetry", "thrust_asymmetry", "force_offset", "voltage_deadband",
@@ -120,9 +122,10 @@ def _replay(x: Truth, cmds: np.ndarray, lg: Logger, tau_m: float) -> np.ndarray:
 
 
 def _visible(a: Truth, b: Truth, cmds: np.ndarray, lg: Logger, tau_m: float, sig: np.ndarray) -> bool:
-    """Whether replaying ``cmds`` on ``a`` and ``b`` gives logs differing by >= VISIBLE noise levels."""
-    outs = [_replay(x, cmds, lg, tau_m) for x in (a, b)]
-    d = np.sqrt(np.mean((outs[0][[0, 1, 3]] - outs[1][[0, 1, 3]]) ** 2, axis=1)) / sig
+    """Whether replaying ``cmds`` on ``a`` and ``b`` gives logs differing by >= VISIBLE noise levels ``sig`` (3,):
+    the channels as logged (:func:`logged`: an encoder's speed, the filtered current), not the rig's instants."""
+    outs = [logged(lg, _replay(x, cmds, lg, tau_m)) for x in (a, b)]
+    d = np.sqrt(np.mean((outs[0] - outs[1]) ** 2, axis=1)) / sig
     return bool(np.max(d) >= VISIBLE)
 
 
@@ -170,7 +173,7 @@ def _attempt(seed: int, rng: np.random.Generator, kind: str | None,
     cmds = _commands(exc, n, lg, truth, nominal, tau_m, rng)
     _, cmds = run(truth, _closed(cmds, exc, n, lg, nominal, truth, tau_m, np.random.default_rng(seed + 1)), n,
                   lg.dt, _lag(truth, lg), _substeps(truth, lg, tau_m))  # the commands issued, for the replays
-    sig = np.array([lg.speed_noise(), lg.noise_i, lg.noise_f])
+    sig = noise_levels(lg)
     for nm in names:  # each hidden effect must show in the log: doubled up to twice, else the draw is replaced
         for doubling in range(3):
             if _shows(truth, nm, cmds, lg, tau_m, sig):

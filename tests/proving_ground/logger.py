@@ -57,17 +57,47 @@ def draw_logger(rng: np.random.Generator, tau_m: float, w0: float, i_op: float, 
         q_v=2 * v_max / rng.choice([256.0, 1024.0, 4096.0]), jitter=float(rng.choice([0.0, 0.01])))
 
 
+def _firmware_filter(lg: Logger, cur: np.ndarray) -> np.ndarray:
+    """The current sensor's first-order digital filter (``alpha``) over the samples ``cur`` (n,) [A]."""
+    filt = np.empty(cur.size)
+    acc = cur[0]
+    for k in range(cur.size):
+        acc += lg.alpha * (cur[k] - acc)
+        filt[k] = acc
+    return filt
+
+
+def _encoder_speed(lg: Logger, theta: np.ndarray) -> np.ndarray:
+    """Speed [rad/s] (n,) from the angle samples ``theta`` (n,) [rad]: a ``diff_span``-sample backward difference."""
+    d = lg.diff_span
+    w = np.empty(theta.size)
+    w[d:] = (theta[d:] - theta[:-d]) / (d * lg.dt)
+    w[:d] = w[d]
+    return w
+
+
+def logged(lg: Logger, truth: np.ndarray) -> np.ndarray:
+    """What the logger makes of the true samples (4, n) [w, sensed current, theta, thrust] without its noise and
+    quantisation: (3, n) [speed rad/s, current A, thrust N]. An encoder's speed is a difference of angles (a
+    ripple faster than the sampling averages out of it), the current passes the firmware's filter."""
+    w = truth[0] if lg.speed == "tacho" else _encoder_speed(lg, truth[2])
+    return np.vstack([w, _firmware_filter(lg, truth[1]), truth[3]])
+
+
+def noise_levels(lg: Logger) -> np.ndarray:
+    """1-sigma (3,) of the noise in the logged [speed rad/s, current A, thrust N] (:func:`logged`'s channels):
+    the sensors' white noise after the current filter, and each ADC step's uniform rounding (step / sqrt(12))."""
+    a = lg.alpha
+    return np.array([lg.speed_noise(), math.hypot(lg.noise_i * math.sqrt(a / (2.0 - a)), lg.q_i / math.sqrt(12.0)),
+                     math.hypot(lg.noise_f, lg.q_f / math.sqrt(12.0))])
+
+
 def record(lg: Logger, truth: np.ndarray, cmds: np.ndarray, rng: np.random.Generator) -> dict[str, np.ndarray]:
     """Log columns (SI) from the true samples (4, n) [w, sensed current, theta, thrust] and the commands (n,)."""
     n = cmds.size
     dt = lg.dt
     t = np.arange(n) * dt + lg.jitter * dt * np.clip(rng.standard_normal(n), -3, 3)
-    cur = truth[1] + lg.noise_i * rng.standard_normal(n)
-    filt = np.empty(n)
-    acc = cur[0]
-    for k in range(n):  # the firmware's first-order filter
-        acc += lg.alpha * (cur[k] - acc)
-        filt[k] = acc
+    filt = _firmware_filter(lg, truth[1] + lg.noise_i * rng.standard_normal(n))
     out = {"t": t, "voltage": cmds.copy(), "current": np.round(filt / lg.q_i) * lg.q_i,
            "thrust": np.round((truth[3] + lg.noise_f * rng.standard_normal(n)) / lg.q_f) * lg.q_f}
     if lg.speed == "tacho":
@@ -75,9 +105,5 @@ def record(lg: Logger, truth: np.ndarray, cmds: np.ndarray, rng: np.random.Gener
     else:
         step = 2 * math.pi / lg.counts
         theta = np.floor(truth[2] / step) * step
-        d = lg.diff_span
-        w = np.empty(n)
-        w[d:] = (theta[d:] - theta[:-d]) / (d * dt)
-        w[:d] = w[d]
-        out["omega"], out["theta"] = w, theta
+        out["omega"], out["theta"] = _encoder_speed(lg, theta), theta
     return out

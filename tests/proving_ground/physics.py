@@ -11,9 +11,12 @@ Equations (SI; written here from the physics, independently of ``ocp``):
   lag is ``tau_F dF_lagged/dt = F_qs - F_lagged``;
 * the current sensor reads ``i + i0``.
 
-Integration per sub-step ``h``: the current by its exact exponential solution with the speed frozen
-over the step (with brushes: piecewise, split where the current reaches zero, held at zero inside the
-contact band), the mechanics (w, theta, F_lagged) by classical RK4 with the step-mean current.
+Integration per sub-step ``h``: the mechanics (w, theta, F_lagged) by classical RK4 whose every stage takes the
+armature's step-mean current at that stage's speed, the current by its exact exponential solution with the speed
+held (at the stage's, then at the step's mean speed; with brushes: piecewise, split where the current reaches zero,
+held at zero inside the contact band). Freezing the speed for the whole step instead (until session 14) left the
+back-EMF's damping to an explicit Euler step: logs off their own equations by up to 12 noise levels. The drive's
+switching instants (lag after each sample) fall on step boundaries.
 """
 
 from __future__ import annotations
@@ -125,23 +128,46 @@ class Rig:
         df = (quasi_static_thrust(t, w) - f_lag) / self.tau_f if self.tau_f > 0 else 0.0
         return dw, w, df
 
-    def substep(self, v_cmd: float, h: float) -> None:
+    def _armature(self, va: float, w: float, h: float) -> tuple[float, float]:
+        """(end current [A], mean current [A]) over ``h`` [s] from the present current, the drive putting out
+        ``va`` [V] and the speed held at ``w`` [rad/s]: eq:dc_electrical, exact for that speed."""
         t = self.t
-        va = drive_voltage(t, v_cmd)
         if "brush_drop" in t.effects:
-            i_end, i_mean = brush_current_step(va - t.k * self.w, t.e("brush_drop", "v_b"), t.R, t.L, self.i, h)
-        else:  # eq:dc_electrical, exact over the step
-            i_ss = (va - t.k * self.w) / t.R
-            a = math.exp(-h * t.R / t.L)
-            i_mean = i_ss + (self.i - i_ss) * (1.0 - a) * t.L / (t.R * h)
-            i_end = i_ss + (self.i - i_ss) * a
+            return brush_current_step(va - t.k * w, t.e("brush_drop", "v_b"), t.R, t.L, self.i, h)
+        i_ss = (va - t.k * w) / t.R
+        a = math.exp(-h * t.R / t.L)
+        return i_ss + (self.i - i_ss) * a, i_ss + (self.i - i_ss) * (1.0 - a) * t.L / (t.R * h)
+
+    def _end_current(self, va: float, w0: float, w1: float, h: float) -> float:
+        """The current [A] after ``h`` [s] with the speed moving linearly from ``w0`` to ``w1`` [rad/s]:
+        eq:dc_electrical under the ramp ``u(s) = a + b s`` (``b = -k_e (w1 - w0) / h``) is exact, the step from the
+        speed held at ``w1`` plus ``(b / R) (h e^-x - (L / R)(1 - e^-x))``, ``x = h R / L``. With brushes the drop is
+        a constant ``v_b sign(i)`` while the current keeps its sign; a step where it reaches zero is taken at the
+        mean speed."""
+        t = self.t
+        end = self._armature(va, w1, h)[0]
+        if "brush_drop" in t.effects and not end * self.i > 0.0:
+            return self._armature(va, 0.5 * (w0 + w1), h)[0]
+        e = math.exp(-h * t.R / t.L)
+        return end - t.k * (w1 - w0) / (h * t.R) * (h * e - t.L / t.R * (1.0 - e))
+
+    def substep(self, v_cmd: float, h: float) -> None:
+        """Advance ``h`` [s]: RK4 on the rotor and thrust lag, each stage driven by the armature's exact mean current
+        over the step at that stage's speed (so the back-EMF's damping is inside the stages: with L/R far below
+        ``h`` the current follows the speed within the step, as it does physically); then the current
+        (:meth:`_end_current`)."""
+        va = drive_voltage(self.t, v_cmd)
         y = (self.w, self.theta, self.f_lag)
-        k1 = self._mech(*y, i_mean)
-        k2 = self._mech(*(y[j] + 0.5 * h * k1[j] for j in range(3)), i_mean)
-        k3 = self._mech(*(y[j] + 0.5 * h * k2[j] for j in range(3)), i_mean)
-        k4 = self._mech(*(y[j] + h * k3[j] for j in range(3)), i_mean)
+
+        def f(x: tuple[float, ...]) -> tuple[float, float, float]:
+            return self._mech(x[0], x[1], x[2], self._armature(va, x[0], h)[1])
+
+        k1 = f(y)
+        k2 = f(tuple(y[j] + 0.5 * h * k1[j] for j in range(3)))
+        k3 = f(tuple(y[j] + 0.5 * h * k2[j] for j in range(3)))
+        k4 = f(tuple(y[j] + h * k3[j] for j in range(3)))
         self.w, self.theta, self.f_lag = (y[j] + h / 6.0 * (k1[j] + 2 * k2[j] + 2 * k3[j] + k4[j]) for j in range(3))
-        self.i = i_end
+        self.i = self._end_current(va, y[0], self.w, h)
 
     def thrust(self) -> float:
         f = self.f_lag if self.tau_f > 0 else quasi_static_thrust(self.t, self.w)
@@ -159,14 +185,20 @@ def run(truth: Truth, command: Callable[[int, np.ndarray], float], n: int, dt: f
     Returns (truth samples (4, n): w, sensed current, theta, thrust at t_k; issued commands (n,)).
     """
     rig = Rig(truth)
-    h = dt / substeps
     out = np.empty((4, n))
     cmds = np.zeros(n)
+    # the command of sample j is in force over [j dt + lag, (j + 1) dt + lag): within each sample interval the
+    # drive switches ``phi`` after its start, which a piece boundary meets exactly (sub-steps of at most dt/substeps)
+    whole, phi = divmod(lag, dt)
+    cut = phi > 1e-9 * dt
+    pieces = [(phi, math.ceil(substeps * phi / dt)), (dt - phi, math.ceil(substeps * (dt - phi) / dt))] if cut \
+        else [(dt, substeps)]
     for k in range(n):
         out[:, k] = (rig.w, rig.sensed_current(), rig.theta, rig.thrust())
         cmds[k] = command(k, out[:, k])
-        for s in range(substeps):
-            tau = (k + s / substeps) * dt - lag  # command in force at this sub-step
-            j = math.floor(tau / dt + 1e-9)
-            rig.substep(float(cmds[j]) if j >= 0 else 0.0, h)
+        for p, (span, m) in enumerate(pieces):
+            j = k - int(whole) - (1 if cut and p == 0 else 0)
+            v = float(cmds[j]) if j >= 0 else 0.0
+            for _ in range(m):
+                rig.substep(v, span / m)
     return out, cmds
