@@ -42,12 +42,16 @@ def test_viscous_error_named_on_paired_blocks() -> None:
     assert res.calibration["B"]["relative"] == pytest.approx(-0.36, abs=0.08)
 
 
-@pytest.mark.parametrize("seed", [3117])
+@pytest.mark.parametrize("seed", [pytest.param(3117, marks=pytest.mark.xfail(
+    strict=True, reason="session 14's proving ground: B's paired fall is 9.7 % of the RMS, under the 10 % asked"))])
 def test_unpaired_test_alone_misses_it(seed: int) -> None:
     """What the paired test adds: the unpaired one does not pass, the blocks agree beyond 3 standard errors.
     (On 3051 the unpaired test passes too since session 10, when the current sensor's lag column became the
     filter's exact inverse and B's fall grew to 29 %; ``make_case(3117, kind="constant")``, B 31 % above its
-    datasheet value, is this class now.)"""
+    datasheet value, was this class until session 14. On the proving ground whose rig follows its equations
+    (session 14) its blocks still agree (t = 4.6 over 28 blocks) but the fall is 9.7 % of the RMS, under the 10 %
+    the paired test also asks, and B is missed; no draw of 3100..3373 is of the class: unpaired test failing,
+    paired naming B.)"""
     raw, p, error = _log(seed)
     assert error["B"] == pytest.approx(0.31, abs=0.01)
     opt = DiagnoseOptions()
