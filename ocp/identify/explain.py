@@ -12,7 +12,7 @@ from ocp.errors import ParameterError
 from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
 from ocp.identify.evidence import Fitted
 from ocp.identify.regression import CONSTANTS, Design
-from ocp.model.effects import CATALOGUE, EffectBase, make_effect
+from ocp.model.effects import CATALOGUE, BrushDrop, EffectBase, make_effect
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 
@@ -20,6 +20,10 @@ from ocp.model.plant import DCMotorPlant
 KEYS = {"J": ("J",), "B": ("B",), "c_tau": ("c_tau",), "c_f": ("c_f",), "k": ("k_t", "k_e"), "R": ("R",),
         "L": ("L",)}
 UNITS = {**PARAM_UNITS, "k": "N m/A = V s/rad"}
+#: the calibrated plant's brush contact is smoothed (``i_eps`` [A]) so that its slope ``v_b / i_eps`` stays within
+#: this many windings ``R``: a 5.7 V drop over the catalogue's 20 mA is 283 ohm, an electrical mode 280 times the
+#: winding's, and a 50 Hz log's free run took 61,000 RK4 steps a sample (17 s)
+BRUSH_SLOPE = 20.0
 SIGNATURE = {**PARAM_SIGNATURE, "k": "torque residual proportional to the current and voltage residual "
                                      "proportional to the speed, in the ratio of k_t to k_e"}
 
@@ -101,13 +105,17 @@ def physical(design: Design, f: Fitted) -> bool:
 
 def plant_of(plant: DCMotorPlant, design: Design, f: Fitted, delay: float | None) -> DCMotorPlant:
     """The user's plant with the explanation in: calibrated constants, adopted effects, a delay if called."""
+    params = params_of(plant.params, design, f)
     effects = list(plant.effects)
     for item in f.items:
         if item not in CONSTANTS:
-            effects.append(make_effect(item, effect_values(design, f, item)))
+            values = effect_values(design, f, item)
+            if item == "brush_drop":  # (the smoothing: BRUSH_SLOPE)
+                values["i_eps"] = max(BrushDrop.i_eps, values["v_b"] / (BRUSH_SLOPE * params.R))
+            effects.append(make_effect(item, values))
     if delay is not None and delay > 0:
         effects.append(make_effect("input_delay", {"delay": delay}))
-    return DCMotorPlant(params_of(plant.params, design, f), tuple(effects))
+    return DCMotorPlant(params, tuple(effects))
 
 
 def calibration(p: MotorParams, design: Design, f: Fitted, tol: float) -> dict[str, dict[str, Any]]:

@@ -1,0 +1,47 @@
+"""A Stribeck band no logged row shows is not offered (issue #11, session 14).
+
+A coarse encoder at a fast rate logs speed in quanta (4096 counts at 5 kHz, one sample's difference: 7.7 rad/s a
+count): the rotor stands (0) or runs at 15.3 rad/s and above. Stribeck friction at a 15 rad/s band showed there
+only as its tail; the regression took a 4.5 rad/s band at 178 N m (true: 3.7 mN m), which named the right effect
+but made the calibrated plant absurd, and its free run took two minutes (RK4 steps for a 356 N m s friction
+slope). Proving-ground draw ``make_case(9194)`` (from the fresh seeds of session 14, now no longer untouched).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ocp.identify import diagnose
+from ocp.identify.columns import STRIBECK_REACH, stribeck_bands
+from ocp.logs import log_from_arrays
+from ocp.logs.timebase import uniform
+from ocp.model.effects import Stribeck
+from ocp.model.params import MotorParams
+from ocp.model.plant import DCMotorPlant
+from tests.proving_ground import make_case
+
+
+def test_bands_below_the_slowest_moving_row_are_not_offered() -> None:
+    """Oracle, closed form: a row at speed w shows ``exp(-(w/ws)^2) tanh(w/0.5)`` of the level; with rows only at 0
+    and at 15.3..184 rad/s a band is offered iff that reaches STRIBECK_REACH at 15.3 rad/s."""
+    w = np.concatenate([np.zeros(50), np.linspace(15.3, 184.0, 400)])
+    log = log_from_arrays(np.arange(w.size) * 2e-4, np.ones(w.size), np.ones(w.size), np.ones(w.size), omega=w)
+    bands = stribeck_bands(log)
+    grid = np.geomspace(0.003 * 184.0, 0.15 * 184.0, 12)
+    shows = [ws for ws in grid if math.exp(-(15.3 / ws) ** 2) * math.tanh(15.3 / 0.5) >= STRIBECK_REACH]
+    assert bands == [float(ws) for ws in shows]
+    assert 0 < len(bands) < grid.size
+
+
+def test_a_quantised_speed_gives_a_plausible_stribeck_level() -> None:
+    case = make_case(9194)
+    truth = case.truth.effects["stribeck"]
+    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
+    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    assert np.min(np.abs(log.omega[log.omega != 0])) > 15.0  # (the class: nothing logged between 0 and 15 rad/s)
+    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
+    assert res.verdict == ["stribeck"]
+    fitted = next(e for e in res.plant.effects if isinstance(e, Stribeck))
+    assert 0.5 * truth["tau_s"] < fitted.tau_s < 2.0 * truth["tau_s"]
