@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import hashlib
 import json
 import multiprocessing
 import pickle
@@ -30,16 +31,29 @@ from collections import Counter
 from pathlib import Path
 from typing import Any
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+
+def generator_stamp() -> str:
+    """Digest (12 hex) of the proving ground's source (its modules, not its tests): a cached log is read back only
+    by the generator that wrote it (session 14 changed the rig's integrator; a flat cache would have served the
+    old logs without a word)."""
+    h = hashlib.sha256()
+    for f in sorted((ROOT / "tests" / "proving_ground").glob("*.py")):
+        if not f.name.startswith("test_"):
+            h.update(f.name.encode() + f.read_bytes())
+    return h.hexdigest()[:12]
 
 
 def load_case(seed: int, cache: str | None) -> Any:
-    """Proving-ground case ``seed``, generated, or read from (and written to) the ``cache`` folder."""
+    """Proving-ground case ``seed``, generated, or read from (and written to) the ``cache`` folder (under the
+    generator's :func:`generator_stamp`)."""
     from tests.proving_ground import make_case
 
     if cache is None:
         return make_case(seed)
-    path = Path(cache) / f"case-{seed}.pkl"
+    path = Path(cache) / generator_stamp() / f"case-{seed}.pkl"
     if path.exists():
         return pickle.loads(path.read_bytes())
     case = make_case(seed)
@@ -155,7 +169,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", default=None, help="write every record here")
     ap.add_argument("--cache", default=None,
                     help="folder of generated logs: read a seed's log from it, write it there when missing "
-                         "(only the diagnosis is then timed afresh; the generator's code is not checked)")
+                         "(only the diagnosis is then timed afresh), in a subfolder named by the generator's "
+                         "source digest: a changed proving ground writes new logs")
     ap.add_argument("--misses", action="store_true", help="list the wrong verdicts")
     ap.add_argument("--records", nargs="+", metavar="JSON", help="print the table of these recorded runs (--json "
                     "files, merged by seed) instead of diagnosing")

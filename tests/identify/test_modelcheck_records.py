@@ -50,3 +50,20 @@ def test_records_are_tabulated_merged_by_seed(tmp_path: Path, capsys: pytest.Cap
     out = capsys.readouterr().out
     assert "logs: 6   verdicts exactly right: 4/6 (66.7 %)" in out
     assert "seed    1 one" in out and "seed    4 one" in out and "seed    2" not in out
+
+
+def test_the_cache_is_keyed_by_the_generator(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A cached log is read back only by the proving ground that wrote it: the cache's subfolder is the digest of
+    the generator's modules (not of its tests)."""
+    mod = _bench()
+    src = BENCH.parents[1] / "tests" / "proving_ground"
+    copy = tmp_path / "tests" / "proving_ground"
+    copy.mkdir(parents=True)
+    for f in src.glob("*.py"):
+        (copy / f.name).write_bytes(f.read_bytes())
+    monkeypatch.setattr(mod, "ROOT", tmp_path)
+    first = mod.generator_stamp()
+    (copy / "test_more.py").write_text("x = 1\n")
+    assert mod.generator_stamp() == first
+    (copy / "physics.py").write_text((copy / "physics.py").read_text() + "\n# changed\n")
+    assert mod.generator_stamp() != first
