@@ -12,11 +12,11 @@ Equations (SI; written here from the physics, independently of ``ocp``):
 * the current sensor reads ``i + i0``.
 
 Integration per sub-step ``h``: the mechanics (w, theta, F_lagged) by classical RK4 whose every stage takes the
-armature's step-mean current at that stage's speed, the current by its exact exponential solution with the speed
-held (at the stage's, then at the step's mean speed; with brushes: piecewise, split where the current reaches zero,
-held at zero inside the contact band). Freezing the speed for the whole step instead (until session 14) left the
-back-EMF's damping to an explicit Euler step: logs off their own equations by up to 12 noise levels. The drive's
-switching instants (lag after each sample) fall on step boundaries.
+armature's step-mean current at that stage's speed (the current's exact exponential solution with that speed held;
+with brushes: piecewise, split where the current reaches zero, held at zero inside the contact band); the current at
+the step's end exact for the speed's ramp over it (:meth:`Rig._end_current`). Freezing the speed for the whole step
+instead (until session 14) left the back-EMF's damping to an explicit Euler step: logs off their own equations by
+up to 12 noise levels. The drive's switching instants (lag after each sample) fall on step boundaries.
 """
 
 from __future__ import annotations

@@ -2,8 +2,9 @@
 
 Guards issue #11's ground truth: visibility compared the rig's speed at the sample instants with the logged
 speed's noise, but an encoder logger records a difference of angles, which averages a ripple faster than the
-sampling out. A cogging ripple at several times the logging rate was labelled present while its log was the
-clean log's to within a fraction of a noise level (1204, 6243, 7090: 50-230 noise levels at the instants).
+sampling out, and the current passes the firmware's filter. (Suspected while looking at missed cogging, 1204:
+it was not their cause, their ripple shows in the logged speed too, at reversals; the criterion is fixed because
+it was wrong, session 14.)
 """
 
 from __future__ import annotations
