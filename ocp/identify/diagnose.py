@@ -34,6 +34,7 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
+from ocp.errors import SolverError
 from ocp.identify.align import SKEW_FRACTION, Alignment, estimate, realign, spread, within
 from ocp.identify.candidates import candidate
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
@@ -263,8 +264,11 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         before = base
         heldout: dict[str, float] = {}
         if step.adopted is not None:
-            base = score(plant_of(plant, design, step.tried[0][1], delay), work, sp.test, noise, seg)
-            heldout = base.rms
+            try:
+                base = score(plant_of(plant, design, step.tried[0][1], delay), work, sp.test, noise, seg)
+                heldout = base.rms
+            except SolverError:  # a plant too stiff to free-run: no held-out figure (free_run says why)
+                pass
         entries = [_entry(n, f, step.before, n == step.adopted, plant, design, heldout if n == step.adopted else {})
                    for n, f in step.tried]
         rounds.append(Round(before, entries))

@@ -19,8 +19,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares, lsq_linear
 
+from ocp.errors import SolverError
 from ocp.identify.candidates import Candidate
-from ocp.identify.predict import CHANNELS, EQUATIONS, free_run, one_step
+from ocp.identify.predict import CHANNELS, EQUATIONS, free_run, one_step, run_rows
 from ocp.logs import Log
 from ocp.model.plant import DCMotorPlant
 
@@ -192,8 +193,12 @@ def equation_error_fit(base: DCMotorPlant, cands: Sequence[Candidate], log: Log,
 
 def free_run_errors(plant: DCMotorPlant, log: Log, samples: np.ndarray, noise: dict[str, float],
                     segment_s: float) -> np.ndarray:
-    """Free-run errors at ``samples`` (bool mask (N,)), each channel divided by its noise level, stacked."""
-    fr = free_run(plant, log, segment_s)
+    """Free-run errors at ``samples`` (bool mask (N,)), each channel divided by its noise level, stacked; a plant
+    too stiff to free-run (a trial parameter vector gone sharp) errs by 1e6 everywhere, as a diverging one does."""
+    try:
+        fr = free_run(plant, log, segment_s)
+    except SolverError:
+        return np.full(len(CHANNELS) * int(np.sum(samples[run_rows(log, segment_s)])), 1e6)
     keep = samples[fr.idx]
     return np.concatenate([(getattr(log, ch)[fr.idx][keep] - fr.channel(ch)[keep]) / noise[ch] for ch in CHANNELS])
 

@@ -36,6 +36,9 @@ CHANNELS: tuple[str, ...] = ("omega", "current", "thrust")
 EQUATIONS: tuple[str, ...] = ("mechanical", "electrical", "thrust")
 EQUATION_UNITS = {"mechanical": "N m", "electrical": "V", "thrust": "N"}
 CHANNEL_UNITS = {"omega": "rad/s", "current": "A", "thrust": "N"}
+#: a plant needing more RK4 steps a sample than this is not free-run (:func:`free_run` raises): a fitted brush
+#: contact or Stribeck band gone sharp took 31,000-61,000 steps a sample and 17-127 s for one log (session 14)
+MAX_STEPS_PER_SAMPLE = 4096
 
 
 @dataclass(frozen=True)
@@ -106,8 +109,16 @@ def segments(log: Log, segment_s: float) -> np.ndarray:
     return np.arange(0, log.n - length + 1, length)
 
 
+def run_rows(log: Log, segment_s: float) -> np.ndarray:
+    """Rows (K,) a time-series free run predicts: every whole segment of ``segment_s`` [s] (:func:`segments`)."""
+    length = max(2, round(segment_s / log.dt))
+    return (segments(log, segment_s)[:, None] + np.arange(length)[None, :]).ravel()
+
+
 def free_run(plant: DCMotorPlant, log: Log, segment_s: float = 0.5) -> FreeRun:
-    """Free-run prediction of a time-series log (see module doc); steady-state sweeps: equilibria."""
+    """Free-run prediction of a time-series log (see module doc); steady-state sweeps: equilibria.
+    Raises :class:`SolverError` (``plant``) for a plant needing over :data:`MAX_STEPS_PER_SAMPLE` RK4 steps a
+    sample, before simulating."""
     if log.kind is LogKind.STEADY_STATE:
         return equilibrium(plant, log)
     starts = segments(log, segment_s)
@@ -115,12 +126,15 @@ def free_run(plant: DCMotorPlant, log: Log, segment_s: float = 0.5) -> FreeRun:
     nx = len(plant.state_names)
     x_obs = observed_states(plant, log)
     per_sample = substeps(plant, log.dt, x_obs[:, 0]) // SUBSTEPS
+    if per_sample > MAX_STEPS_PER_SAMPLE:
+        raise SolverError("plant", f"too stiff to free-run: {per_sample} RK4 steps a sample of {log.dt:.3g} s "
+                                   f"(at most {MAX_STEPS_PER_SAMPLE}); a sharp effect (brush contact, Stribeck band)?")
     sim = segment_simulator(plant, per_sample, length, starts.size)  # built once per plant and shape
     u_blocks = np.concatenate([log.voltage[s:s + length - 1] for s in starts])
     traj = np.asarray(sim(x_obs[:, starts], u_blocks.reshape(1, -1), log.dt / per_sample))
     traj = traj.reshape(nx, starts.size, length - 1)
     full = np.concatenate([x_obs[:, starts].reshape(nx, starts.size, 1), traj], axis=2).reshape(nx, -1)
-    idx = (starts[:, None] + np.arange(length)[None, :]).ravel()
+    idx = run_rows(log, segment_s)
     if not np.all(np.isfinite(full)):
         full = np.where(np.isfinite(full), full, 1e6)  # a diverging model: huge error, not a crash
     thrust = np.asarray(plant.thrust(list(full)), dtype=float)
