@@ -24,6 +24,12 @@ GRID = 12  # shape values per shaped effect (geometric grid)
 DROPS = ("brush_drop", "voltage_deadband")
 #: a Stribeck band is offered only where some row shows at least this share of its level (:func:`effect_columns`)
 STRIBECK_REACH = 0.5
+#: Coulomb friction's sign is offered at these smoothing widths ``omega_eps`` (fractions of the logged peak speed, the
+#: grid's ends; the catalogue's 0.5 rad/s at most the upper end): dry friction is a sign, sharp at zero speed, and
+#: its rotor dwells there at speeds far under 0.5 rad/s while the motor torque stays within ``+-tau_c``. The
+#: catalogue's smoothing (set for the optimiser) left a residual at every dwell, which a ripple of some period
+#: count or a Stribeck band then took up (proving ground: Coulomb friction alone named with cogging)
+COULOMB_EDGES = (1e-4, 1e-2)
 
 
 @dataclass(frozen=True)
@@ -220,6 +226,10 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
     if name == "stribeck":  # on the logged speed's range, the same for the low-passed and the raw rows
         return [(Column(name, "tau_s", ws), _effect(name, {"tau_s": 1.0, "omega_s": ws}, p, s))
                 for ws in stribeck_bands(log)]
+    if name == "coulomb_friction":  # the sign's sharpness on a grid (COULOMB_EDGES)
+        w_peak = float(np.max(np.abs(log.omega))) or 1.0
+        return [(Column(name, "tau_c", eps), _effect(name, {"tau_c": 1.0, "omega_eps": eps}, p, s))
+                for eps in _grid(COULOMB_EDGES[0] * w_peak, max(0.5, COULOMB_EDGES[1] * w_peak))]
     if name in DROPS:
         return drop_columns(name, p, s, log)
     if name == "thrust_lag":

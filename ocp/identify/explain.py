@@ -24,6 +24,11 @@ UNITS = {**PARAM_UNITS, "k": "N m/A = V s/rad"}
 #: this many windings ``R``: a 5.7 V drop over the catalogue's 20 mA is 283 ohm, an electrical mode 280 times the
 #: winding's, and a 50 Hz log's free run took 61,000 RK4 steps a sample (17 s)
 BRUSH_SLOPE = 20.0
+#: ... and its Coulomb friction's sign so that its slope at rest ``tau_c / omega_eps`` [N m s/rad] stays within this
+#: many times the motor's electrical damping ``k_t k_e / R``: the fitted sign may be as sharp as the rig's (down to
+#: 1e-4 of the peak speed, :data:`.columns.COULOMB_EDGES`), a rotor mode a free run or the optimiser would have to
+#: resolve at thousands of steps a sample; smoothed so, the stiffest mode is within 21 x the mechanical one
+FRICTION_SLOPE = 20.0
 SIGNATURE = {**PARAM_SIGNATURE, "k": "torque residual proportional to the current and voltage residual "
                                      "proportional to the speed, in the ratio of k_t to k_e"}
 
@@ -51,6 +56,8 @@ def effect_values(design: Design, f: Fitted, item: str) -> dict[str, float]:
     shape, x = _blend([(c.shape, x_) for c, x_ in picked])
     if item == "stribeck":
         return {"tau_s": max(x, 0.0), "omega_s": shape}
+    if item == "coulomb_friction":
+        return {"tau_c": x, "omega_eps": shape}
     if item == "voltage_deadband":
         return {"v_db": max(x, 0.0)}
     if item == "thrust_lag":
@@ -112,6 +119,9 @@ def plant_of(plant: DCMotorPlant, design: Design, f: Fitted, delay: float | None
             values = effect_values(design, f, item)
             if item == "brush_drop":  # (the smoothing: BRUSH_SLOPE)
                 values["i_eps"] = max(BrushDrop.i_eps, values["v_b"] / (BRUSH_SLOPE * params.R))
+            if item == "coulomb_friction":  # (FRICTION_SLOPE)
+                values["omega_eps"] = max(values["omega_eps"], abs(values["tau_c"]) * params.R
+                                          / (FRICTION_SLOPE * params.k_t * params.k_e))
             effects.append(make_effect(item, values))
     if delay is not None and delay > 0:
         effects.append(make_effect("input_delay", {"delay": delay}))
