@@ -24,6 +24,9 @@ GRID = 12  # shape values per shaped effect (geometric grid)
 DROPS = ("brush_drop", "voltage_deadband")
 #: a Stribeck band is offered only where some row shows at least this share of its level (:func:`effect_columns`)
 STRIBECK_REACH = 0.5
+#: a command whose magnitude spreads by more than this (relative standard deviation) holds several levels
+#: (:func:`_levels`); a PRBS's quantised two levels spread by 0
+LEVEL_SPREAD = 0.05
 #: Coulomb friction's sign is offered at these smoothing widths ``omega_eps`` (fractions of the logged peak speed, the
 #: grid's ends; the catalogue's 0.5 rad/s at most the upper end): dry friction is a sign, sharp at zero speed, and
 #: its rotor dwells there at speeds far under 0.5 rad/s while the motor torque stays within ``+-tau_c``. The
@@ -200,8 +203,11 @@ def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
     the command, a PRBS edge, passes through the band within a row, not over the low-pass's rise, and leaves a
     residual at every edge). ``held``: the log's command (N,) [V] before the alignment shifted it by that many
     samples: the dead band acts on each held level, before the shift mixes two of them in a row. A width no row
-    falls inside is not offered: there the drop is the command's sign times its width, on a two-level command a
-    drive gain, which no dead band or brush contact can be told from."""
+    falls inside is the drop's sign times its width: a brush width so is not offered, nor a dead band's on a
+    command of one magnitude (two levels, a PRBS), where it is a drive gain that no dead band can be told from. Over
+    several magnitudes (steps to random levels) a gain scales with the level and the dead band does not
+    (:func:`_levels`): there it is offered (before session 15 it was not, and a dead band on a steps log was named
+    a brush drop, proving-ground tuning seeds 6043, 6069, 6076, 6155)."""
     v = log.voltage[:s.v.size] if s.dt > 0 else s.v
     x, lag = (held[0], held[1]) if held is not None and name == "voltage_deadband" and s.dt > 0 else (v, 0.0)
     if name == "brush_drop":
@@ -211,7 +217,15 @@ def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
     key = "v_b" if name == "brush_drop" else "v_db"
     v_peak = float(np.max(np.abs(s.v))) or 1.0
     return [(Column(name, key, b), np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size], s.dt, fc), z]))
-            for b in _grid(0.005 * v_peak, 0.3 * v_peak) if np.any(np.abs(x) < b)]
+            for b in _grid(0.005 * v_peak, 0.3 * v_peak)
+            if np.any(np.abs(x) < b) or (name == "voltage_deadband" and _levels(x))]
+
+
+def _levels(x: np.ndarray) -> bool:
+    """Whether the magnitudes of ``x`` (M,) spread over more than one level (a relative standard deviation over
+    :data:`LEVEL_SPREAD`): then ``sign(x)`` is no gain on ``x`` (:func:`drop_columns`)."""
+    a = np.abs(x)
+    return bool(np.std(a) > LEVEL_SPREAD * np.mean(a))
 
 
 def _low(y: np.ndarray, dt: float, fc: float) -> np.ndarray:

@@ -13,6 +13,7 @@ command the drop is then a drive gain, which no dead band can be told from.
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from ocp.identify import diagnose
 from ocp.identify.columns import effect_columns, signals
@@ -67,3 +68,31 @@ def test_dead_band_beside_a_delay_is_not_also_a_brush_drop() -> None:
     assert sorted(res.verdict) == ["input_delay", "voltage_deadband"]
     band = next(e for r in res.rounds for e in r.entries if e.name == "voltage_deadband" and e.significant)
     assert abs(band.parameters["v_db"] / case.truth.e("voltage_deadband", "v_db") - 1.0) < 0.2
+
+
+def test_dead_band_is_offered_over_several_magnitudes_none_inside() -> None:
+    """Steps to several magnitudes, none inside any width offered (all above 0.3 of the peak): the dead band's
+    column is the command's sign (no gain on it), offered at every width; a PRBS's one magnitude stays refused."""
+    p = preset("paper-rig")
+    levels = np.array([4.0, -6.0, 5.0, -4.5, 6.0, -5.5])
+    v = np.repeat(levels, 400)
+    log = _log(v)
+    cols = effect_columns("voltage_deadband", p, signals(log, p), log, 0)
+    assert len(cols) == 12
+    settled = np.concatenate([np.arange(k * 400 + 100, (k + 1) * 400 - 100) for k in range(levels.size)])
+    for _, a in cols:  # closed form: sign(V) on the rows the low-pass has settled on
+        np.testing.assert_allclose(a[1][settled], np.sign(v[settled]), atol=1e-6)
+    assert effect_columns("brush_drop", p, signals(log, p), log, 0) != []  # (brushes: rows inside, as before)
+
+
+def test_a_dead_band_on_steps_is_not_named_a_brush_drop() -> None:
+    """Proving-ground tuning draw 6155 (2 kHz, steps to random levels, a dead band alone): named a brush drop
+    before session 15 (the dead band was not offered: no command row inside its band)."""
+    case = make_case(6155)
+    assert set(case.truth.effects) == {"voltage_deadband"} and not case.constant_error  # (the premise)
+    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
+    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
+    assert res.verdict == ["voltage_deadband"]
+    fitted = res.ranking[0].parameters["v_db"]
+    assert fitted == pytest.approx(case.truth.e("voltage_deadband", "v_db"), rel=0.05)
