@@ -12,6 +12,7 @@ nominal constants; its verdict is compared with the truth.
     python bench/modelcheck.py --n 200 --first 2000 --json new.json   # every record, for the two below
     python bench/modelcheck.py --records a.json b.json   # the table of recorded runs (merged), nothing diagnosed
     python bench/modelcheck.py --compare old.json new.json   # seed by seed: the logs a change fixed and broke
+    python bench/modelcheck.py --n 200 --first 2000 --noise-free --json quiet.json   # the same logs without noise
 
 Prints: verdicts exactly right, false alarms on clean logs, per label (effect or named constant)
 precision and recall with counts, alignment error, time per log (diagnose only, and generating).
@@ -62,8 +63,27 @@ def load_case(seed: int, cache: str | None) -> Any:
     return case
 
 
-def one(seed: int, cache: str | None = None) -> dict[str, Any]:
-    """Generate case ``seed`` (or read it from ``cache``) and diagnose it; a JSON-ready record."""
+def noise_free(case: Any) -> Any:
+    """``case`` with its log recorded again by a logger with no sensor noise, quantisation or time-stamp jitter
+    (its rate, skew, speed sensor and current filter kept): the rig replayed under the logged commands (the same
+    run; a PI loop's commands are as issued). What the identifier gets wrong there, its equations get wrong, not
+    the noise (the expected verdict stands: an effect visible against the noise is the more visible without)."""
+    from dataclasses import replace
+
+    import numpy as np
+
+    from tests.proving_ground.cases import _replay
+    from tests.proving_ground.logger import record
+
+    quiet = replace(case.logger, noise_w=0.0, noise_i=0.0, q_i=1e-9, noise_f=0.0, q_f=1e-9, counts=2**40, jitter=0.0)
+    cmds = case.columns["voltage"]
+    out = _replay(case.truth, cmds, case.logger, case.meta["tau_m"])
+    return replace(case, columns=record(quiet, out, cmds, np.random.default_rng(case.seed)), logger=quiet)
+
+
+def one(seed: int, cache: str | None = None, quiet: bool = False) -> dict[str, Any]:
+    """Generate case ``seed`` (or read it from ``cache``) and diagnose it (``quiet``: its log recorded without
+    noise, :func:`noise_free`); a JSON-ready record."""
     from ocp.identify import diagnose
     from ocp.logs import log_from_arrays
     from ocp.logs.timebase import uniform
@@ -72,6 +92,8 @@ def one(seed: int, cache: str | None = None) -> dict[str, Any]:
 
     t0 = time.perf_counter()
     case = load_case(seed, cache)
+    if quiet:
+        case = noise_free(case)
     t1 = time.perf_counter()
     # a jittery logger's time stamps are resampled to a uniform grid, as the file readers do (and say)
     t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
@@ -89,7 +111,7 @@ def one(seed: int, cache: str | None = None) -> dict[str, Any]:
     return {"seed": seed, "kind": case.kind, "expected": sorted(case.expected), "verdict": verdict, "error": err,
             "ambiguous": amb, "rate": case.logger.rate, "n": log.n, "speed": case.logger.speed,
             "excitations": list(case.excitations), "true_lag": lag, "alignment": align,
-            "constant_error": case.constant_error, "t_generate": t1 - t0, "t_diagnose": t2 - t1}
+            "constant_error": case.constant_error, "t_generate": t1 - t0, "t_diagnose": t2 - t1, "noise_free": quiet}
 
 
 def right(r: dict[str, Any]) -> bool:
@@ -154,7 +176,8 @@ def _run(seeds: range, args: argparse.Namespace) -> list[dict[str, Any]]:
     """Every seed's record (:func:`one`) in ``args.procs`` processes, by seed."""
     with multiprocessing.get_context("spawn").Pool(args.procs) as pool:
         rows = []
-        for k, r in enumerate(pool.imap_unordered(functools.partial(one, cache=args.cache), seeds), 1):
+        job = functools.partial(one, cache=args.cache, quiet=args.noise_free)
+        for k, r in enumerate(pool.imap_unordered(job, seeds), 1):
             rows.append(r)
             print(f"\r{k}/{len(seeds)}", end="", file=sys.stderr, flush=True)
     print(file=sys.stderr)
@@ -172,6 +195,9 @@ def main(argv: list[str] | None = None) -> int:
                          "(only the diagnosis is then timed afresh), in a subfolder named by the generator's "
                          "source digest: a changed proving ground writes new logs")
     ap.add_argument("--misses", action="store_true", help="list the wrong verdicts")
+    ap.add_argument("--noise-free", action="store_true",
+                    help="diagnose each log recorded again without sensor noise, quantisation or jitter (compare "
+                         "with a run on the logs as generated: the misses that stay are the identifier's equations)")
     ap.add_argument("--records", nargs="+", metavar="JSON", help="print the table of these recorded runs (--json "
                     "files, merged by seed) instead of diagnosing")
     ap.add_argument("--compare", nargs=2, metavar=("OLD", "NEW"), help="compare two recorded runs seed by seed")

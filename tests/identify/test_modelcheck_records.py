@@ -67,3 +67,30 @@ def test_the_cache_is_keyed_by_the_generator(tmp_path: Path, monkeypatch: pytest
     assert mod.generator_stamp() == first
     (copy / "physics.py").write_text((copy / "physics.py").read_text() + "\n# changed\n")
     assert mod.generator_stamp() != first
+
+
+def test_noise_free_records_the_same_run_without_noise() -> None:
+    """``--noise-free``: the case's rig replayed under its logged commands and recorded by its logger without noise,
+    quantisation or jitter. Oracle: the proving ground's own noiseless channels (``logged``) of that replay; and
+    the original log differs from it by the logger's stated noise levels (the same run, its noise removed)."""
+    import numpy as np
+
+    from tests.proving_ground import make_case
+    from tests.proving_ground.logger import logged, noise_levels
+
+    case = make_case(10152)
+    quiet = _bench().noise_free(case)
+    assert quiet.expected == case.expected and np.array_equal(quiet.columns["voltage"], case.columns["voltage"])
+    ref = logged(case.logger, _bench_replay(case))
+    got = np.vstack([quiet.columns["omega"], quiet.columns["current"], quiet.columns["thrust"]])
+    err = np.max(np.abs(got[:, 2:] - ref[:, 2:]), axis=1)
+    assert np.all(err <= 1e-6 * np.max(np.abs(ref), axis=1)), err
+    noisy = np.vstack([case.columns["omega"], case.columns["current"], case.columns["thrust"]])
+    ratio = np.sqrt(np.mean((noisy - got) ** 2, axis=1)) / noise_levels(case.logger)
+    assert np.all((ratio > 0.7) & (ratio < 1.3))  # (the stated levels, within sampling and rounding)
+
+
+def _bench_replay(case: Any) -> Any:
+    from tests.proving_ground.cases import _replay
+
+    return _replay(case.truth, case.columns["voltage"], case.logger, case.meta["tau_m"])
