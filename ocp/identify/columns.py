@@ -159,8 +159,13 @@ def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> 
     return np.vstack([mech + p.k_t * offset, elec - p.R * offset, thr])
 
 
-def _grid(lo: float, hi: float) -> np.ndarray:
-    return np.geomspace(lo, hi, GRID)
+def _grid(lo: float, hi: float, n: int = GRID) -> np.ndarray:
+    return np.geomspace(lo, hi, n)
+
+
+def _peak_speed(log: Log) -> float:
+    """The logged peak speed [rad/s] (1 for a rotor that never turned): the shaped friction grids' scale."""
+    return float(np.max(np.abs(log.omega))) or 1.0
 
 
 def stribeck_bands(log: Log) -> list[float]:
@@ -168,7 +173,7 @@ def stribeck_bands(log: Log) -> list[float]:
     row shows at :data:`STRIBECK_REACH` of their level or more (the friction's level would be extrapolated from
     its tail: a 4.5 rad/s band fitted at 178 N m for 3.7 mN m of Stribeck friction at 15 rad/s, on a log whose
     rotor either stood still or ran above 15 rad/s, and the free run of that plant took two minutes)."""
-    w_peak = float(np.max(np.abs(log.omega))) or 1.0
+    w_peak = _peak_speed(log)
     return [float(ws) for ws in _grid(0.003 * w_peak, 0.15 * w_peak)
             if np.max(np.abs(make_effect("stribeck", {"tau_s": 1.0, "omega_s": ws}).load_torque(
                 log.omega, NUMPY, None))) >= STRIBECK_REACH]
@@ -244,9 +249,9 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
         return [(Column(name, "tau_s", ws), _effect(name, {"tau_s": 1.0, "omega_s": ws}, p, s))
                 for ws in stribeck_bands(log)]
     if name == "coulomb_friction":  # the sign's sharpness on a grid (COULOMB_EDGES)
-        w_peak = float(np.max(np.abs(log.omega))) or 1.0
+        w_peak = _peak_speed(log)
         return [(Column(name, "tau_c", eps), _effect(name, {"tau_c": 1.0, "omega_eps": eps}, p, s))
-                for eps in np.geomspace(COULOMB_EDGES[0] * w_peak, max(0.5, COULOMB_EDGES[1] * w_peak), COULOMB_GRID)]
+                for eps in _grid(COULOMB_EDGES[0] * w_peak, max(0.5, COULOMB_EDGES[1] * w_peak), COULOMB_GRID)]
     if name in DROPS:
         return drop_columns(name, p, s, log)
     if name == "thrust_lag":
