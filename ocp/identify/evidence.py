@@ -18,6 +18,8 @@ from ocp.identify.regression import CONSTANTS, Design
 #: a constant off by more than this factor (either way) is a less likely error than a missing effect that fits
 #: the held-out data as well: the prior on constant errors behind :func:`.select._prefer_effects`
 IMPLAUSIBLE_FACTOR = 2.0
+#: ... judged on the fitted factor's bound nearest nominal, this many standard errors in
+PRIOR_SE = 2.0
 #: the paired block test of a constant (:func:`blocks_agree`): one-sided level, and the fewest held-out blocks
 BLOCK_ALPHA = 0.01
 #: ... the level an EFFECT's likelihood ratio is held to (:func:`ratio_agrees`): a round tries about ten effects
@@ -201,8 +203,29 @@ def worst(design: Design, f: Fitted) -> float:
 
 
 def implausible_factor(design: Design, f: Fitted, item: str) -> float | None:
-    """True / nominal of constant ``item`` in ``f`` where beyond :data:`IMPLAUSIBLE_FACTOR` either way, else None."""
+    """True / nominal of constant ``item`` in ``f`` where beyond :data:`IMPLAUSIBLE_FACTOR` either way by more than
+    :data:`PRIOR_SE` standard errors of its fit (:func:`standard_error`), else None: a B error of exactly half,
+    fitted at 0.494 (10020), is within the prior's reach."""
     if item not in CONSTANTS:
         return None
-    factor = 1.0 + f.coefficient(design.index(item)[0])
-    return factor if max(factor, 1.0 / max(factor, 1e-9)) > IMPLAUSIBLE_FACTOR else None
+    j = design.index(item)[0]
+    factor = 1.0 + f.coefficient(j)
+    se = PRIOR_SE * standard_error(design, f, j)
+    near = max(factor - se, 1.0) if factor > 1.0 else min(factor + se, 1.0)  # (the bound nearest nominal)
+    return factor if max(near, 1.0 / max(near, 1e-9)) > IMPLAUSIBLE_FACTOR else None
+
+
+def standard_error(design: Design, f: Fitted, j: int) -> float:
+    """Standard error of coefficient ``j`` of ``f`` (a relative error, -): the least-squares covariance
+    ``(sum_e q_e G_e / s_e^2)^-1`` over the training Gram matrices ``G_e`` of ``f``'s columns, each equation's rows
+    independent in a fraction ``q_e`` (:attr:`.regression.Design.independence`) and scattered by its held-out RMS
+    ``s_e`` (noise units, at least 1). Bounds are ignored (the unconstrained curvature)."""
+    if j not in f.cols:
+        return 0.0
+    idx = np.array(f.cols, dtype=int)
+    s2 = np.maximum(f.per_eq, 1.0) ** 2
+    g = np.einsum("e,eqr->qr", design.independence / s2, design.g_train[:, idx][:, :, idx])
+    k = f.cols.index(j)
+    d = np.sqrt(np.maximum(np.diag(g), 1e-300))
+    cov = np.linalg.pinv(g / np.outer(d, d), rcond=1e-12) / np.outer(d, d)
+    return float(math.sqrt(max(cov[k, k], 0.0)))

@@ -31,8 +31,9 @@ greedy first pick that stood for a mix of the items adopted after it (a thrust a
 and a force offset) leaves nothing of its own once they are in.
 Where no item clears that alone, two that clear it only together (and each against the other alone) are adopted
 as a pair (:func:`_pair`).
-A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` yields to an effect that fits as
-well (a prior on constant errors: :func:`_prefer_effects`). Then every adopted item is challenged: an
+A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` (beyond its fit's uncertainty,
+:func:`.evidence.implausible_factor`) yields to an effect that fits as well (a prior on constant errors:
+:func:`_prefer_effects`). Then every adopted item is challenged: an
 alternative that swaps it for another item and scores within ``ambiguity_margin`` makes the verdict
 ``ambiguous`` (both candidates and the reason are reported) instead of a confident wrong name.
 """
