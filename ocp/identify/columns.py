@@ -148,15 +148,31 @@ def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
 
 
 def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> np.ndarray:
-    """(3, N): an effect's contribution at these parameter values, through the catalogue's hooks."""
+    """(3, N): an effect's contribution at these parameter values, through the catalogue's hooks (a load torque as
+    its mean over each row, :func:`_row_mean`)."""
     eff = make_effect(name, values)
     z = np.zeros_like(s.w)
-    mech = np.asarray(eff.load_torque(s.w, NUMPY, None), float) + z
+    mech = _row_mean(lambda w: np.asarray(eff.load_torque(w, NUMPY, None), float) + z, s)
     elec = s.v - np.asarray(eff.drive_voltage(s.v, s.i, NUMPY), float)
     ideal = p.c_f * s.w0 * np.abs(s.w0)
     thr = np.asarray(eff.thrust(ideal, s.w0, NUMPY, None), float) - ideal
     offset = float(eff.measured_current(0.0))
     return np.vstack([mech + p.k_t * offset, elec - p.R * offset, thr])
+
+
+#: points of the row mean of a load torque over the speed's path within a row (:func:`_row_mean`)
+ROW_POINTS = 8
+
+
+def _row_mean(torque: Callable[[np.ndarray], np.ndarray], s: Signals) -> np.ndarray:
+    """A load torque's mean over each row (M,) [N m] (eq. dc_mechanical holds over the held interval), the speed
+    taken linear from the row's start ``w0`` to its end ``w1`` (midpoint rule, :data:`ROW_POINTS` points): a
+    friction's sign flips inside the row where the speed passes zero, and at the row's mean speed it would be
+    taken whole (a sweep, ``dt = 0``: at the speed)."""
+    if s.dt == 0:
+        return torque(s.w)
+    u = (np.arange(ROW_POINTS) + 0.5) / ROW_POINTS
+    return np.mean([torque(s.w0 + f * (s.w1 - s.w0)) for f in u], axis=0)
 
 
 def _grid(lo: float, hi: float, n: int = GRID) -> np.ndarray:
