@@ -33,7 +33,7 @@ def test_the_standard_error_is_the_scatter_of_fits_over_noise_draws() -> None:
     fits = np.array([np.linalg.lstsq(a, rng.standard_normal(ROWS), rcond=None)[0] for _ in range(DRAWS)])
     f = Fitted(("B",), (0, 1), np.zeros(2), 0.0, 1.0, np.ones(3))
     se = [standard_error(_design(a, 1.0), f, j) for j in (0, 1)]
-    # 4000 draws: the empirical standard deviation is within 3 % (2.2 standard errors of a std) of the truth
+    # 4000 draws: an estimated standard deviation scatters by 1 / sqrt(2 * 4000) = 1.1 %; within three of those
     assert np.allclose(se, fits.std(axis=0), rtol=0.035)
     # each row repeated REPEAT times (one noise value each): a design that counts them all, scaled by its
     # independence 1 / REPEAT, gives the same standard error as the rows counted once
