@@ -1,0 +1,92 @@
+"""The torque equation's floor on proving-ground logs against a labelled item's footprint: with the TRUE
+constants and hidden effects (the proving ground's own load torque), what eq. dc_mechanical still leaves on the
+identifier's rows (the aligned log, raw rows where an angle is logged, seen through the rotor's low-pass as
+:mod:`ocp.identify.regression` sees it), and what the item alone puts there.
+
+    python bench/pg_floor.py --items 6132:stribeck 113:param:B 88:cogging --cache DIR [--noise-free]
+
+A footprint under the floor is an item that no choice of columns can show on these rows: the equations'
+discretisation against the logger (sample means, an encoder's difference, a sub-sample skew), not noise or a
+missing column, stands above it (``--noise-free``: each log recorded again without sensor noise, quantisation or
+jitter, :func:`bench.modelcheck.noise_free`: what is left is the equations'). Load-torque items only
+(``coulomb_friction``, ``stribeck``, ``drag_asymmetry``, ``cogging``, ``param:B``, ``param:c_tau``); a current
+offset is taken out of the measured current.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from bench.modelcheck import load_case, noise_free
+from ocp.identify.align import estimate, realign
+from ocp.identify.columns import raw_signals, signals
+from ocp.identify.regression import rotor_tau, speed_view
+from ocp.logs import log_from_arrays
+from ocp.logs.timebase import uniform
+from ocp.model.params import MotorParams
+from tests.proving_ground.physics import load_torque
+
+LOAD_ITEMS = ("coulomb_friction", "stribeck", "drag_asymmetry", "cogging", "param:B", "param:c_tau")
+
+
+def floor_and_footprint(case: Any, item: str) -> tuple[float, float]:
+    """(floor, footprint) [N m]: RMS over the middle 80 % of the rows, speed view (module doc)."""
+    t, c = case.truth, case.columns
+    tt, ch, _ = uniform(c["t"], {k: v for k, v in c.items() if k != "t"}, resample=True)
+    log = log_from_arrays(tt, ch["voltage"], ch["current"], ch["thrust"], omega=ch["omega"], theta=ch.get("theta"))
+    nominal = case.nominal
+    log = realign(log, estimate(log, 2.0, (nominal["L"] / nominal["R"], nominal["k_e"])).samples)
+    p = MotorParams(J=t.J, B=t.B, c_tau=t.c_tau, c_f=t.c_f, k_t=t.k, k_e=t.k, R=t.R, L=t.L)
+    s = raw_signals(log, log.theta) if log.theta is not None else signals(log, p)
+    theta = s.theta if s.theta is not None else np.zeros_like(s.w)
+    load = np.vectorize(load_torque, excluded={0})
+
+    def torque(x: Any) -> np.ndarray:
+        return np.asarray(load(x, s.w, theta), float)
+
+    if item.startswith("param:"):
+        key = item.removeprefix("param:")
+        other = replace(t, **{key: getattr(t, key) / (1.0 + case.constant_error[key])})
+    else:
+        other = replace(t, effects={k: v for k, v in t.effects.items() if k != item})
+    offset = t.e("current_offset", "i0")
+    resid = p.k_t * (s.i - offset) - p.J * (s.w1 - s.w0) / s.dt - torque(t)
+    tau = rotor_tau(p, signals(log, p))
+    rows = slice(s.w.size // 10, -(s.w.size // 10))
+    r = speed_view(resid, s.dt, tau)[rows]
+    f = speed_view(torque(t) - torque(other), s.dt, tau)[rows]
+    return float(np.std(r)), float(np.sqrt(np.mean(f * f)))
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--items", nargs="+", required=True, help="SEED:ITEM, e.g. 6132:stribeck or 113:param:B")
+    ap.add_argument("--cache", default=None, help="as bench/modelcheck.py's")
+    ap.add_argument("--noise-free", action="store_true", help="the logs recorded again without noise")
+    args = ap.parse_args(argv)
+    under = 0
+    for spec in args.items:
+        seed, item = spec.split(":", 1)
+        if item not in LOAD_ITEMS:
+            print(f"{spec}: not a load-torque item ({', '.join(LOAD_ITEMS)})")
+            continue
+        case = load_case(int(seed), args.cache)
+        case = noise_free(case) if args.noise_free else case
+        floor, foot = floor_and_footprint(case, item)
+        under += foot < floor
+        print(f"{int(seed):6d} {item:17s} {case.logger.rate:6.0f} Hz {case.logger.speed:8s} floor {floor:9.3g} N m "
+              f"footprint {foot:9.3g} N m  ratio {foot / floor:7.2f}", flush=True)
+    print(f"footprint under the floor: {under} of {len(args.items)}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
