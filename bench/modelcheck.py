@@ -81,12 +81,21 @@ def noise_free(case: Any) -> Any:
     return replace(case, columns=record(quiet, out, cmds, np.random.default_rng(case.seed)), logger=quiet)
 
 
+def case_log(case: Any) -> Any:
+    """The case's log as :func:`ocp.logs.log_from_arrays` reads it (a jittery logger's time stamps resampled to a
+    uniform grid, as the file readers do, and say)."""
+    from ocp.logs import log_from_arrays
+    from ocp.logs.timebase import uniform
+
+    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
+    return log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"),
+                           source=f"proving-ground-{case.seed}")
+
+
 def one(seed: int, cache: str | None = None, quiet: bool = False) -> dict[str, Any]:
     """Generate case ``seed`` (or read it from ``cache``) and diagnose it (``quiet``: its log recorded without
     noise, :func:`noise_free`); a JSON-ready record."""
     from ocp.identify import diagnose
-    from ocp.logs import log_from_arrays
-    from ocp.logs.timebase import uniform
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
 
@@ -95,10 +104,7 @@ def one(seed: int, cache: str | None = None, quiet: bool = False) -> dict[str, A
     if quiet:
         case = noise_free(case)
     t1 = time.perf_counter()
-    # a jittery logger's time stamps are resampled to a uniform grid, as the file readers do (and say)
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"),
-                          source=f"proving-ground-{seed}")
+    log = case_log(case)
     try:
         res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
         verdict, err = sorted(res.verdict), None

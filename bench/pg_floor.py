@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -27,12 +26,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bench.modelcheck import load_case, noise_free
+from bench.modelcheck import case_log, load_case, noise_free
+from bench.pg_visibility import without
 from ocp.identify.align import estimate, realign
 from ocp.identify.columns import nuisance_columns, raw_signals, signals
 from ocp.identify.regression import rotor_tau, speed_view
-from ocp.logs import log_from_arrays
-from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams
 from tests.proving_ground.physics import load_torque
 
@@ -41,9 +39,8 @@ LOAD_ITEMS = ("coulomb_friction", "stribeck", "drag_asymmetry", "cogging", "para
 
 def floor_and_footprint(case: Any, item: str) -> tuple[float, float]:
     """(floor, footprint) [N m]: RMS over the middle 80 % of the rows, speed view (module doc)."""
-    t, c = case.truth, case.columns
-    tt, ch, _ = uniform(c["t"], {k: v for k, v in c.items() if k != "t"}, resample=True)
-    log = log_from_arrays(tt, ch["voltage"], ch["current"], ch["thrust"], omega=ch["omega"], theta=ch.get("theta"))
+    t = case.truth
+    log = case_log(case)
     nominal = case.nominal
     log = realign(log, estimate(log, 2.0, (nominal["L"] / nominal["R"], nominal["k_e"])).samples)
     p = MotorParams(J=t.J, B=t.B, c_tau=t.c_tau, c_f=t.c_f, k_t=t.k, k_e=t.k, R=t.R, L=t.L)
@@ -54,11 +51,7 @@ def floor_and_footprint(case: Any, item: str) -> tuple[float, float]:
     def torque(x: Any) -> np.ndarray:
         return np.asarray(load(x, s.w, theta), float)
 
-    if item.startswith("param:"):
-        key = item.removeprefix("param:")
-        other = replace(t, **{key: getattr(t, key) / (1.0 + case.constant_error[key])})
-    else:
-        other = replace(t, effects={k: v for k, v in t.effects.items() if k != item})
+    other = without(case, item)
     offset = t.e("current_offset", "i0")
     resid = p.k_t * (s.i - offset) - p.J * (s.w1 - s.w0) / s.dt - torque(t)
     tau = rotor_tau(p, signals(log, p))

@@ -18,6 +18,7 @@ import random
 import sys
 from dataclasses import replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -28,17 +29,20 @@ from tests.proving_ground import cases as pg
 from tests.proving_ground.logger import logged, noise_levels
 
 
-def visibility(case: object, item: str) -> np.ndarray:
-    """(3,) the item's RMS change of the logged [speed, current, thrust] in noise levels (``param:<c>``: the
-    constant believed off by its drawn error)."""
-    tr, lg, tau_m = case.truth, case.logger, case.meta["tau_m"]  # type: ignore[attr-defined]
+def without(case: Any, item: str) -> Any:
+    """The case's rig without the labelled ``item`` (``param:<c>``: with the constant the user believes)."""
+    tr = case.truth
     if item.startswith("param:"):
         c = item.removeprefix("param:")
-        other = replace(tr, **{c: getattr(tr, c) / (1.0 + case.constant_error[c])})  # type: ignore[attr-defined]
-    else:
-        other = replace(tr, effects={k: v for k, v in tr.effects.items() if k != item})
-    cmds = case.columns["voltage"]  # type: ignore[attr-defined]
-    a, b = (logged(lg, pg._replay(x, cmds, lg, tau_m)) for x in (tr, other))
+        return replace(tr, **{c: getattr(tr, c) / (1.0 + case.constant_error[c])})
+    return replace(tr, effects={k: v for k, v in tr.effects.items() if k != item})
+
+
+def visibility(case: Any, item: str) -> np.ndarray:
+    """(3,) the item's RMS change of the logged [speed, current, thrust] in noise levels."""
+    tr, lg, tau_m = case.truth, case.logger, case.meta["tau_m"]
+    cmds = case.columns["voltage"]
+    a, b = (logged(lg, pg._replay(x, cmds, lg, tau_m)) for x in (tr, without(case, item)))
     return np.sqrt(np.mean((a - b) ** 2, axis=1)) / noise_levels(lg)
 
 
