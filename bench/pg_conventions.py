@@ -25,6 +25,7 @@ from scipy.optimize import minimize_scalar
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.modelcheck import load_case
+from bench.pg_visibility import without
 from tests.proving_ground import cases as pg
 from tests.proving_ground.logger import logged, noise_levels
 from tests.proving_ground.physics import run
@@ -38,7 +39,7 @@ def study(case: Any, const: str) -> tuple[float, float, float, float]:
     cmds = case.columns["voltage"]
     sig = noise_levels(lg)
     truth = logged(lg, pg._replay(tr, cmds, lg, tau_m))
-    believed = replace(tr, **{const: getattr(tr, const) / (1 + case.constant_error[const])})
+    believed = without(case, f"param:{const}")
     delay, subs, rows = tr.e("input_delay", "delay"), pg._substeps(believed, lg, tau_m), slice(5, -5)
     replays: dict[float, np.ndarray] = {}
 

@@ -210,6 +210,8 @@ def implausible_factor(design: Design, f: Fitted, item: str) -> float | None:
         return None
     j = design.index(item)[0]
     factor = 1.0 + f.coefficient(j)
+    if max(factor, 1.0 / max(factor, 1e-9)) <= IMPLAUSIBLE_FACTOR:
+        return None  # (within the factor: no interval needed; this runs for every challenger of every round)
     se = PRIOR_SE * standard_error(design, f, j)
     near = max(factor - se, 1.0) if factor > 1.0 else min(factor + se, 1.0)  # (the bound nearest nominal)
     return factor if max(near, 1.0 / max(near, 1e-9)) > IMPLAUSIBLE_FACTOR else None
