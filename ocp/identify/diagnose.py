@@ -4,7 +4,9 @@ Procedure:
 
 1. **Alignment** (:mod:`.align`): the command-to-sensor lag is estimated first and removed; only a lag
    beyond what logging conventions explain (stated rule there) is called ``input_delay``, and only when it
-   predicts the held-out speed and current better (by ``min_improvement``) than the best lag within them.
+   predicts the held-out speed and current better (by ``min_improvement``) than the best lag within them, or
+   halves the alignment search's own residual (the armature equation with free coefficients, which wrong
+   nominal constants do not swamp).
 2. Split the log into segments of ``segment_s`` seconds; every ``holdout_every``-th is held out
    (steady-state sweeps: rows). Competing models are scored by cross-validation (``cross_validate``): each
    of the ``holdout_every`` classes of segments is held out in turn, the model fitted on the others, so that
@@ -35,7 +37,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.errors import SolverError
-from ocp.identify.align import SKEW_FRACTION, Alignment, estimate, realign, spread, within
+from ocp.identify.align import DELAY_GAIN, SKEW_FRACTION, Alignment, estimate, gain, realign, spread, within
 from ocp.identify.candidates import candidate
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
@@ -377,7 +379,11 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
                 noise: dict[str, float], seg: float) -> bool:
     """Whether a lag beyond the logging conventions predicts the held-out speed and current (what the
     armature voltage drives first; free run, in noise units) better by the selection's ``min_improvement``
-    than the best lag within them: only then is it an ``input_delay``."""
+    than the best lag within them, or cuts the alignment search's residual by :data:`.align.DELAY_GAIN` (the
+    armature equation with free coefficients, which other model errors do not swamp, :func:`.align.gain`): only
+    then is it an ``input_delay``."""
+    if gain(align, opt.max_logging_skew + own) >= DELAY_GAIN:
+        return True
     lag = make_effect("input_delay", {"delay": (align.samples - own) * log.dt})
     short = within(align, opt.max_logging_skew + own, log.dt).samples - own
     err = [score(p, x, sp.test, noise, seg).rms for p, x in

@@ -7,13 +7,15 @@ Rigs come from the independent proving ground (``tests/proving_ground``, seeds o
 
 from __future__ import annotations
 
+import importlib
+import math
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from ocp.identify import DiagnoseOptions, diagnose
-from ocp.identify.align import Alignment, estimate, search_range, within
+from ocp.identify.align import DELAY_GAIN, Alignment, estimate, gain, search_range, within
 from ocp.identify.diagnose import _delay_wins, split
 from ocp.identify.predict import noise_levels
 from ocp.logs import Log, log_from_arrays
@@ -21,6 +23,8 @@ from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground.experiment import Rig, draw, run_command
 from tests.synthetic_rig import RigSpec, generate
+
+diagnose_module = importlib.import_module("ocp.identify.diagnose")  # (the package exports the function)
 
 
 def _excite(rig: Rig, seconds: float) -> tuple[np.ndarray, np.ndarray]:
@@ -87,3 +91,42 @@ def test_a_longer_lag_is_a_delay_only_when_it_predicts_better(rig: MotorParams) 
                            seg) is wins
         if not wins:
             assert within(al, opt.max_logging_skew, log.dt).samples == pytest.approx(1.0, abs=0.2)
+
+
+def test_a_delay_is_measured_by_the_armature_equation_where_wrong_constants_swamp_the_free_run(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """A nominal inertia 20 times too large (the datasheet of another propeller) makes both free runs of
+    :func:`_delay_wins` so wrong that the true delay no longer predicts the held-out data better; the alignment
+    search (eq. dc_electrical with free coefficients) does not use ``J``, and its residual at the delay is far
+    below the best within the conventions: the delay is called. (On the benchmark's logs, a 34 % ``J`` error or
+    a dead band beside a delay did the same: 10105, 186, 9232.)"""
+    rig = draw(3106, "input_delay")
+    lg = rig.logger
+    t = np.arange(0.0, min(max(60 * rig.tau_m, 2.0), 6000 * lg.dt), lg.dt)
+    hold = max(1, int(4 * rig.tau_m / lg.dt))
+    levels = np.random.default_rng(3106).choice([-1.0, 1.0], size=t.size // hold + 1)
+    log = _log(run_command(rig, t, 0.6 * rig.truth.v_max * np.repeat(levels, hold)[:t.size], 3106))
+    wrong = MotorParams(**{**rig.nominal, "J": 20.0 * rig.nominal["J"]})
+    al = estimate(log, 2.0, (wrong.L / wrong.R, wrong.k_e))
+    true_lag = lg.skew + rig.truth.effects["input_delay"]["delay"] / lg.dt
+    assert al.delay and al.samples == pytest.approx(true_lag, abs=1.0)
+    assert gain(al, 2.0) >= DELAY_GAIN
+    opt, seg = DiagnoseOptions(), 0.5
+    args = (DCMotorPlant(wrong), log, al, 0.0, opt, split(log, seg, opt.holdout_every), noise_levels(log), seg)
+    monkeypatch.setattr(diagnose_module, "DELAY_GAIN", math.inf)  # the free runs alone
+    assert not _delay_wins(*args)
+    monkeypatch.undo()
+    assert _delay_wins(*args)
+
+
+def test_the_armature_equation_gain_needs_a_minimum_inside_the_search() -> None:
+    """:func:`gain` is the residual's best within the conventions over its value at the lag taken; a residual
+    still falling at the end of the search (a smooth command traded against the armature's lag, as on a clean
+    5 kHz log whose search ran to its 26-sample end) measures nothing: 1."""
+    lags = np.arange(0.0, 27.0)
+    dip = 1.0 - 0.6 * np.exp(-0.5 * (lags - 9.0) ** 2)  # a sharp minimum at 9 samples, 0.4 of the rest
+    al = Alignment(9.0, 9e-3, True, "", (tuple(lags), tuple(dip)))
+    assert gain(al, 2.0) == pytest.approx(dip[lags <= 2.75].min() / 0.4)
+    falling = 1.0 - 0.02 * lags
+    assert gain(Alignment(26.0, 26e-3, True, "", (tuple(lags), tuple(falling))), 2.0) == 1.0
+    assert gain(Alignment(0.0, 0.0, False, "", (tuple(lags), tuple(dip)), identified=False), 2.0) == 1.0

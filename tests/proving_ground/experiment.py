@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tests.proving_ground.cases import _scales, draw_effect, draw_motor
+from tests.proving_ground.cases import _lag, _scales, draw_effect, draw_motor
 from tests.proving_ground.logger import Logger, draw_logger, record
 from tests.proving_ground.physics import Truth, run
 
@@ -50,7 +50,7 @@ def draw(seed: int, effect: str) -> Rig:
 
 def _columns(rig: Rig, cmd: np.ndarray, skip: int, seed: int) -> dict[str, np.ndarray]:
     lg = rig.logger
-    out, issued = run(rig.truth, lambda k, _s: float(cmd[k]), cmd.size, lg.dt, lg.skew * lg.dt, _substeps(rig))
+    out, issued = run(rig.truth, lambda k, _s: float(cmd[k]), cmd.size, lg.dt, _lag(rig.truth, lg), _substeps(rig))
     cols = record(lg, out[:, skip:], issued[skip:], np.random.default_rng(seed))
     cols["t"] = np.arange(cols["voltage"].size) * lg.dt  # the uniform time base a reader resamples onto
     return cols
