@@ -36,14 +36,17 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 
+#: the proving ground's modules that make a case (:func:`tests.proving_ground.make_case` imports no other)
+GENERATOR = ("__init__.py", "cases.py", "excite.py", "logger.py", "physics.py")
+
+
 def generator_stamp() -> str:
-    """Digest (12 hex) of the proving ground's source (its modules, not its tests): a cached log is read back only
-    by the generator that wrote it (session 14 changed the rig's integrator; a flat cache would have served the
-    old logs without a word)."""
+    """Digest (12 hex) of the modules that generate a case (:data:`GENERATOR`): a cached log is read back only by
+    the generator that wrote it (session 14 changed the rig's integrator; a flat cache would have served the old
+    logs without a word). The proving ground's other modules (experiment rigs for tests) do not make cases."""
     h = hashlib.sha256()
-    for f in sorted((ROOT / "tests" / "proving_ground").glob("*.py")):
-        if not f.name.startswith("test_"):
-            h.update(f.name.encode() + f.read_bytes())
+    for name in GENERATOR:
+        h.update(name.encode() + (ROOT / "tests" / "proving_ground" / name).read_bytes())
     return h.hexdigest()[:12]
 
 
