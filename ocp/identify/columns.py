@@ -161,11 +161,24 @@ def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
     at those samples in the torque residual: ``(di + di_prev) / 2`` with ``di = i1 - i0`` the row's own step. (The
     row's own step alone is that derivative half a sample late: the same for a smooth current, but a current that
     steps, a fast armature under a stepped command, then leaves a residual the acceleration's column takes: ``J``
-    was named 11-14 % low on tuning logs with a right J, at a mechanical time constant of four samples.)"""
+    was named 11-14 % low on tuning logs with a right J, at a mechanical time constant of four samples.)
+
+    ``switch_phase``, ``x = phi - 1/2``: the drive applies a new command ``phi`` of a row after the sample (the
+    alignment removes whole samples; a fraction the current cannot show where the armature settles within a row, so
+    the torque equation measures it). The row's mean current is then the end samples' mean less ``x (2c - 1) q``,
+    ``q = (i1 - i0) + (k_e/R)(w1 - w0)``, ``c`` = :func:`settle_weight`: eq. dc_electrical over the row, exact for
+    a switch at its start at any armature speed and for any ``phi`` where the armature settles within the row (for
+    a fast armature ``q`` is the command's step over ``R``: the impulse of switching late; a slow one has
+    ``c = 1/2`` and no column). With the row's mean current fixed at the samples' mean, ``J`` was held at the edge of
+    its box and ``B`` at the other's (proving ground, mechanical time constant of 4.5 samples)."""
     z = np.zeros_like(s.w)
+    if s.dt == 0:
+        return {"current_lag": np.vstack([z, z, z]), "switch_phase": np.vstack([z, z, z])}
     d = s.i1 - s.i0
     d = 0.5 * (d + np.concatenate([d[:1], d[:-1]]))  # (M,): the first row has no previous step: its own
-    return {"current_lag": np.vstack([-p.k_t * d if s.dt > 0 else z, z, z])}
+    q = (s.i1 - s.i0) + p.k_e / p.R * (s.w1 - s.w0)  # [A] (M,)
+    return {"current_lag": np.vstack([-p.k_t * d, z, z]),
+            "switch_phase": np.vstack([-(2.0 * settle_weight(p, s.dt) - 1.0) * p.k_t * q, z, z])}
 
 
 def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> np.ndarray:

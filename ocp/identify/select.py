@@ -81,7 +81,9 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float,
     above = design.above if above is None else above
     for j in cols:
         c = design.columns[j]
-        if c.item in NUISANCES:
+        if c.item == "switch_phase":
+            a, b = -0.5, 0.5  # the switching instant: anywhere within the row
+        elif c.item in NUISANCES:
             a, b = -1.0, np.inf  # a sensor lag; a lead of up to one sample: a current settling within a sample
         elif c.item in CONSTANTS:
             # a constant the log cannot resolve is a free nuisance (never named): boxing it in would leave
