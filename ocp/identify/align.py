@@ -260,6 +260,11 @@ def spread(align: Alignment) -> float:
     return max(LAG_STEP, 0.5 * float(lags[run[-1]] - lags[run[0]]))
 
 
+def _conventional(lags: np.ndarray, max_logging_skew: float) -> np.ndarray:
+    """Which of the search's ``lags`` (K,) [samples] logging conventions explain (the rule, module doc)."""
+    return lags <= max_logging_skew + SKEW_FRACTION + 1e-9
+
+
 def gain(align: Alignment, max_logging_skew: float) -> float:
     """How many times lower the search residual is at the lag taken than at the best lag within the conventions
     (lags up to ``max_logging_skew + SKEW_FRACTION``): the one-step armature equation with free coefficients, so a
@@ -268,7 +273,7 @@ def gain(align: Alignment, max_logging_skew: float) -> float:
     search (the residual still falls at its end: a smooth command traded against the armature's lag, not a
     measured delay) or not identified."""
     lags, res = (np.asarray(x, float) for x in align.curve)
-    keep = lags <= max_logging_skew + SKEW_FRACTION + 1e-9
+    keep = _conventional(lags, max_logging_skew)
     if not align.identified or not keep.any() or keep.all() or align.samples >= lags[-1] - 0.5:
         return 1.0
     return float(res[keep].min() / max(float(np.interp(align.samples, lags, res)), 1e-300))
@@ -278,7 +283,7 @@ def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
     """``align`` restricted to what logging conventions explain (lags up to ``max_logging_skew`` + 0.75
     samples): the best lag of its search curve there, never a delay (a longer lag was not confirmed)."""
     lags, res = (np.asarray(x, float) for x in align.curve)
-    keep = lags <= max_logging_skew + SKEW_FRACTION + 1e-9
+    keep = _conventional(lags, max_logging_skew)
     if not keep.any():
         return Alignment(0.0, 0.0, False, align.rule, align.curve, False)
     samples, known = _pick(lags[keep], res[keep])

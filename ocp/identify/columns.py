@@ -174,9 +174,9 @@ def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
     z = np.zeros_like(s.w)
     if s.dt == 0:
         return {"current_lag": np.vstack([z, z, z]), "switch_phase": np.vstack([z, z, z])}
-    d = s.i1 - s.i0
-    d = 0.5 * (d + np.concatenate([d[:1], d[:-1]]))  # (M,): the first row has no previous step: its own
-    q = (s.i1 - s.i0) + p.k_e / p.R * (s.w1 - s.w0)  # [A] (M,)
+    step = s.i1 - s.i0
+    d = 0.5 * (step + np.concatenate([step[:1], step[:-1]]))  # (M,): the first row has no previous step: its own
+    q = step + p.k_e / p.R * (s.w1 - s.w0)  # [A] (M,)
     return {"current_lag": np.vstack([-p.k_t * d, z, z]),
             "switch_phase": np.vstack([-(2.0 * settle_weight(p, s.dt) - 1.0) * p.k_t * q, z, z])}
 

@@ -68,8 +68,10 @@ CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 #: logger artefacts every model fits and no verdict names: ``current_lag``, the current sensor's lag [samples]
 #: (a firmware filter) in the torque equation, where the true current is ``i + lag dt i'`` (in the armature
 #: equation the same lag looks like an inductance: an unresolved ``L`` takes it up there); ``switch_phase``, where
-#: within a row the drive applies a new command (:func:`.columns.nuisance_columns`)
-NUISANCES: tuple[str, ...] = ("current_lag", "switch_phase")
+#: within a row the drive applies a new command (:func:`.columns.nuisance_columns`). Each with its box: a sensor lag,
+#: or a lead of up to one sample (a current settling within a sample); the switching instant anywhere in the row
+NUISANCE_BOUNDS: dict[str, tuple[float, float]] = {"current_lag": (-1.0, math.inf), "switch_phase": (-0.5, 0.5)}
+NUISANCES: tuple[str, ...] = tuple(NUISANCE_BOUNDS)
 #: effects found by regression (input_delay is found by the alignment)
 REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")
 #: the torque equation's weight is at least this fraction of the smallest torque error a free run shows at

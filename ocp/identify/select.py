@@ -61,7 +61,7 @@ from ocp.identify.evidence import (
     scatter,
     worst,
 )
-from ocp.identify.regression import CONSTANTS, NUISANCES, Design
+from ocp.identify.regression import CONSTANTS, NUISANCE_BOUNDS, NUISANCES, Design
 from ocp.model.effects import CATALOGUE
 
 NAMED_BOUNDS = (-0.8, 3.0)
@@ -81,10 +81,8 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float,
     above = design.above if above is None else above
     for j in cols:
         c = design.columns[j]
-        if c.item == "switch_phase":
-            a, b = -0.5, 0.5  # the switching instant: anywhere within the row
-        elif c.item in NUISANCES:
-            a, b = -1.0, np.inf  # a sensor lag; a lead of up to one sample: a current settling within a sample
+        if c.item in NUISANCES:
+            a, b = NUISANCE_BOUNDS[c.item]
         elif c.item in CONSTANTS:
             # a constant the log cannot resolve is a free nuisance (never named): boxing it in would leave
             # what it stands for (a current filter for L) to be explained by a wrong item
