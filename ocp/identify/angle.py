@@ -123,9 +123,10 @@ def track_phase(z: np.ndarray, h: np.ndarray, resid: np.ndarray, train: np.ndarr
     its phase does): a window fitted to noise turns the phase, it cannot add amplitude; knots are fitted on
     training rows only, so the held-out rows between them judge the tracking."""
     k = h.shape[1]
-    cols = [*(z.imag * h[:, j] for j in range(k)), *(z.real * h[:, j] for j in range(k))]
-    a = np.column_stack([view(c) if view is not None else c for c in cols])
-    x = np.linalg.lstsq(a[train], resid[train], rcond=None)[0]
+    a = np.hstack([z.imag[:, None] * h, z.real[:, None] * h])  # (M, 2K)
+    a = view(a) if view is not None else a  # (one call over all columns: rows first)
+    at = a[train]
+    x = np.linalg.lstsq(at.T @ at, at.T @ resid[train], rcond=1e-12)[0]  # (normal equations: 2K columns, many rows)
     w = h @ (x[k:] - 1j * x[:k])  # Re[w z] = c Re z + s Im z, per knot
     return np.asarray(w / np.maximum(np.abs(w), 1e-300))
 

@@ -199,15 +199,15 @@ def _noise_residual(t: np.ndarray, rich: list[np.ndarray], fixed: list[np.ndarra
 
 
 def speed_view(y: np.ndarray, dt: float, tau: float) -> np.ndarray:
-    """Torque rows (N,) [N m] seen as the speed error they cause: the rotor's first-order low-pass
+    """Torque rows (N,) or (N, K) [N m] seen as the speed error they cause: the rotor's first-order low-pass
     (eq. dc_mechanical ``J w' + D w = tau``, ``tau = J / D`` [s], unit gain at DC, exact for a held input),
     run forward and backward (zero phase, magnitude ``1 / (1 + (w tau)^2)``). The differentiated speed's
     noise (``J w'``, growing with frequency) falls below the speed noise, while a slow torque error keeps
     what moves the rotor: what a free run shows."""
-    if dt == 0 or tau <= 2 * dt or y.size < 20:
+    if dt == 0 or tau <= 2 * dt or y.shape[0] < 20:
         return y
     a = math.exp(-dt / tau)
-    return np.asarray(signal.filtfilt([1.0 - a], [1.0, -a], y, padlen=0), float)
+    return np.asarray(signal.filtfilt([1.0 - a], [1.0, -a], y, axis=0, padlen=0), float)
 
 
 def rotor_tau(p: MotorParams, s: Signals) -> float:
@@ -270,8 +270,8 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     # rows next to them tapered in (edge_taper: the low-passed J w' of a log cut off there holds the speed of one row)
     taper = edge_taper(edge, tau / s.dt if s.dt > 0 else 0.0)
 
-    def view(y: np.ndarray) -> np.ndarray:
-        return speed_view(np.where(edge, 0.0, y) * taper, s.dt, tau)
+    def view(y: np.ndarray) -> np.ndarray:  # (M,) or (M, K): rows first
+        return speed_view(np.where(_rows(edge, y), 0.0, y) * _rows(taper, y), s.dt, tau)
 
     for y in (t, *(a for _, a in cols)):
         y[0] = view(y[0])
@@ -325,6 +325,11 @@ def _grams(a_all: np.ndarray, tw: np.ndarray, rows: list[np.ndarray]) -> tuple[n
     return (np.stack([np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for m in rows]),
             np.stack([np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for m in rows]),
             np.stack([np.einsum("en,en->e", tw[:, m], tw[:, m]) for m in rows]))
+
+
+def _rows(x: np.ndarray, like: np.ndarray) -> np.ndarray:
+    """Per-row ``x`` (M,) shaped to broadcast over ``like`` (M,) or (M, K)."""
+    return x if like.ndim == 1 else x[:, None]
 
 
 def edge_taper(edge: np.ndarray, rows: float) -> np.ndarray:
