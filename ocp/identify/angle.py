@@ -4,8 +4,8 @@ A ripple ``tau_sin sin(n theta) + tau_cos cos(n theta)`` [N m] acts on the rotor
 at speed ``w`` it is a tone at ``n |w| / (2 pi)`` Hz, often beyond a slow logger's Nyquist frequency, but the
 angle is sampled too. Between two samples the angle moves (nearly) linearly, so the ripple's mean over a
 row is known in closed form (:func:`interval_ripple`): on slow rows it is the ripple itself, on fast rows
-it averages out (a sinc), never aliasing. The period count (1..64) is the one whose columns explain most of
-the torque residual on held-out rows (:func:`angle_spectrum`: a matched filter against the angle);
+it averages out (a sinc), never aliasing. The period count (1..64) is the one whose columns, fitted beside the
+other columns, best predict the torque equation's held-out rows (:func:`ocp.identify.regression.build`);
 :func:`angle_limits` says how much of the log can show a ripple of that count, and when it cannot. An angle
 integrated from a speed column drifts as a random walk: there the ripple's phase may also be tracked between
 knots (:func:`drift_windows`, :func:`track_phase`), its amplitude one over the log.
@@ -72,46 +72,6 @@ def drift_windows(t: np.ndarray, periods: int, sigma_w: float, dt: float) -> np.
         return np.ones((t.size, 1))
     knots = np.linspace(t[0], t[-1], pieces + 1)
     return np.clip(1.0 - np.abs(t[:, None] - knots[None, :]) / (knots[1] - knots[0]), 0.0, None)
-
-
-def instant_spectrum(resid: np.ndarray, theta: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """Amplitude [N m] of ``resid`` (N,) at 1..64 periods per revolution of ``theta`` (N,) on ``rows`` (the
-    angle at the sample instants: what a low-passed torque residual holds of a slow ripple)."""
-    n = np.arange(1, MAX_PERIODS + 1)
-    r = resid[rows] - resid[rows].mean()
-    ph = np.exp(-1j * np.outer(n, theta[rows]))
-    return np.asarray(2.0 * np.abs(ph @ r) / max(r.size, 1), float)
-
-
-def angle_spectrum(resid: np.ndarray, theta: np.ndarray, triangle: bool, train: np.ndarray, test: np.ndarray,
-                   windows: Callable[[int], np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """A torque ripple at 1..64 periods per revolution fitted to the torque residual ``resid`` (M,): per
-    period count ``n``, the least-squares fit on the ``train`` rows by the row means of ``sin/cos(n theta)``
-    (:func:`interval_ripple`; ``theta`` (M + 1,) [rad], ``triangle`` as there). The residual's spectrum
-    against the rotor angle, as a matched filter: a ripple faster than the sampling averages out of its
-    columns instead of aliasing. Returns (64,) each: the amplitude [N m] and the fraction of the residual's
-    square sum it explains on the ``test`` rows (a ripple locked to the angle holds there, a slow residual
-    that happens to correlate with the angle does not). ``windows(n)`` (M, K): hat functions over which a
-    drifting integrated angle's ripple phase is tracked (:func:`drift_windows`, :func:`track_phase`)."""
-    amp, share = np.zeros(MAX_PERIODS), np.zeros(MAX_PERIODS)
-    r, q = resid[train], resid[test]
-    total = float(q @ q) or 1.0
-    step = np.diff(theta)
-    e1a, e1d = np.exp(1j * theta[:-1]), np.exp(1j * step)
-    ea, ed = np.ones_like(e1a), np.ones_like(e1d)
-    for n in range(1, MAX_PERIODS + 1):
-        ea, ed = ea * e1a, ed * e1d  # exp(i n a), exp(i n d) by recurrence
-        z = _means(ea, ed, n * step, triangle)
-        h = windows(n) if windows is not None else np.ones((z.size, 1))
-        # a drifting angle: the ripple's phase also tracked knot by knot (track_phase); the better held out
-        for v in (z, z * track_phase(z, h, resid, train)) if h.shape[1] > 1 else (z,):
-            a = np.stack([v.imag[train], v.real[train]])  # (2, rows): sin, cos
-            g = a @ a.T + 1e-300 * np.eye(2)
-            x = np.linalg.lstsq(g, a @ r, rcond=1e-12)[0]
-            e = q - x[0] * v.imag[test] - x[1] * v.real[test]
-            if v is z or 1.0 - float(e @ e) / total > share[n - 1]:
-                amp[n - 1], share[n - 1] = math.hypot(*x), 1.0 - float(e @ e) / total
-    return amp, share
 
 
 def track_phase(z: np.ndarray, h: np.ndarray, resid: np.ndarray, train: np.ndarray,

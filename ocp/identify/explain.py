@@ -170,12 +170,13 @@ def units(item: str) -> dict[str, str]:
 
 
 def spectrum_peak(design: Design) -> dict[str, Any] | None:
-    """The angle-periodic torque's period count (the best held-out fit, :mod:`.regression`) and amplitude
-    [N m], the amplitudes at 1..64 periods, how far the log resolves it (:func:`.angle.angle_limits`) and
-    which torque rows found it (None when not computed)."""
+    """The angle-periodic torque's period count (the best held-out fit, :mod:`.regression`) and amplitude [N m], the
+    fraction of the torque equation's held-out residual it explains and that fraction at 1..64 periods (``shares``,
+    the spectrum, and its median), how far the log resolves it (:func:`.angle.angle_limits`) and which torque rows
+    found it (None when not computed)."""
     if not design.spectrum or design.periods < 1:
         return None
     s = np.asarray(design.spectrum)
-    return {"periods": design.periods, "amplitude": float(s[design.periods - 1]),
-            "median_amplitude": float(np.median(s)), "amplitudes": [float(v) for v in s], **design.angle,
+    return {"periods": design.periods, "share": float(s[design.periods - 1]), "median_share": float(np.median(s)),
+            "shares": [float(v) for v in s], **design.angle,
             "torque_rows": "raw" if design.raw_torque else "low-passed"}

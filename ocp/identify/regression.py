@@ -24,8 +24,8 @@ Where an angle is logged, the torque equation can also be written on the RAW row
 periods/rev) and would be filtered out before it could be seen (:func:`ocp.identify.diagnose.diagnose`
 uses that view wherever an angle is logged). The ripple's columns are its exact
 means over each row (:func:`interval_ripple`), so a ripple faster than the sampling averages out instead
-of aliasing, and its period count is found in the angle domain (:func:`angle_spectrum`; :func:`angle_limits`
-says when the log cannot show it).
+of aliasing; its period count is the one whose columns, fitted beside the others, best predict held-out rows
+(:func:`_pick_periods`; :func:`angle_limits` says when the log cannot show it).
 
 Rows are split into training and held-out samples (every ``holdout_every``-th segment), or into folds held out
 in turn (cross-validation, :attr:`Design.g_fold`); each equation is weighted by its noise level. Only Gram matrices
@@ -44,7 +44,7 @@ import numpy as np
 from scipy import signal
 
 from ocp.identify.align import cutoff_hz
-from ocp.identify.angle import angle_limits, angle_spectrum, instant_spectrum, ripple_independence
+from ocp.identify.angle import MAX_PERIODS, angle_limits, ripple_independence
 from ocp.identify.columns import (
     DROPS,
     Column,
@@ -55,7 +55,6 @@ from ocp.identify.columns import (
     nuisance_columns,
     raw_signals,
     ripple_phase,
-    ripple_windows,
     signals,
     targets,
 )
@@ -97,8 +96,9 @@ class Design:
         c_train, c_test: (3,) ``r_e^T r_e``
         n_train, n_test: (3,) row counts
         sigma: (3,) equation weights (noise level) [N m, V, N]
-        periods: cogging periods per revolution chosen from the spectrum, and its amplitude [N m]
-        spectrum: amplitude [N m] per period count 1..64 of the torque residual against angle
+        periods: cogging periods per revolution chosen from the spectrum (its amplitude [N m] in ``angle``)
+        spectrum: per period count 1..64, the fraction of the torque equation's held-out residual a ripple of that
+            count explains beside the other columns (:func:`_pick_periods`)
     """
 
     columns: list[Column]
@@ -175,13 +175,20 @@ class Design:
 
 def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
     """Per equation: the residual (N,) of the least-squares fit by every column's part in it (unbounded)."""
-    a = np.column_stack(cols) if cols else np.zeros((t.size, 0))
-    keep = np.flatnonzero(np.any(a != 0, axis=0)) if a.size else np.zeros(0, int)
-    a = a[:, keep]
+    return residualizer(cols, rows)(t)
+
+
+def residualizer(cols: list[np.ndarray], rows: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    """``y -> y - A x`` (N,) with ``x`` the least-squares fit of ``y`` (N,) by the columns ``cols`` (N,) each (``A``,
+    all-zero ones left out) on the ``rows`` mask (N,): what the columns leave of ``y``. Fitting what it leaves of a
+    target by what it leaves of further columns is the joint fit (Frisch-Waugh-Lovell): the further columns'
+    coefficients and the residual on every row are those of the fit by all columns together."""
+    a = np.column_stack(cols) if cols else np.zeros((rows.size, 0))
+    a = a[:, np.any(a != 0, axis=0)] if a.size else a
     if a.shape[1] == 0:
-        return t
-    x, *_ = np.linalg.lstsq(a[rows], t[rows], rcond=None)
-    return t - a @ x
+        return lambda y: y
+    proj = np.linalg.pinv(a[rows])  # (Q, rows): computed once for the many targets of a period search
+    return lambda y: y - a @ (proj @ y[rows])
 
 
 def _noise_residual(t: np.ndarray, rich: list[np.ndarray], fixed: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
@@ -243,7 +250,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     use_raw = raw_torque and log.kind is LogKind.TIME_SERIES and log.theta is not None
     raw = raw_signals(log, log.theta) if use_raw and log.theta is not None else s
     t = targets(p, s)
-    smooth_t, t[0] = t[0].copy(), targets(p, raw)[0]
+    t[0] = targets(p, raw)[0]
     rows = s.w.size
     edge = np.zeros(rows, dtype=bool)
     tau = rotor_tau(p, s) if log.kind is LogKind.TIME_SERIES else 0.0
@@ -256,14 +263,9 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     # (the motor constant is left out: with it, J, B and c_tau the torque balance scales to zero)
     keep = [j for j, (c, _) in enumerate(cols)
             if c.item != "k" and (math.isnan(c.shape) or c.shape == _mid(cols, c.item))]
-    periods, spectrum, cands, angle = 0, np.zeros(0), [], {}
-    if "cogging" in effects and s.theta is not None and raw.theta is not None and log.kind is LogKind.TIME_SERIES:
-        theta = np.append(raw.theta, raw.theta[-1] + raw.w1[-1] * raw.dt)
-        spectrum, share = angle_spectrum(_rich_residual(t[0], [cols[j][1][0] for j in keep], train), theta,
-                                         raw.triangle, train, test,  # the raw rows: a fast ripple kept
-                                         functools.partial(ripple_windows, log, raw))
-        slow = instant_spectrum(_rich_residual(smooth_t, [cols[j][1][0] for j in keep], train), s.theta, train)
-        cands = sorted({int(np.argmax(share)) + 1, int(np.argmax(slow)) + 1})
+    periods, spectrum, angle = 0, np.zeros(0), {}
+    ripple = "cogging" in effects and s.theta is not None and raw.theta is not None \
+        and log.kind is LogKind.TIME_SERIES
 
     # eq. dc_mechanical judged by the speed error it causes (speed_view), the others as they are; the
     # edge rows are zeroed on both sides first (still an equation), so their transients do not spread, and the
@@ -276,11 +278,12 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     for y in (t, *(a for _, a in cols)):
         y[0] = view(y[0])
     rich = [cols[j][1] for j in keep]
-    if cands:
-        periods, cogging = _pick_periods(cands, p, raw, log, t[0], [a[0] for a in rich], train, test, view)
+    if ripple:
+        periods, cogging, amplitude, spectrum = _pick_periods(p, raw, log, t[0], [a[0] for a in rich], train, test,
+                                                              view)
         cols += cogging
         rich += [a for _, a in cogging]
-        angle = angle_limits(raw.theta, periods, log.theta is not None)
+        angle = {"amplitude": amplitude, **angle_limits(raw.theta, periods, log.theta is not None)}
     # (the armature and thrust equations keep the motor constant: their measured side does not scale)
     k_col = [a for c, a in cols if c.item == "k"]
     fixed = [a for j, (c, a) in enumerate(cols) if j in keep and c.item in (*CONSTANTS, *NUISANCES)]
@@ -302,7 +305,8 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         (g_tr, h_tr, c_tr), n_tr = (x[0] for x in _grams(a_all, tw, [train])), int(train.sum())
         g_te, h_te, c_te, n_te = fg[0], fh[0], fc[0], int(test.sum())
     independence = _independence(p, log, s, tau)
-    if angle:  # the ripple's own independence against the torque residual (select: its scatter test)
+    if angle and raw.theta is not None:  # the ripple's own independence against the torque residual (select)
+        theta = np.append(raw.theta, raw.theta[-1] + raw.w1[-1] * raw.dt)
         angle["independence"] = ripple_independence(theta, periods, float(independence[0]),
                                                     1.0 if raw is not s else float(independence[1]))
     per_fold = [_blocks(m, math.ceil(BLOCK_INDEPENDENT / float(independence.min()))) for m in tests]
@@ -405,29 +409,39 @@ def _effect_columns_on(name: str, p: MotorParams, log: Log, s: Signals) -> list[
     return effect_columns(name, p, s, log, 0)
 
 
-def _pick_periods(cands: list[int], p: MotorParams, raw: Signals, log: Log, target: np.ndarray,
-                  rich: list[np.ndarray], train: np.ndarray, test: np.ndarray,
-                  view: Callable[[np.ndarray], np.ndarray]) -> tuple[int, list[tuple[Column, np.ndarray]]]:
-    """Of the candidate period counts (and, along an integrated angle, phases: one, or tracked), the ripple whose
-    columns (seen through ``view``) explain most of the viewed torque residual ``target`` (M,) beyond the
-    ``rich`` columns on the held-out rows."""
-    resid = _rich_residual(target, rich, train)
-    best: tuple[float, int, list[tuple[Column, np.ndarray]]] = (-math.inf, 0, [])
-    tries: list[tuple[int, np.ndarray | None]] = []
-    for n in cands:  # a drifting integrated angle: also the ripple with its phase tracked (ripple_phase)
+def _pick_periods(p: MotorParams, raw: Signals, log: Log, target: np.ndarray, rich: list[np.ndarray],
+                  train: np.ndarray, test: np.ndarray, view: Callable[[np.ndarray], np.ndarray]
+                  ) -> tuple[int, list[tuple[Column, np.ndarray]], float, np.ndarray]:
+    """The torque ripple at 1..64 periods per revolution (and, along an integrated angle, phases: one, or tracked)
+    whose columns (seen through ``view``) explain most of the viewed torque target ``target`` (M,) on the held-out
+    rows when fitted beside the ``rich`` columns (M,) each on the training rows: its period count, its columns, its
+    amplitude [N m], and per count (64,) the fraction of the held-out residual it explains (at most 1; negative where
+    it predicts worse than nothing): the residual's spectrum against the rotor angle. (An amplitude per count is no
+    spectrum: where the speed view averages a count's ripple out, its columns are tiny and the fitted amplitude is
+    noise, larger than the true ripple's.) Measured as the added
+    variable (:func:`residualizer`: the joint fit, exactly). A ripple fitted to what the rich columns alone had left
+    found the share of it they took up missing (a ripple holding a stalled rotor in its detents, taken up by an offset
+    and friction: the true count explained nothing and a wrong one half; proving-ground seeds 12089, 12156: ripples
+    of 31 and 47 periods not named)."""
+    added = residualizer(rich, train)
+    resid = added(target)
+    total = float(resid[test] @ resid[test]) or 1.0
+    shares = np.full(MAX_PERIODS, -math.inf)
+    best: tuple[float, int, list[tuple[Column, np.ndarray]], float] = (-math.inf, 0, [], 0.0)
+    for n in range(1, MAX_PERIODS + 1):  # a drifting integrated angle: also the ripple with its phase tracked
         phase = ripple_phase(p, raw, log, n, resid, train, view)
-        tries += [(n, None)] if phase is None else [(n, None), (n, phase)]
-    for n, phase in tries:
-        cols = effect_columns("cogging", p, raw, log, n, phase)
-        for _, a in cols:
-            a[0] = view(a[0])
-        sc = np.column_stack([a[0] for _, a in cols])
-        x, *_ = np.linalg.lstsq(sc[train], resid[train], rcond=None)
-        e = resid[test] - sc[test] @ x
-        gain = float(resid[test] @ resid[test] - e @ e)
-        if gain > best[0]:
-            best = (gain, n, cols)
-    return best[1], best[2]
+        for turn in (None,) if phase is None else (None, phase):
+            cols = effect_columns("cogging", p, raw, log, n, turn)
+            for _, c in cols:
+                c[0] = view(c[0])
+            sc = np.column_stack([added(c[0]) for _, c in cols])
+            x, *_ = np.linalg.lstsq(sc[train], resid[train], rcond=None)
+            e = resid[test] - sc[test] @ x
+            gain = float(resid[test] @ resid[test] - e @ e)
+            shares[n - 1] = max(shares[n - 1], gain / total)
+            if gain > best[0]:
+                best = (gain, n, cols, math.hypot(*x))
+    return best[1], best[2], best[3], shares
 
 
 def unresolved(p: MotorParams, log: Log) -> dict[str, str]:
