@@ -418,11 +418,10 @@ def _pick_periods(p: MotorParams, raw: Signals, log: Log, target: np.ndarray, ri
     amplitude [N m], and per count (64,) the fraction of the held-out residual it explains (at most 1; negative where
     it predicts worse than nothing): the residual's spectrum against the rotor angle. (An amplitude per count is no
     spectrum: where the speed view averages a count's ripple out, its columns are tiny and the fitted amplitude is
-    noise, larger than the true ripple's.) Measured as the added
-    variable (:func:`residualizer`: the joint fit, exactly). A ripple fitted to what the rich columns alone had left
-    found the share of it they took up missing (a ripple holding a stalled rotor in its detents, taken up by an offset
-    and friction: the true count explained nothing and a wrong one half; proving-ground seeds 12089, 12156: ripples
-    of 31 and 47 periods not named)."""
+    noise, larger than the true ripple's.) Measured as the added variable (:func:`residualizer`: the joint fit,
+    exactly). A ripple fitted to what the rich columns alone had left found the share of it they took up missing (a
+    ripple holding a stalled rotor in its detents, taken up by an offset and friction: the true count explained
+    nothing and a wrong one half; proving-ground seeds 12089, 12156: ripples of 31 and 47 periods not named)."""
     added = residualizer(rich, train)
     resid = added(target)
     total = float(resid[test] @ resid[test]) or 1.0

@@ -39,7 +39,7 @@ def test_the_added_variable_fit_is_the_joint_fit() -> None:
     xj = np.linalg.lstsq(joint[train], y[train], rcond=None)[0]
     assert np.allclose(x, xj[3:], rtol=1e-9, atol=1e-12)
     assert np.allclose(added(y) - a @ x, y - joint @ xj, rtol=1e-9, atol=1e-12)  # every row, held-out ones too
-    # what the rich columns alone leave, fitted by the ripple alone: a different (here, smaller) coefficient
+    # what the rich columns alone leave, fitted by the ripple's own columns: another coefficient (the old search)
     x_left = np.linalg.lstsq(ripple[train], added(y)[train], rcond=None)[0]
     assert abs(x_left[0] - xj[3]) > 0.1
 
