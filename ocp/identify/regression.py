@@ -25,7 +25,7 @@ periods/rev) and would be filtered out before it could be seen (:func:`ocp.ident
 uses that view wherever an angle is logged). The ripple's columns are its exact
 means over each row (:func:`interval_ripple`), so a ripple faster than the sampling averages out instead
 of aliasing; its period count is the one whose columns, fitted beside the others, best predict held-out rows
-(:func:`_pick_periods`; :func:`angle_limits` says when the log cannot show it).
+(:func:`.ripple.pick_periods`; :func:`angle_limits` says when the log cannot show it).
 
 Rows are split into training and held-out samples (every ``holdout_every``-th segment), or into folds held out
 in turn (cross-validation, :attr:`Design.g_fold`); each equation is weighted by its noise level. Only Gram matrices
@@ -44,7 +44,7 @@ import numpy as np
 from scipy import signal
 
 from ocp.identify.align import cutoff_hz
-from ocp.identify.angle import MAX_PERIODS, angle_limits, ripple_independence
+from ocp.identify.angle import angle_limits, ripple_independence
 from ocp.identify.columns import (
     DROPS,
     Column,
@@ -54,10 +54,10 @@ from ocp.identify.columns import (
     effect_columns,
     nuisance_columns,
     raw_signals,
-    ripple_phase,
     signals,
     targets,
 )
+from ocp.identify.ripple import pick_periods, residualizer
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE
 from ocp.model.params import MotorParams
@@ -98,7 +98,7 @@ class Design:
         sigma: (3,) equation weights (noise level) [N m, V, N]
         periods: cogging periods per revolution chosen from the spectrum (its amplitude [N m] in ``angle``)
         spectrum: per period count 1..64, the fraction of the torque equation's held-out residual a ripple of that
-            count explains beside the other columns (:func:`_pick_periods`)
+            count explains beside the other columns (:func:`.ripple.pick_periods`)
     """
 
     columns: list[Column]
@@ -176,19 +176,6 @@ class Design:
 def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
     """Per equation: the residual (N,) of the least-squares fit by every column's part in it (unbounded)."""
     return residualizer(cols, rows)(t)
-
-
-def residualizer(cols: list[np.ndarray], rows: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
-    """``y -> y - A x`` (N,) with ``x`` the least-squares fit of ``y`` (N,) by the columns ``cols`` (N,) each (``A``,
-    all-zero ones left out) on the ``rows`` mask (N,): what the columns leave of ``y``. Fitting what it leaves of a
-    target by what it leaves of further columns is the joint fit (Frisch-Waugh-Lovell): the further columns'
-    coefficients and the residual on every row are those of the fit by all columns together."""
-    a = np.column_stack(cols) if cols else np.zeros((rows.size, 0))
-    a = a[:, np.any(a != 0, axis=0)] if a.size else a
-    if a.shape[1] == 0:
-        return lambda y: y
-    proj = np.linalg.pinv(a[rows])  # (Q, rows): computed once for the many targets of a period search
-    return lambda y: y - a @ (proj @ y[rows])
 
 
 def _noise_residual(t: np.ndarray, rich: list[np.ndarray], fixed: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
@@ -279,7 +266,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         y[0] = view(y[0])
     rich = [cols[j][1] for j in keep]
     if ripple:
-        periods, cogging, amplitude, spectrum = _pick_periods(p, raw, log, t[0], [a[0] for a in rich], train, test,
+        periods, cogging, amplitude, spectrum = pick_periods(p, raw, log, t[0], [a[0] for a in rich], train, test,
                                                               view)
         cols += cogging
         rich += [a for _, a in cogging]
@@ -407,40 +394,6 @@ def _columns(p: MotorParams, s: Signals, raw: Signals, log: Log, effects: tuple[
 
 def _effect_columns_on(name: str, p: MotorParams, log: Log, s: Signals) -> list[tuple[Column, np.ndarray]]:
     return effect_columns(name, p, s, log, 0)
-
-
-def _pick_periods(p: MotorParams, raw: Signals, log: Log, target: np.ndarray, rich: list[np.ndarray],
-                  train: np.ndarray, test: np.ndarray, view: Callable[[np.ndarray], np.ndarray]
-                  ) -> tuple[int, list[tuple[Column, np.ndarray]], float, np.ndarray]:
-    """The torque ripple at 1..64 periods per revolution (and, along an integrated angle, phases: one, or tracked)
-    whose columns (seen through ``view``) explain most of the viewed torque target ``target`` (M,) on the held-out
-    rows when fitted beside the ``rich`` columns (M,) each on the training rows: its period count, its columns, its
-    amplitude [N m], and per count (64,) the fraction of the held-out residual it explains (at most 1; negative where
-    it predicts worse than nothing): the residual's spectrum against the rotor angle. (An amplitude per count is no
-    spectrum: where the speed view averages a count's ripple out, its columns are tiny and the fitted amplitude is
-    noise, larger than the true ripple's.) Measured as the added variable (:func:`residualizer`: the joint fit,
-    exactly). A ripple fitted to what the rich columns alone had left found the share of it they took up missing (a
-    ripple holding a stalled rotor in its detents, taken up by an offset and friction: the true count explained
-    nothing and a wrong one half; proving-ground seeds 12089, 12156: ripples of 31 and 47 periods not named)."""
-    added = residualizer(rich, train)
-    resid = added(target)
-    total = float(resid[test] @ resid[test]) or 1.0
-    shares = np.full(MAX_PERIODS, -math.inf)
-    best: tuple[float, int, list[tuple[Column, np.ndarray]], float] = (-math.inf, 0, [], 0.0)
-    for n in range(1, MAX_PERIODS + 1):  # a drifting integrated angle: also the ripple with its phase tracked
-        phase = ripple_phase(p, raw, log, n, resid, train, view)
-        for turn in (None,) if phase is None else (None, phase):
-            cols = effect_columns("cogging", p, raw, log, n, turn)
-            for _, c in cols:
-                c[0] = view(c[0])
-            sc = np.column_stack([added(c[0]) for _, c in cols])
-            x, *_ = np.linalg.lstsq(sc[train], resid[train], rcond=None)
-            e = resid[test] - sc[test] @ x
-            gain = float(resid[test] @ resid[test] - e @ e)
-            shares[n - 1] = max(shares[n - 1], gain / total)
-            if gain > best[0]:
-                best = (gain, n, cols, math.hypot(*x))
-    return best[1], best[2], best[3], shares
 
 
 def unresolved(p: MotorParams, log: Log) -> dict[str, str]:

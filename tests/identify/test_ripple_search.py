@@ -3,7 +3,7 @@
 The count was the one whose columns best fitted what the other columns (friction, offsets, constants) had left of
 the torque residual. Where a large ripple holds a stalled rotor in its detents, those columns take up part of it
 first: the true count then fitted nothing and a wrong one half. The search now measures each count's columns beside
-the others (:func:`ocp.identify.regression.residualizer`: exact by the Frisch-Waugh-Lovell theorem, tested against the
+the others (:func:`ocp.identify.ripple.residualizer`: exact by the Frisch-Waugh-Lovell theorem, tested against the
 joint least-squares fit). The spectrum reported is each count's share of the held-out residual, not its fitted
 amplitude (noise where the speed view averages a count out).
 """
@@ -15,7 +15,7 @@ import pytest
 
 from ocp.identify import diagnose
 from ocp.identify.diagnose import DiagnoseResult
-from ocp.identify.regression import residualizer
+from ocp.identify.ripple import residualizer
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams
