@@ -344,7 +344,8 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
     if ap:
         print(f"angle-periodic torque: best fit at {ap['periods']} periods/rev, "
               f"amplitude {_g(ap['amplitude'], '.3g')} N m, explaining {_g(100 * ap['share'], '.0f')} % of the "
-              f"held-out torque residual (median over 1..64: {_g(100 * ap['median_share'], '.0f')} %)")
+              f"held-out torque residual (median over 1..64: {_g(100 * ap['median_share'], '.0f')} %)"
+              + ("" if "cogging" in d["verdict"] else "; not named: it does not win on held-out data"))
         if ap.get("note"):
             print(f"  {ap['note']}")
     print("ranking (held-out error reduction):")

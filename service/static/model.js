@@ -213,6 +213,7 @@ function showDiagnosisDetails(res, after) {
   }
   const ap = res.angle_periodic;
   if (ap) line(`Angle-periodic torque: best fit at ${ap.periods} periods/rev, ${fmt(ap.amplitude, 3)} N m` +
+               ((res.verdict || []).includes("cogging") ? "" : ", not named (it does not win on held-out data)") +
                (ap.note ? ` (${ap.note})` : ""), "m-angle");
 }
 
