@@ -18,7 +18,7 @@ EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
 
 
 def test_one_program_serves_every_time_limit_and_each_limit_holds() -> None:
-    short = mission_from_mapping({**EXAMPLE, "time_limit_s": 0.002})
+    short = mission_from_mapping({**EXAMPLE, "time_limit_s": 0.0002})
     long = mission_from_mapping({**EXAMPLE, "time_limit_s": 60.0})
     a, b = problem_for(short), problem_for(long)
     assert a.structure == b.structure
