@@ -238,16 +238,25 @@ def ripple_windows(log: Log, s: Signals, periods: int) -> np.ndarray:
     return drift_windows(s.t, periods, speed_noise(log.omega), s.dt)
 
 
-def ripple_phase(p: MotorParams, s: Signals, log: Log, periods: int, resid: np.ndarray, train: np.ndarray,
-                 view: Callable[[np.ndarray], np.ndarray]) -> np.ndarray | None:
-    """Unit phasors (M,) tracking a ripple of ``periods``/rev along an angle integrated from the speed column
-    (:func:`.angle.track_phase` on the torque residual ``resid`` (M,), columns seen through ``view``), or None
-    where the angle is logged or its drift stays within one phase (:func:`ripple_windows`)."""
+def ripple_phase(s: Signals, log: Log, periods: int, cols: list[tuple[Column, np.ndarray]], resid: np.ndarray,
+                 train: np.ndarray, view: Callable[[np.ndarray], np.ndarray]) -> np.ndarray | None:
+    """Unit phasors (M,) tracking the ripple ``cols`` (cogging's two columns at ``periods``/rev,
+    :func:`effect_columns`) along an angle integrated from the speed column (:func:`.angle.track_phase` on the torque
+    residual ``resid`` (M,), columns seen through ``view``), or None where the angle is logged or its drift stays
+    within one phase (:func:`ripple_windows`)."""
     h = ripple_windows(log, s, periods)
     if h.shape[1] < 2:
         return None
-    sin, cos = (a[0] for _, a in effect_columns("cogging", p, s, log, periods))
+    sin, cos = (a[0] for _, a in cols)
     return track_phase(cos + 1j * sin, h, resid, train, view)
+
+
+def turn_ripple(cols: list[tuple[Column, np.ndarray]], phase: np.ndarray) -> list[tuple[Column, np.ndarray]]:
+    """Cogging's two columns (``tau_sin``, ``tau_cos``; (3, M) each) turned by the unit phasors ``phase`` (M,) of a
+    drifting integrated angle (:func:`ripple_phase`); new arrays."""
+    (c_sin, a_sin), (c_cos, a_cos) = cols
+    z = (a_cos[0] + 1j * a_sin[0]) * phase
+    return [(c_sin, np.vstack([z.imag, a_sin[1:]])), (c_cos, np.vstack([z.real, a_cos[1:]]))]
 
 
 def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
@@ -291,10 +300,9 @@ def _low(y: np.ndarray, dt: float, fc: float) -> np.ndarray:
     return smooth(y, dt, fc) if dt > 0 else y
 
 
-def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int,
-                   phase: np.ndarray | None = None) -> list[tuple[Column, np.ndarray]]:
-    """Columns of one effect (one per shape value for shaped effects); cogging's turned by ``phase`` (M,) unit
-    phasors where given (:func:`ripple_phase`)."""
+def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int) -> list[tuple[Column, np.ndarray]]:
+    """Columns of one effect (one per shape value for shaped effects; cogging's at ``periods``/rev, turned along a
+    drifting angle by :func:`turn_ripple`)."""
     if name == "stribeck":  # on the logged speed's range, the same for the low-passed and the raw rows
         return [(Column(name, "tau_s", ws), _effect(name, {"tau_s": 1.0, "omega_s": ws}, p, s))
                 for ws in stribeck_bands(log)]
@@ -322,9 +330,6 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
         if not s.triangle:  # low-passed rows (no logged angle): the ripple low-passed like them
             fc = cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
             means = [smooth(m, log.dt, fc) for m in means]
-        if phase is not None:  # a drifting integrated angle: the ripple's phase tracked (ripple_phase)
-            turned = (means[1] + 1j * means[0]) * phase
-            means = [turned.imag, turned.real]
         return [(Column(name, k, float(periods)), np.vstack([m, z, z]))
                 for k, m in zip(("tau_sin", "tau_cos"), means, strict=True)]
     key = CATALOGUE[name].fitted[0]

@@ -14,7 +14,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ocp.identify.angle import MAX_PERIODS
-from ocp.identify.columns import Column, Signals, effect_columns, ripple_phase
+from ocp.identify.columns import Column, Signals, effect_columns, ripple_phase, turn_ripple
 from ocp.logs import Log
 from ocp.model.params import MotorParams
 
@@ -47,20 +47,19 @@ def pick_periods(p: MotorParams, raw: Signals, log: Log, target: np.ndarray, ric
     nothing and a wrong one half; proving-ground seeds 12089, 12156: ripples of 31 and 47 periods not named)."""
     added = residualizer(rich, train)
     resid = added(target)
-    total = float(resid[test] @ resid[test]) or 1.0
+    total = float(resid[test] @ resid[test])
     shares = np.full(MAX_PERIODS, -math.inf)
     best: tuple[float, int, list[tuple[Column, np.ndarray]], float] = (-math.inf, 0, [], 0.0)
     for n in range(1, MAX_PERIODS + 1):  # a drifting integrated angle: also the ripple with its phase tracked
-        phase = ripple_phase(p, raw, log, n, resid, train, view)
-        for turn in (None,) if phase is None else (None, phase):
-            cols = effect_columns("cogging", p, raw, log, n, turn)
-            for _, c in cols:
-                c[0] = view(c[0])
-            sc = np.column_stack([added(c[0]) for _, c in cols])
+        ripple = effect_columns("cogging", p, raw, log, n)
+        phase = ripple_phase(raw, log, n, ripple, resid, train, view)
+        for unviewed in (ripple,) if phase is None else (ripple, turn_ripple(ripple, phase)):
+            cols = [(c, np.vstack([view(a[0]), a[1:]])) for c, a in unviewed]
+            sc = np.column_stack([added(a[0]) for _, a in cols])
             x, *_ = np.linalg.lstsq(sc[train], resid[train], rcond=None)
             e = resid[test] - sc[test] @ x
-            gain = float(resid[test] @ resid[test] - e @ e)
-            shares[n - 1] = max(shares[n - 1], gain / total)
+            gain = total - float(e @ e)
+            shares[n - 1] = max(shares[n - 1], gain / total if total > 0 else 0.0)
             if gain > best[0]:
                 best = (gain, n, cols, math.hypot(*x))
     return best[1], best[2], best[3], shares
