@@ -45,6 +45,8 @@ class Column:
     item: str
     key: str
     shape: float = math.nan
+    #: False: zero at the rows where the rotor is at rest (:func:`at_rest`), for a model whose dry friction holds it
+    at_rest: bool = True
 
 
 
@@ -96,6 +98,28 @@ def signals(log: Log, p: MotorParams) -> Signals:
         [[0.0], np.cumsum(0.5 * (log.omega[1:] + log.omega[:-1]) * dt)])
     return Signals(w[:-1], w[1:], i[:-1], i[1:], 0.5 * (w[:-1] + w[1:]), 0.5 * (i[:-1] + i[1:]), v[:-1], f[:-1],
                    theta[:-1], log.t[:-1], dt)
+
+
+#: the rotor is taken at rest over runs of at least REST_ROWS rows whose low-passed speed stays within REST_NOISE of
+#: its noise levels of zero (:func:`at_rest`)
+REST_NOISE = 3.0
+REST_ROWS = 3
+
+
+def at_rest(s: Signals, log: Log, p: MotorParams) -> np.ndarray:
+    """Rows (M,) where the rotor is at rest: its low-passed speed within :data:`REST_NOISE` noise levels of zero
+    (the speed column's per-sample noise, :func:`.angle.speed_noise`, through the low-pass) for at least
+    :data:`REST_ROWS` rows in a row. There dry friction is set-valued: it holds whatever torque stays within its
+    level, and the torque equation's residual is wherever the rotor stopped (none on a sweep)."""
+    if s.dt == 0:
+        return np.zeros(s.w.size, dtype=bool)
+    low = min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt)
+    still = np.abs(s.w) <= REST_NOISE * speed_noise(log.omega) * math.sqrt(low)
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], still.astype(np.int8), [0]])))
+    out = np.zeros(s.w.size, dtype=bool)
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        out[a:b] = b - a >= REST_ROWS
+    return out
 
 
 def settle_weight(p: MotorParams, dt: float) -> float:

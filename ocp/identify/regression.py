@@ -49,6 +49,7 @@ from ocp.identify.columns import (
     DROPS,
     Column,
     Signals,
+    at_rest,
     constant_columns,
     drop_columns,
     effect_columns,
@@ -71,6 +72,9 @@ CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 #: or a lead of up to one sample (a current settling within a sample); the switching instant anywhere in the row
 NUISANCE_BOUNDS: dict[str, tuple[float, float]] = {"current_lag": (-1.0, math.inf), "switch_phase": (-0.5, 0.5)}
 NUISANCES: tuple[str, ...] = tuple(NUISANCE_BOUNDS)
+#: dry friction: set-valued where the rotor is at rest (:func:`.columns.at_rest`); beside it the ripple's columns
+#: are left out there (:func:`.select.fit_model`)
+DRY = frozenset({"coulomb_friction", "stribeck"})
 #: effects found by regression (input_delay is found by the alignment)
 REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")
 #: the torque equation's weight is at least this fraction of the smallest torque error a free run shows at
@@ -266,10 +270,15 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         y[0] = view(y[0])
     rich = [cols[j][1] for j in keep]
     if ripple:
-        periods, cogging, amplitude, spectrum = pick_periods(p, raw, log, t[0], [a[0] for a in rich], train, test,
+        periods, unviewed, amplitude, spectrum = pick_periods(p, raw, log, t[0], [a[0] for a in rich], train, test,
                                                               view)
+        cogging = [(c, np.vstack([view(a[0]), a[1:]])) for c, a in unviewed]
         cols += cogging
         rich += [a for _, a in cogging]
+        rest = at_rest(s, log, p)
+        if rest.any() and DRY.intersection(effects):  # the ripple beside dry friction that holds the rotor at rest
+            cols += [(replace(c, at_rest=False), np.vstack([view(np.where(rest, 0.0, a[0])), a[1:]]))
+                     for c, a in unviewed]
         angle = {"amplitude": amplitude, **angle_limits(raw.theta, periods, log.theta is not None)}
     # (the armature and thrust equations keep the motor constant: their measured side does not scale)
     k_col = [a for c, a in cols if c.item == "k"]

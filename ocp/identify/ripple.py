@@ -37,7 +37,8 @@ def pick_periods(p: MotorParams, raw: Signals, log: Log, target: np.ndarray, ric
                   ) -> tuple[int, list[tuple[Column, np.ndarray]], float, np.ndarray]:
     """The torque ripple at 1..64 periods per revolution (and, along an integrated angle, phases: one, or tracked)
     whose columns (seen through ``view``) explain most of the viewed torque target ``target`` (M,) on the held-out
-    rows when fitted beside the ``rich`` columns (M,) each on the training rows: its period count, its columns, its
+    rows when fitted beside the ``rich`` columns (M,) each on the training rows: its period count, its columns (not
+    yet seen through ``view``), its
     amplitude [N m], and per count (64,) the fraction of the held-out residual it explains (at most 1; negative where
     it predicts worse than nothing): the residual's spectrum against the rotor angle. (An amplitude per count is no
     spectrum: where the speed view averages a count's ripple out, its columns are tiny and the fitted amplitude is
@@ -61,5 +62,5 @@ def pick_periods(p: MotorParams, raw: Signals, log: Log, target: np.ndarray, ric
             gain = total - float(e @ e)
             shares[n - 1] = max(shares[n - 1], gain / total if total > 0 else 0.0)
             if gain > best[0]:
-                best = (gain, n, cols, math.hypot(*x))
+                best = (gain, n, unviewed, math.hypot(*x))
     return best[1], best[2], best[3], shares

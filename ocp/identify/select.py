@@ -61,7 +61,7 @@ from ocp.identify.evidence import (
     scatter,
     worst,
 )
-from ocp.identify.regression import CONSTANTS, NUISANCE_BOUNDS, NUISANCES, Design
+from ocp.identify.regression import CONSTANTS, DRY, NUISANCE_BOUNDS, NUISANCES, Design
 from ocp.model.effects import CATALOGUE
 
 NAMED_BOUNDS = (-0.8, 3.0)
@@ -139,7 +139,10 @@ def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
             continue
         js = design.index(item)
         shapes = sorted({design.columns[j].shape for j in js if not math.isnan(design.columns[j].shape)})
-        if design.columns[js[0]].item == "cogging" or not shapes:
+        if item == "cogging":
+            chosen += _ripple_columns(design, js, items)
+            continue
+        if not shapes:
             chosen += js
             continue
         chosen += _shape_columns(design, chosen, js, named, tol, mix=item not in SATURATING)
@@ -152,6 +155,15 @@ def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
     sse = sum(p.per_eq ** 2 * design.n_fold[k] for k, p in enumerate(parts))
     ms = sse / np.maximum(design.n_test, 1)
     return Fitted(tuple(items), f.cols, f.x, f.train_cost, _score(design, ms), np.sqrt(ms), parts)
+
+
+def _ripple_columns(design: Design, js: list[int], items: Sequence[str]) -> list[int]:
+    """Cogging's pair of columns ``js`` for a model of ``items``: beside dry friction, the pair left out where the
+    rotor is at rest (:attr:`.columns.Column.at_rest`; there the friction holds whatever torque the ripple and the
+    motor leave within its level, so the residual depends on where the rotor stopped, and on a periodic trajectory
+    a false ripple fitted it on held-out rows); else, or where the log has no rows at rest, the whole pair."""
+    dry = bool(DRY.intersection(items)) and any(not design.columns[j].at_rest for j in js)
+    return [j for j in js if design.columns[j].at_rest != dry]
 
 
 def _filtered(design: Design, f: Fitted, chosen: list[int], named: set[str], tol: float) -> Fitted:
