@@ -100,8 +100,8 @@ def signals(log: Log, p: MotorParams) -> Signals:
                    theta[:-1], log.t[:-1], dt)
 
 
-#: the rotor is taken at rest over runs of at least REST_ROWS rows whose low-passed speed stays within REST_NOISE of
-#: its noise levels of zero (:func:`at_rest`)
+#: the rotor is taken at rest over runs of at least REST_ROWS rows whose low-passed speed stays within REST_NOISE
+#: noise levels of zero (:func:`at_rest`; both set before any proving-ground run, not tuned)
 REST_NOISE = 3.0
 REST_ROWS = 3
 

@@ -37,10 +37,10 @@ def pick_periods(p: MotorParams, raw: Signals, log: Log, target: np.ndarray, ric
                   ) -> tuple[int, list[tuple[Column, np.ndarray]], float, np.ndarray]:
     """The torque ripple at 1..64 periods per revolution (and, along an integrated angle, phases: one, or tracked)
     whose columns (seen through ``view``) explain most of the viewed torque target ``target`` (M,) on the held-out
-    rows when fitted beside the ``rich`` columns (M,) each on the training rows: its period count, its columns (not
-    yet seen through ``view``), its
-    amplitude [N m], and per count (64,) the fraction of the held-out residual it explains (at most 1; negative where
-    it predicts worse than nothing): the residual's spectrum against the rotor angle. (An amplitude per count is no
+    rows when fitted beside the ``rich`` columns (M,) each on the training rows: its period count, its columns (as
+    built, not seen through ``view``), its amplitude [N m], and per count (64,) the fraction of the held-out residual
+    it explains (at most 1; negative where it predicts worse than nothing): the residual's spectrum against the rotor
+    angle. (An amplitude per count is no
     spectrum: where the speed view averages a count's ripple out, its columns are tiny and the fitted amplitude is
     noise, larger than the true ripple's.) Measured as the added variable (:func:`residualizer`: the joint fit,
     exactly). A ripple fitted to what the rich columns alone had left found the share of it they took up missing (a
