@@ -177,11 +177,6 @@ class Design:
                        block_fold=self.block_fold[:0])
 
 
-def _rich_residual(t: np.ndarray, cols: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
-    """Per equation: the residual (N,) of the least-squares fit by every column's part in it (unbounded)."""
-    return residualizer(cols, rows)(t)
-
-
 def _noise_residual(t: np.ndarray, rich: list[np.ndarray], fixed: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
     """An equation's residual (N,) [its unit] for its noise level: what the ``rich`` columns (N,) leave of the
     nominal residual ``t`` (N,) on ``rows``; where they leave nothing (below :data:`DEGENERATE` of ``t``'s RMS),
@@ -190,10 +185,10 @@ def _noise_residual(t: np.ndarray, rich: list[np.ndarray], fixed: list[np.ndarra
     add up to it; ``k`` gives ``k_e w``), so the rich fit reproduces ``t`` exactly, noise and all, wherever an
     effect's column also spans the measured side: a constant command is a current offset's (and a saturated dead
     band's) column. That fit scales the equation to zero, no noise level; the effects cannot be told from it."""
-    r = _rich_residual(t, rich, rows)
+    r = residualizer(rich, rows)(t)
     if not rows.any() or np.sqrt(np.mean(r[rows] ** 2)) >= DEGENERATE * np.sqrt(np.mean(t[rows] ** 2)):
         return r
-    return _rich_residual(t, fixed, rows)
+    return residualizer(fixed, rows)(t)
 
 
 def speed_view(y: np.ndarray, dt: float, tau: float) -> np.ndarray:

@@ -13,11 +13,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from bench.modelcheck import case_log
 from ocp.identify import diagnose
 from ocp.identify.diagnose import DiagnoseResult
 from ocp.identify.ripple import residualizer
-from ocp.logs import log_from_arrays
-from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import Case, make_case
@@ -52,9 +51,7 @@ def test_no_columns_leave_the_target() -> None:
 
 def _diagnosed(seed: int) -> tuple[Case, DiagnoseResult]:
     case = make_case(seed)
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
-    return case, diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
+    return case, diagnose(DCMotorPlant(MotorParams(**case.nominal)), case_log(case))
 
 
 @pytest.mark.parametrize("seed", [12089, 12156])
