@@ -16,7 +16,6 @@ import argparse
 import json
 import random
 import sys
-from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -26,16 +25,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.modelcheck import load_case
 from tests.proving_ground import cases as pg
+from tests.proving_ground.calibration import without
 from tests.proving_ground.logger import logged, noise_levels
-
-
-def without(case: Any, item: str) -> Any:
-    """The case's rig without the labelled ``item`` (``param:<c>``: with the constant the user believes)."""
-    tr = case.truth
-    if item.startswith("param:"):
-        c = item.removeprefix("param:")
-        return replace(tr, **{c: getattr(tr, c) / (1.0 + case.constant_error[c])})
-    return replace(tr, effects={k: v for k, v in tr.effects.items() if k != item})
 
 
 def visibility(case: Any, item: str) -> np.ndarray:

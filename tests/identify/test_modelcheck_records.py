@@ -94,3 +94,27 @@ def _bench_replay(case: Any) -> Any:
     from tests.proving_ground.cases import _replay
 
     return _replay(case.truth, case.columns["voltage"], case.logger, case.meta["tau_m"])
+
+
+def test_audited_records_are_tabulated_with_the_absorbed_labels_optional(tmp_path: Path,
+                                                                         capsys: pytest.CaptureFixture[str]) -> None:
+    """Records carrying the audit (``--audit``: ``required``, the labels that show beyond calibration) are tabulated
+    twice: on the labels as drawn, then with the others optional -- a verdict is right when it holds the required
+    labels and nothing it was not drawn with; an optional label named is a true positive, one not named no miss."""
+    rows = [{**_rec(1, ["brush_drop"], []), "required": []},  # optional, not named: right
+            {**_rec(2, ["param:L", "stribeck"], ["stribeck"]), "required": ["stribeck"]},  # right
+            {**_rec(3, ["param:k"], ["param:k"]), "required": []},  # optional, named: right either way
+            {**_rec(4, ["cogging"], []), "required": ["cogging"]},  # a miss either way
+            {**_rec(5, ["B"], ["B", "cogging"]), "required": []},  # a label never drawn: wrong either way
+            {**_rec(6, [], []), "required": []}]
+    path = tmp_path / "a.json"
+    path.write_text(json.dumps(rows), encoding="utf-8")
+    assert _bench().main(["--records", str(path)]) == 0
+    drawn, audited = capsys.readouterr().out.split("with the labels calibration absorbs optional")
+    assert "verdicts exactly right: 2/6 (33.3 %)" in drawn
+    assert audited.startswith(" (4 of 6: 1:brush_drop, 2:param:L, 3:param:k, 5:B):")
+    assert "verdicts exactly right: 4/6 (66.7 %)" in audited and "clean logs: 1   false alarms: 0" in audited
+    rows_ = audited.split("recall")[1].split("\n\n")[0].splitlines()[1:]
+    matrix = {line.split()[0]: line.split()[1:4] for line in rows_}
+    assert "brush_drop" not in matrix and "param:L" not in matrix  # (optional, not named: no count anywhere)
+    assert matrix["param:k"] == ["1", "0", "0"] and matrix["cogging"] == ["0", "1", "1"]
