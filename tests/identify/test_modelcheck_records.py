@@ -118,3 +118,22 @@ def test_audited_records_are_tabulated_with_the_absorbed_labels_optional(tmp_pat
     matrix = {line.split()[0]: line.split()[1:4] for line in rows_}
     assert "brush_drop" not in matrix and "param:L" not in matrix  # (optional, not named: no count anywhere)
     assert matrix["param:k"] == ["1", "0", "0"] and matrix["cogging"] == ["0", "1", "1"]
+
+
+def test_the_audit_of_a_drawn_case_is_kept_in_the_cache(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """``--audit`` on proving-ground seed 3 (a wake lag and a 0.27 V brush drop under a two-level PRBS of 4.83 V: the
+    drop is ``R`` and ``k`` scaled by 1 / (1 - 0.27 / 4.83), 5.9 %, within the tolerance): the brush drop is optional,
+    the wake lag required; the audit is written under the cache and read back from there."""
+    from tests.proving_ground import calibration
+
+    mod = _bench()
+    rec = _rec(3, ["brush_drop", "thrust_lag"], ["thrust_lag"])
+    out = mod.audited(rec, str(tmp_path))
+    assert max(out["footprints"]["brush_drop"]) < 0.1 and max(out["footprints"]["thrust_lag"]) > 10.0
+    assert out["required"] == ["thrust_lag"] and mod.right(out, optional=True) and not mod.right(out)
+
+    def fail(case: Any) -> None:
+        raise AssertionError("audited again")
+
+    monkeypatch.setattr(calibration, "audit", fail)
+    assert mod.audited(rec, str(tmp_path))["footprints"] == out["footprints"]
