@@ -25,8 +25,8 @@ from scipy.optimize import minimize_scalar
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.modelcheck import load_case
-from bench.pg_visibility import without
 from tests.proving_ground import cases as pg
+from tests.proving_ground.calibration import without
 from tests.proving_ground.logger import logged, noise_levels
 from tests.proving_ground.physics import run
 

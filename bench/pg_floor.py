@@ -27,11 +27,11 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.modelcheck import case_log, load_case, noise_free
-from bench.pg_visibility import without
 from ocp.identify.align import estimate, realign
 from ocp.identify.columns import nuisance_columns, raw_signals, signals
 from ocp.identify.regression import rotor_tau, speed_view
 from ocp.model.params import MotorParams
+from tests.proving_ground.calibration import without
 from tests.proving_ground.physics import load_torque
 
 LOAD_ITEMS = ("coulomb_friction", "stribeck", "drag_asymmetry", "cogging", "param:B", "param:c_tau")
