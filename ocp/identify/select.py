@@ -30,7 +30,9 @@ beside all the other adopted items, and dropped (a constant: calibrated, not nam
 greedy first pick that stood for a mix of the items adopted after it (a thrust asymmetry taken first for a wake lag
 and a force offset) leaves nothing of its own once they are in.
 Where no item clears that alone, two that clear it only together (and each against the other alone) are adopted
-as a pair (:func:`_pair`).
+as a pair (:func:`_pair`). Where the forward rounds end with an equation still far from its noise (``RESCUE``), the
+best pair of the first round's best single effects starts the rounds again, if it beats their end and either effect
+alone (:func:`_rescue`): a constant can win the first round with a share of two overlapping effects.
 A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` (beyond its fit's uncertainty,
 :func:`.evidence.implausible_factor`) yields to an effect that fits as well (a prior on constant errors:
 :func:`_prefer_effects`). Then every adopted item is challenged: an
@@ -40,6 +42,7 @@ alternative that swaps it for another item and scores within ``ambiguity_margin`
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from collections.abc import Callable, Sequence
@@ -67,6 +70,12 @@ from ocp.model.effects import CATALOGUE
 NAMED_BOUNDS = (-0.8, 3.0)
 #: a pair of items is tried among this many best single challengers when none clears the test alone (:func:`_pair`)
 PAIR_TOP = 4
+#: [noise units] forward rounds that leave an equation beyond this explained little: a pair of the first round's
+#: best single effects is tried as their start instead (:func:`_rescue`; set once, not tuned: three times the noise
+#: level, where 1 is the noise itself)
+RESCUE = 3.0
+#: ... among this many best single effects (set once, not tuned)
+PAIR_WIDE = 6
 #: effects whose columns are a saturation ``clip(x, +-w) / w`` (a driver dead band, a brush drop: no output or no
 #: current inside the band): physically the drop saturates at the band's width, so a column's amplitude is its
 #: width, within this factor (a grid step, ~1.45, and the calibration of the constants); a 0.3 V "dead band" of
@@ -220,8 +229,31 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
     ``min_improvement`` applies to effects (a constant's materiality is ``tol``). A model that ``physical``
     refuses (an effect fitted outside its catalogue range, e.g. a Stribeck level of 1.8e4 N m) is never adopted."""
     pool = [c for c in pool if c not in design.unresolved and design.index(c)]  # (no columns: not testable here)
-    items: list[str] = []
-    current = fit_model(design, items, tol)
+    forward = functools.partial(_forward, design, pool, tol=tol, min_improvement=min_improvement,
+                                noise_floor=noise_floor, max_items=max_items, margin=margin, physical=physical)
+    items, current, steps = forward([], fit_model(design, [], tol), progress=progress)
+    if steps and worst(design, current) > RESCUE:  # the greedy picks explained little: two effects together?
+        start = _rescue(design, steps[0].tried, current, tol, min_improvement, physical)
+        if start is not None:
+            items, current, later = forward([st.adopted for st in start if st.adopted is not None],
+                                            start[-1].tried[0][1])
+            steps = [*start, *later]
+    dropped = []
+    # backward: each constant, then each effect but the last adopted one, tested again beside all the others
+    for c in [i for i in items if i in CONSTANTS] + [i for i in items if i not in CONSTANTS][:-1]:
+        rest = fit_model(design, [i for i in items if i != c], tol)
+        if physical(rest) and not _wins(design, rest, c, current, min_improvement):  # (refit unphysical: kept)
+            items.remove(c)
+            dropped.append(c)
+            current = rest
+    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin), dropped)
+
+
+def _forward(design: Design, pool: list[str], items: list[str], current: Fitted, tol: float, min_improvement: float,
+             noise_floor: float, max_items: int, margin: float, physical: Callable[[Fitted], bool],
+             progress: Callable[[float], None] | None = None) -> tuple[list[str], Fitted, list[Step]]:
+    """The forward rounds from ``items`` (fitted ``current``): the adopted items, the final fit and the rounds."""
+    items = list(items)
     steps: list[Step] = []
     while len(items) < max_items:
         tried = [(c, fit_model(design, [*items, c], tol)) for c in pool if c not in items]
@@ -248,15 +280,31 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
             break
         items.append(tried[0][0])
         current = tried[0][1]
-    dropped = []
-    # backward: each constant, then each effect but the last adopted one, tested again beside all the others
-    for c in [i for i in items if i in CONSTANTS] + [i for i in items if i not in CONSTANTS][:-1]:
-        rest = fit_model(design, [i for i in items if i != c], tol)
-        if physical(rest) and not _wins(design, rest, c, current, min_improvement):  # (refit unphysical: kept)
-            items.remove(c)
-            dropped.append(c)
-            current = rest
-    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin), dropped)
+    return items, current, steps
+
+
+def _rescue(design: Design, first: list[tuple[str, Fitted]], final: Fitted, tol: float, min_improvement: float,
+            physical: Callable[[Fitted], bool]) -> list[Step] | None:
+    """Where the forward rounds leave an equation beyond :data:`RESCUE` noise units, the best pair of the
+    :data:`PAIR_WIDE` best single effects of the first round (``first``), as the start of the rounds instead: two
+    effects whose residuals overlap can each be beaten alone by a constant that takes a share of both (a current
+    offset and a drag asymmetry, 19.8 -> 1.07 noise units together, where ``c_tau`` won the first round). The pair
+    must clear the test against the forward rounds' ``final`` model and against either effect alone. Returns its
+    two rounds (the better single first), or None."""
+    single = dict(first)
+    effects = [c for c, _ in first if c not in CONSTANTS][:PAIR_WIDE]
+    if len(effects) < 2:
+        return None
+    fits = [(a, b, fit_model(design, [a, b], tol)) for a, b in itertools.combinations(effects, 2)]
+    a, b, f = min(fits, key=lambda e: e[2].score)
+    if not physical(f):
+        return None
+    for before in (final, single[a], single[b]):
+        if not (is_material(design, before, f, (a, b), min_improvement) and beyond_scatter(design, before, f, (a, b))):
+            return None
+    if single[b].score < single[a].score:
+        a, b = b, a
+    return [Step(fit_model(design, [], tol), [(a, single[a])], a), Step(single[a], [(b, f)], b)]
 
 
 def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], current: Fitted, tol: float,
