@@ -2,11 +2,13 @@
 
 A check is promised (issue #11, item 3) that a constant within ``TOLERANCE`` of its nominal is calibration, not a
 verdict, and that a command-to-sensor lag within the logging conventions is a nuisance. A discrepancy whose footprint
-on the logged channels some such correction reproduces (to under the proving ground's own ``VISIBLE``) is one the log
-does not decide: a verdict is right with or without it (:func:`required`). A brush drop under a two-level command is
-``v_b sign(V)``, a scaling of ``R`` and ``k`` by ``1 / (1 - v_b / |V|)`` (5 % of the supply: calibration); an
-inductance 26 % high where L/R is a fraction of a sample is a lag of a tenth of a sample; a constant 11 % off is
-calibrated to within 1 %.
+on the logged channels some such correction reproduces (to under the proving ground's own ``VISIBLE``) is one the
+generator would not have drawn as visible had it judged after calibration: a verdict is right with or without it
+(:func:`required`). That relaxes the score; it does not prove that no check can find it (a free run's RMS is a coarse
+test, and equation evidence over thousands of rows can name a ``B`` whose footprint calibration leaves at 0.2 noise
+levels). A brush drop under a two-level command is ``v_b sign(V)``, a scaling of ``R`` and ``k`` by
+``1 / (1 - v_b / |V|)`` (5 % of the supply: calibration); an inductance 26 % high where L/R is a fraction of a sample
+is a lag of a tenth of a sample; a constant 11 % off is calibrated to within 1 %.
 
 :func:`residual_footprint` replays the rig without the item (a wrong constant: at its believed value) and fits the
 difference of the logged channels (the proving ground's own replay and logger, weighted by the noise levels) with the
@@ -161,5 +163,5 @@ def required(expected: frozenset[str] | list[str], footprints: dict[str, list[fl
     """The labels a verdict must hold: those whose footprint left after calibration shows at ``VISIBLE`` noise levels
     in some channel (and ``input_delay``). The others are optional: the log is reproduced without them, within the
     proving ground's own visibility, by corrections a check makes without naming anything; a verdict with or without
-    them is right (a constant 11 % off that a check estimates and names is not wrong either)."""
+    them is right (a constant 11 % off that a check estimates and names is not wrong either, nor is one left out)."""
     return frozenset(i for i in expected if i not in footprints or max(footprints[i]) >= VISIBLE)
