@@ -65,14 +65,16 @@ class AsyncClient:
 
     async def check(self, log: LogSource, params: str | Mapping[str, Any], *,
                     columns: Mapping[str, Any] | None = None, steady_state: bool | None = None,
-                    read: ReadFields = None) -> dict[str, Any]:
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}))
+                    read: ReadFields = None, max_logging_skew: float | None = None) -> dict[str, Any]:
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
+                                       max_logging_skew=max_logging_skew)
         return await self._json("POST", "/v1/model-check/check", files=files, data=data)
 
     async def check_report(self, log: LogSource, params: str | Mapping[str, Any], *,
                            columns: Mapping[str, Any] | None = None, steady_state: bool | None = None,
-                           read: ReadFields = None) -> str:
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}))
+                           read: ReadFields = None, max_logging_skew: float | None = None) -> str:
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
+                                       max_logging_skew=max_logging_skew)
         return (await self._request("POST", "/v1/model-check/check", files=files, data=data,
                                     params={"report": "html"})).text
 
@@ -104,9 +106,10 @@ class AsyncClient:
 
     async def fit(self, log: LogSource, params: str | Mapping[str, Any], effects: str | Iterable[str], *,
                   columns: Mapping[str, Any] | None = None, steady_state: bool | None = None, read: ReadFields = None,
-                  refine: bool | None = None) -> dict[str, Any]:
+                  refine: bool | None = None, max_logging_skew: float | None = None) -> dict[str, Any]:
         files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
-                                       effects=effects if isinstance(effects, str) else list(effects), refine=refine)
+                                       effects=effects if isinstance(effects, str) else list(effects), refine=refine,
+                                       max_logging_skew=max_logging_skew)
         return await self._json("POST", "/v1/model-check/fit", files=files, data=data)
 
     async def submit_batch(self, missions: Iterable[BaseModel | Mapping[str, Any]],

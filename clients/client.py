@@ -97,16 +97,19 @@ class Client:
         return self._request("POST", "/v1/compare", json=_json(mission), params=_qs(qs)).json()
 
     def check(self, log: LogSource, params: str | Mapping[str, Any], *, columns: Mapping[str, Any] | None = None,
-              steady_state: bool | None = None, read: ReadFields = None) -> dict[str, Any]:
+              steady_state: bool | None = None, read: ReadFields = None, max_logging_skew: float | None = None
+              ) -> dict[str, Any]:
         """Model check: where the model fails on ``log`` (see :func:`model_check_form` for the arguments)."""
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}))
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
+                                       max_logging_skew=max_logging_skew)
         return self._request("POST", "/v1/model-check/check", files=files, data=data).json()
 
     def check_report(self, log: LogSource, params: str | Mapping[str, Any], *,
                      columns: Mapping[str, Any] | None = None, steady_state: bool | None = None,
-                     read: ReadFields = None) -> str:
+                     read: ReadFields = None, max_logging_skew: float | None = None) -> str:
         """The self-contained HTML report of :meth:`check`."""
-        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}))
+        files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
+                                       max_logging_skew=max_logging_skew)
         return self._request("POST", "/v1/model-check/check", files=files, data=data,
                              params={"report": "html"}).text
 
@@ -163,10 +166,11 @@ class Client:
 
     def fit(self, log: LogSource, params: str | Mapping[str, Any], effects: str | Iterable[str], *,
             columns: Mapping[str, Any] | None = None, steady_state: bool | None = None, read: ReadFields = None,
-            refine: bool | None = None) -> dict[str, Any]:
+            refine: bool | None = None, max_logging_skew: float | None = None) -> dict[str, Any]:
         """Add ``effects`` and refit; the answer's ``calibrated_params`` is the calibrated parameter mapping."""
         files, data = model_check_form(log, params, columns=columns, steady_state=steady_state, **dict(read or {}),
-                                       effects=effects if isinstance(effects, str) else list(effects), refine=refine)
+                                       effects=effects if isinstance(effects, str) else list(effects), refine=refine,
+                                       max_logging_skew=max_logging_skew)
         return self._request("POST", "/v1/model-check/fit", files=files, data=data).json()
 
     def submit_batch(self, missions: Iterable[BaseModel | Mapping[str, Any]],

@@ -178,6 +178,8 @@ class CheckPublic(_Open):
     noise: dict[str, float | None]
     breakdown: dict[str, Any] = Field(description="group -> bin -> statistics")
     correlation: dict[str, Any] = Field(description="residual auto/cross-correlations and the 95 % band")
+    alignment: dict[str, Any] | None = Field(default=None, description="the command-to-sensor lag logging "
+                                             "conventions explain, removed before comparing (time series)")
 
 
 class DiagnosePublic(_Open):
@@ -200,6 +202,8 @@ class FitPublic(_Open):
     parameters: dict[str, dict[str, float | None]] = Field(description="name -> {value, stderr}")
     rms_before: dict[str, float | None]
     rms_after: dict[str, float | None]
+    alignment: dict[str, Any] | None = Field(default=None, description="the command-to-sensor lag logging "
+                                             "conventions explain, removed before fitting (time series)")
     calibrated_params: dict[str, Any]
 
 

@@ -7,7 +7,7 @@ import json
 import sys
 import tempfile
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, TypeVar
 
 from clients.cli.help import STDIO, add_command
 from clients.cli.io import fmt_number as _g
@@ -16,8 +16,12 @@ from clients.cli.remote import add_server_args, client, params_for_server
 from ocp.errors import LogError, ParameterError
 
 if TYPE_CHECKING:  # the core is imported inside the commands: `thrustshape --help` stays fast
+    from pydantic import BaseModel
+
     from ocp.identify import DiagnoseOptions
     from ocp.logs import Log, ReadOptions
+
+_O = TypeVar("_O", bound="BaseModel")
 
 _LOG_DESCRIPTION = ("A log is CSV/Parquet/.xlsx/.mat with headers and units (Tyto/RCbenchmark exports, vendor "
                     "sweeps,\nor t, voltage, current, omega/theta, thrust in SI; --columns maps other names and "
@@ -135,6 +139,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                     lists=("presets",))
     _log_args(p)
     p.add_argument("--report", default=None, help="write a self-contained HTML report here")
+    _skew_arg(p)
     p.set_defaults(func=cmd_check)
 
     p = add_command(sub, "diagnose", summary="rank candidate effects by held-out error reduction",
@@ -158,6 +163,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--effects", required=True, help="comma-separated effect names (or param:<key> corrections)")
     p.add_argument("--out", default=None, help="write the calibrated parameter file (JSON) here")
     p.add_argument("--no-refine", action="store_true", help="equation-error fit only (skip free-run refinement)")
+    _skew_arg(p)
     p.set_defaults(func=cmd_fit)
 
 
@@ -166,8 +172,13 @@ def _diagnose_args(p: argparse.ArgumentParser) -> None:
     p.add_argument("--no-corrections", action="store_true", help="never name a constant wrong (calibrate only)")
     p.add_argument("--tolerance", type=float, default=0.10,
                    help="a constant is named wrong only beyond this relative error (default 0.10 = 10 %%)")
+    _skew_arg(p)
+
+
+def _skew_arg(p: argparse.ArgumentParser) -> None:
     p.add_argument("--max-logging-skew", type=float, default=2.0,
-                   help="command-to-sensor lag [samples] that logging conventions explain (beyond: input_delay)")
+                   help="command-to-sensor lag [samples] that logging conventions explain, removed first "
+                        "(diagnose: beyond it, input_delay)")
 
 
 def _columns(args: argparse.Namespace) -> Any:
@@ -220,9 +231,10 @@ def _upload(args: argparse.Namespace) -> dict[str, Any]:
 def cmd_check(args: argparse.Namespace) -> int:
     if args.server:
         with client(args) as c:
-            d = _server_job(c, "check", args)
+            d = _server_job(c, "check", args, max_logging_skew=args.max_logging_skew)
             if args.report:  # the HTML report is a synchronous request (?report=html): no job returns HTML
-                Path(args.report).write_text(c.check_report(**_upload(args)), encoding="utf-8")
+                Path(args.report).write_text(c.check_report(**_upload(args), max_logging_skew=args.max_logging_skew),
+                                             encoding="utf-8")
     else:
         from ocp.identify import CheckOptions, check
         from ocp.identify.report import write_report
@@ -230,7 +242,7 @@ def cmd_check(args: argparse.Namespace) -> int:
 
         log = _load_log(args)
         plant = load_plant(args.params)
-        res = check(plant, log, CheckOptions())
+        res = check(plant, log, _options(CheckOptions, max_logging_skew=args.max_logging_skew))
         if args.report:
             write_report(res, log, args.report, plant=plant)
         d = _annotate(res.to_dict(), log)
@@ -241,6 +253,7 @@ def cmd_check(args: argparse.Namespace) -> int:
         _print_points(d)
         _print_equations(d)
         return 0
+    _print_alignment(d)
     print("free run (model simulated under the measured voltage) RMS error:")
     for ch, v in d["free_run"]["rms"].items():
         print(f"  {ch:8s} {_g(v, '.4g')}   (sensor noise ~{_g(d['noise'][ch], '.3g')})")
@@ -281,17 +294,22 @@ def _server_job(c: Any, op: str, args: argparse.Namespace, **fields: Any) -> dic
         return result
 
 
-def _diagnose_options(args: argparse.Namespace) -> DiagnoseOptions:
+def _options(kind: type[_O], **values: Any) -> _O:
+    """``kind(**values)``, a bad value named by its CLI option."""
     from pydantic import ValidationError
 
-    from ocp.identify import DiagnoseOptions
-
     try:
-        return DiagnoseOptions(max_effects=args.max_effects, include_params=not args.no_corrections,
-                               tolerance=args.tolerance, max_logging_skew=args.max_logging_skew)
+        return kind(**values)
     except ValidationError as exc:
         err = exc.errors()[0]
         raise ParameterError(f"--{str(err['loc'][0]).replace('_', '-')}", str(err["msg"])) from None
+
+
+def _diagnose_options(args: argparse.Namespace) -> DiagnoseOptions:
+    from ocp.identify import DiagnoseOptions
+
+    return _options(DiagnoseOptions, max_effects=args.max_effects, include_params=not args.no_corrections,
+                    tolerance=args.tolerance, max_logging_skew=args.max_logging_skew)
 
 
 def _diagnose_fields(args: argparse.Namespace) -> dict[str, Any]:
@@ -321,17 +339,24 @@ class _Progress:
             sys.stderr.flush()
 
 
+def _print_alignment(d: dict[str, Any], rule: bool = False) -> None:
+    """The command-to-sensor alignment of a check, fit or diagnosis (its ``alignment``), when it has one."""
+    al = d.get("alignment")
+    if not al:
+        return
+    print(f"alignment: command acts {_g(al['samples'], '.2f')} samples ({_g(1e3 * al['seconds'], '.3g')} ms) after "
+          f"its row{' -> input_delay' if al['called_input_delay'] else ' (removed: logging convention)'}")
+    if rule:
+        print(f"  rule: {al['rule']}")
+
+
 def _print_diagnosis(d: dict[str, Any]) -> None:
     print("nothing missing" if not d["verdict"] else "missing: " + ", ".join(d["verdict"]))
     for text in d["explanations"]:
         print(f"  {text}")
     for a in d.get("ambiguous") or []:
         print(f"ambiguous: {a['adopted']} or {a['alternative']}: {a['reason']}")
-    al = d.get("alignment")
-    if al:
-        print(f"alignment: command acts {_g(al['samples'], '.2f')} samples ({_g(1e3 * al['seconds'], '.3g')} ms) after "
-              f"its row{' -> input_delay' if al['called_input_delay'] else ' (removed: logging convention)'}")
-        print(f"  rule: {al['rule']}")
+    _print_alignment(d, rule=True)
     cal = d.get("calibration") or {}
     if cal:
         print(f"calibration (refinements within {100 * d.get('tolerance', 0.1):.0f} % stay here; beyond it a constant "
@@ -361,7 +386,8 @@ def cmd_fit(args: argparse.Namespace) -> int:
         raise ParameterError("--effects", "give at least one effect name")
     if args.server:
         with client(args) as c:
-            d = _server_job(c, "fit", args, effects=",".join(names), refine=not args.no_refine)
+            d = _server_job(c, "fit", args, effects=",".join(names), refine=not args.no_refine,
+                            max_logging_skew=args.max_logging_skew)
         if args.out:  # the same file FitResult.write makes
             Path(args.out).write_text(json.dumps(d["calibrated_params"], indent=2, allow_nan=False) + "\n",
                                       encoding="utf-8")
@@ -370,13 +396,15 @@ def cmd_fit(args: argparse.Namespace) -> int:
         from ocp.model.effects import load_plant
 
         log = _load_log(args)
-        res = fit(load_plant(args.params), log, names, FitOptions(refine=not args.no_refine))
+        res = fit(load_plant(args.params), log, names,
+                  _options(FitOptions, refine=not args.no_refine, max_logging_skew=args.max_logging_skew))
         if args.out:
             res.write(args.out)
         d = _annotate(res.to_dict(), log)
     if args.json:
         print_json(d)
         return 0
+    _print_alignment(d)
     print(f"fitted ({d['stage']} stage):")
     for n, p in d["parameters"].items():
         print(f"  {n:28s} {_g(p['value'], '.5g')}  +- {_g(p['stderr'], '.2g')}")

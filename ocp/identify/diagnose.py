@@ -37,7 +37,17 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.errors import SolverError
-from ocp.identify.align import DELAY_GAIN, SKEW_FRACTION, Alignment, estimate, gain, realign, spread, within
+from ocp.identify.align import (
+    DELAY_GAIN,
+    SKEW_FRACTION,
+    Alignment,
+    conventional,
+    estimate,
+    gain,
+    realign,
+    spread,
+    within,
+)
 from ocp.identify.candidates import candidate
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
@@ -227,6 +237,20 @@ def _entry(name: str, fit_: Fitted, before: Fitted, significant: bool, plant: DC
                      explain(name, values, plant.params, design, fit_))
 
 
+def timing(plant: DCMotorPlant, log: Log) -> tuple[float, tuple[float, float]]:
+    """What the alignment needs of ``plant``: the delay it applies itself (its ``input_delay``) [samples of ``log``]
+    and its nominal armature ``(L/R [s], k_e [V s/rad])``."""
+    own = sum(float(getattr(e, "delay", 0.0)) for e in plant.effects if e.name == "input_delay") / log.dt
+    return own, (plant.params.L / plant.params.R, plant.params.k_e)
+
+
+def aligned(plant: DCMotorPlant, log: Log, max_logging_skew: float) -> tuple[Alignment, Log]:
+    """``log`` realigned by the lag logging conventions explain, for confronting ``plant`` with it (``check``,
+    ``fit``; :func:`.align.conventional`), and that alignment."""
+    own, armature = timing(plant, log)
+    return conventional(log, max_logging_skew, own, armature)
+
+
 def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None,
              progress: Callable[[float], None] | None = None) -> DiagnoseResult:
     """Say which effects are missing and which constants are wrong (module doc). ``progress(fraction)``
@@ -237,8 +261,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
 
         return diagnose_points(plant, log, opt)
     effects, pool = _pool(plant, opt)
-    own = sum(float(getattr(e, "delay", 0.0)) for e in plant.effects if e.name == "input_delay") / log.dt
-    armature = (plant.params.L / plant.params.R, plant.params.k_e)
+    own, armature = timing(plant, log)
     align = estimate(log, opt.max_logging_skew + own if log.kind is LogKind.TIME_SERIES else 0.0, armature)
     seg = min(opt.segment_s, log.n * log.dt / (3 * opt.holdout_every)) if log.kind is LogKind.TIME_SERIES \
         else opt.segment_s  # short logs: shorter segments, so that some are held out

@@ -4,7 +4,10 @@ Two stages: an equation-error fit (one-step residuals; fast, linear in most effe
 gives the start; a free-run refinement (plant simulated under the measured voltage, restarted
 every ``segment_s``) polishes it and is kept only if it lowers the free-run error. Before/after
 RMS per channel (free run) and per equation (one step) are reported on the whole log, with the
-parameters' standard errors and correlations from the last stage's Jacobian.
+parameters' standard errors and correlations from the last stage's Jacobian. Both stages see the log realigned by
+the command-to-sensor lag logging conventions explain, reported as ``alignment``
+(:func:`ocp.identify.diagnose.aligned`, as ``check`` and ``diagnose`` do): unaligned, the armature's constants
+would be fitted to a logging convention.
 
 The calibrated file is the parameter-file format of :mod:`ocp.model.effects` (``MotorParams`` keys +
 ``effects``), readable by :func:`ocp.model.effects.load_plant` and, for the constants, by
@@ -23,8 +26,9 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
+from ocp.identify.align import Alignment
 from ocp.identify.candidates import candidate
-from ocp.identify.diagnose import dynamic, finite
+from ocp.identify.diagnose import aligned, dynamic, finite
 from ocp.identify.estimate import Estimate, equation_error_fit, equation_scales, free_run_errors, free_run_fit
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, EQUATION_UNITS, EQUATIONS, free_run, noise_levels, one_step
 from ocp.logs import Log, LogKind
@@ -40,6 +44,7 @@ class FitOptions(BaseModel):
     segment_s: float = Field(default=0.5, gt=0)
     refine: bool = True  # free-run refinement after the equation-error start
     max_nfev: int = Field(default=30, ge=1, le=1000)
+    max_logging_skew: float = Field(default=2.0, ge=0, le=20)  # [samples] lags logging conventions explain
 
 
 def channel_rms(plant: DCMotorPlant, log: Log, segment_s: float) -> dict[str, float]:
@@ -69,6 +74,7 @@ class FitResult:
     after: dict[str, float]
     before_equations: dict[str, float]
     after_equations: dict[str, float]
+    alignment: Alignment | None = None  # time series only (a sweep's rows have no command timing)
 
     def calibrated(self, name: str | None = None) -> dict[str, Any]:
         """The calibrated parameter file as a mapping (JSON-ready)."""
@@ -85,6 +91,7 @@ class FitResult:
         return {
             "effects": list(self.effects),
             "stage": self.stage,
+            "alignment": self.alignment.to_dict() if self.alignment else None,
             "parameters": {n: {"value": finite(v), "stderr": finite(s)}
                            for n, v, s in zip(self.names, self.values, self.stderr, strict=True)},
             "correlation": {"names": list(self.names),
@@ -109,6 +116,7 @@ def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptio
         from ocp.identify.steady import fit_points
 
         return fit_points(plant, log, effects)
+    align, log = aligned(plant, log, opt.max_logging_skew)
     cands = [candidate(n) for n in dict.fromkeys(effects)]
     every = np.ones(log.n, dtype=bool)
     scales = equation_scales(plant, log, every)
@@ -125,5 +133,5 @@ def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptio
         plant=est.plant, effects=tuple(c.name for c in cands), stage=stage, names=est.names, values=est.values,
         stderr=est.stderr, correlation=est.correlation,
         before=channel_rms(plant, log, opt.segment_s), after=channel_rms(est.plant, log, opt.segment_s),
-        before_equations=equation_rms(plant, log), after_equations=equation_rms(est.plant, log),
+        before_equations=equation_rms(plant, log), after_equations=equation_rms(est.plant, log), alignment=align,
     )

@@ -105,8 +105,8 @@ def html_report(result: CheckResult | PointCheck, log: Log, title: str = "thrust
     imgs = "".join(f'<h3>{html.escape(k)}</h3><img alt="{html.escape(k)}" src="data:image/png;base64,'
                    f'{base64.b64encode(v).decode()}">' for k, v in figs.items())
     tables = "".join(f"<h3>{html.escape(g)}</h3>{_table(b)}" for g, b in result.breakdown.items())
-    summary = html.escape(json.dumps({k: v for k, v in result.to_dict().items() if k in ("free_run", "one_step",
-                                                                                      "noise")}, indent=1))
+    shown = ("alignment", "free_run", "one_step", "noise")
+    summary = html.escape(json.dumps({k: v for k, v in result.to_dict().items() if k in shown}, indent=1))
     return (f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>"
             "<style>body{font-family:sans-serif;margin:2em}table{border-collapse:collapse;font-size:12px}"
             "td,th{border:1px solid #ccc;padding:2px 6px}</style></head><body>"

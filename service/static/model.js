@@ -118,6 +118,10 @@ function showReportFigures(reportHtml) {
 function showCheck(res, reportHtml) {
   $("#m-check-results").hidden = false;
   showEquations("#m-check-equations", res);
+  const al = res.alignment;
+  $("#m-check-alignment").textContent = al ? `Compared after removing the logging convention: the command acts ` +
+    `${fmt(al.samples, 3)} samples (${fmt(1e3 * al.seconds, 3)} ms) after its row` +
+    (al.identified ? "." : " (not identifiable from this log: none assumed).") : "";
   const fr = res.free_run || {}, os_ = res.one_step || {}, noise = res.noise || {};
   const units = fr.units || CHANNEL_UNITS;
   const eb = emptied("#m-errors tbody");

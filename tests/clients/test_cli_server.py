@@ -103,7 +103,7 @@ def test_check_json_text_and_report(server: Server, rig_csv: Path, tmp_path: Pat
     assert jobs_run(server, "check") == before + 1  # a job: no request timeout on a long log
     close(json.loads(local), json.loads(remote))
     local, remote = both(argv, server, capsys)
-    assert remote == local and remote.startswith("free run (model simulated")
+    assert remote == local and remote.startswith("alignment: command acts") and "\nfree run (model simulated" in remote
     report = tmp_path / "report.html"
     code, _, err = run([*argv, "--report", str(report), "--server", server.url, "--api-key", KEY], capsys)
     assert code == 0, err

@@ -131,6 +131,7 @@ def test_model_check_finds_the_hidden_effect_and_the_refit_lowers_the_error(page
     groups = page.locator("#m-breakdown .plotbox")
     assert {groups.nth(k).get_attribute("data-group") for k in range(groups.count())} >= {
         "direction", "reversal", "speed band", "rotor angle"}
+    assert "samples" in page.inner_text("#m-check-alignment")  # compared after the logging convention's lag
     omega_ratio = page.locator("#m-errors tr[data-channel=omega] td").nth(4).inner_text()
     assert number(omega_ratio.rstrip("×")) > 5  # the nominal model misses the friction: far above the noise
     page.click("#m-fit")

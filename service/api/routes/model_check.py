@@ -155,9 +155,9 @@ async def _payload(op: Op, log: UploadFile, params: str, columns: str | None, st
 async def check(log: LogFile, params: ParamsField, settings: SettingsDep, pool: PoolDep, tasks: TasksDep,
                 read: ReadForm, columns: ColumnsField = None, steady_state: SteadyField = None,
                 report: Annotated[Literal["json", "html"], Query(description="html: the self-contained report")]
-                = "json") -> Any:
+                = "json", max_logging_skew: SkewField = 2.0) -> Any:
     out = await _run("check", log, params, columns, steady_state, settings, pool, tasks, report=report == "html",
-                     read=read)
+                     options={"max_logging_skew": max_logging_skew}, read=read)
     if report == "html":
         return HTMLResponse(out["html"])
     return out
@@ -189,11 +189,11 @@ async def fit(log: LogFile, params: ParamsField,
               settings: SettingsDep, pool: PoolDep, tasks: TasksDep, read: ReadForm, columns: ColumnsField = None,
               steady_state: SteadyField = None,
               refine: Annotated[bool, Form(description="free-run refinement after the equation-error fit")] = True,
-              ) -> Any:
+              max_logging_skew: SkewField = 2.0) -> Any:
     with _form_field():
         names = parse_effects(effects)
     return await _run("fit", log, params, columns, steady_state, settings, pool, tasks, effects=names,
-                      options={"refine": refine}, read=read)
+                      options={"refine": refine, "max_logging_skew": max_logging_skew}, read=read)
 
 
 # --- model checks as jobs: 202, poll the status and its progress, fetch the result (service/checkjobs.py) ---
@@ -251,9 +251,12 @@ async def submit_model_check(
         if op == "fit":
             if effects is None:
                 raise ParameterError("effects", "a fit job needs effects (comma-separated names)")
-            extra.update(effects=parse_effects(effects), options={"refine": refine})
+            extra.update(effects=parse_effects(effects), options={"refine": refine,
+                                                                   "max_logging_skew": max_logging_skew})
         elif op in ("diagnose", "design"):
             extra["options"] = _diagnose_options(max_effects, corrections, tolerance, max_logging_skew)
+        else:
+            extra["options"] = {"max_logging_skew": max_logging_skew}
         if op == "design":
             extra["design"] = {"voltage": voltage, "current": current, "duration_s": duration_s,
                                "rivals": parse_rivals(rivals)}
