@@ -10,7 +10,8 @@ Two kinds of error, always labelled:
 Both on the log realigned first by the command-to-sensor lag that logging conventions explain (up to
 ``max_logging_skew`` + 0.75 samples; :func:`ocp.identify.diagnose.aligned`), which is reported: a loop that logs the
 command it is about to write beside the sensors it just read is no failure of the model (session 21: unaligned, the
-exact plant's free run on 33 clean proving-ground logs was a median 8.5 noise units off, aligned 2.0).
+exact plant's free run on the 30 clean proving-ground logs of seeds 0..199 was a median 8.5 noise units off, aligned
+2.0).
 
 Breakdowns (mean and RMS of the one-step residuals, RMS of the free-run error, sample count per bin):
 thrust direction, near reversals (within ``reversal_window_s`` of a speed sign change) vs away,
