@@ -301,20 +301,5 @@ def realign(log: Log, samples: float) -> Log:
                log.source)
 
 
-def conventional(log: Log, max_logging_skew: float, own: float, armature: tuple[float, float] | None) -> \
-        tuple[Alignment, Log]:
-    """The alignment a logging convention explains and the log realigned by it, for confronting a given plant with
-    the log (``check``, ``fit``): estimated as :func:`estimate` does, restricted to the conventions
-    (:func:`within`: a longer lag is the plant's business, an ``input_delay`` only ``diagnose`` names). ``own``
-    [samples]: the delay the plant itself applies (its ``input_delay`` effect), not removed twice. A steady-state
-    sweep is returned as it is."""
-    if log.kind is not LogKind.TIME_SERIES:
-        return estimate(log), log
-    align = estimate(log, max_logging_skew + own, armature)
-    if align.delay:
-        align = within(align, max_logging_skew + own, log.dt)
-    return align, realign(log, align.samples - own)
-
-
 def sample_rate(log: Log) -> float:
     return 1.0 / log.dt if log.kind is LogKind.TIME_SERIES else math.nan

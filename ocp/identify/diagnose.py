@@ -37,17 +37,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.errors import SolverError
-from ocp.identify.align import (
-    DELAY_GAIN,
-    SKEW_FRACTION,
-    Alignment,
-    conventional,
-    estimate,
-    gain,
-    realign,
-    spread,
-    within,
-)
+from ocp.identify.align import DELAY_GAIN, SKEW_FRACTION, Alignment, estimate, gain, realign, spread, within
 from ocp.identify.candidates import candidate
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
@@ -246,9 +236,16 @@ def timing(plant: DCMotorPlant, log: Log) -> tuple[float, tuple[float, float]]:
 
 def aligned(plant: DCMotorPlant, log: Log, max_logging_skew: float) -> tuple[Alignment, Log]:
     """``log`` realigned by the lag logging conventions explain, for confronting ``plant`` with it (``check``,
-    ``fit``; :func:`.align.conventional`), and that alignment."""
+    ``fit``), and that alignment: estimated as :func:`diagnose` does, held within the conventions (:func:`.within`: a
+    longer lag is an ``input_delay``, which only :func:`diagnose` names), less the delay ``plant`` applies itself. A
+    steady-state sweep is returned as it is."""
+    if log.kind is not LogKind.TIME_SERIES:
+        return estimate(log), log
     own, armature = timing(plant, log)
-    return conventional(log, max_logging_skew, own, armature)
+    align = estimate(log, max_logging_skew + own, armature)
+    if align.delay:
+        align = within(align, max_logging_skew + own, log.dt)
+    return align, realign(log, align.samples - own)
 
 
 def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None,

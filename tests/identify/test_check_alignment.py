@@ -14,7 +14,8 @@ import pytest
 from bench.modelcheck import case_log
 from ocp.identify import FitOptions, check, fit
 from ocp.identify.check import CheckResult
-from ocp.identify.predict import CHANNELS, free_run, noise_levels
+from ocp.identify.fit import channel_rms
+from ocp.identify.predict import noise_levels
 from ocp.logs import Log, log_from_arrays
 from ocp.model.params import MotorParams, load_params
 from ocp.model.plant import DCMotorPlant
@@ -38,9 +39,8 @@ def _combined(units: dict[str, float]) -> float:
 
 def _raw_units(plant: DCMotorPlant, log: Log) -> dict[str, float]:
     """The free run's error [noise units] on ``log`` as logged, no alignment."""
-    fr, noise = free_run(plant, log), noise_levels(log)
-    return {ch: float(np.sqrt(np.mean((getattr(log, ch)[fr.idx] - fr.channel(ch)) ** 2))) / noise[ch]
-            for ch in CHANNELS}
+    noise = noise_levels(log)
+    return {ch: v / noise[ch] for ch, v in channel_rms(plant, log, 0.5).items()}
 
 
 @pytest.fixture(scope="module")

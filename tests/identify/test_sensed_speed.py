@@ -16,7 +16,8 @@ import pytest
 import ocp.identify.predict as predict
 from bench.modelcheck import case_log
 from ocp.identify.align import estimate, realign
-from ocp.identify.predict import MAX_SPEED_SPAN, free_run, noise_levels, sensed_speed, speed_span
+from ocp.identify.fit import channel_rms
+from ocp.identify.predict import MAX_SPEED_SPAN, noise_levels, sensed_speed, speed_span
 from ocp.logs import log_from_arrays
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -81,8 +82,7 @@ def test_a_clean_encoder_log_is_reproduced_by_its_own_plant(seed: int, monkeypat
     noise = noise_levels(log)["omega"]
 
     def speed_error() -> float:
-        fr = free_run(plant, aligned)
-        return float(np.sqrt(np.mean((aligned.omega[fr.idx] - fr.omega) ** 2))) / noise
+        return channel_rms(plant, aligned, 0.5)["omega"] / noise
 
     read = speed_error()
     monkeypatch.setattr(predict, "speed_span", lambda _log: 0)
