@@ -85,7 +85,13 @@ def test_check_json_and_html_report(http: httpx.Client, rig_csv: bytes) -> None:
                      data={"params": "paper-rig"})
     assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
     assert page.text.startswith("<!DOCTYPE html>") and page.text.count("data:image/png;base64,") == 4
-    assert "rig.csv" in page.text
+    assert "rig.csv" in page.text and "called_input_delay" in page.text  # the alignment, in the summary
+    # compared after the logging convention's lag (the rig logs on time), which is bounded before any work
+    assert abs(d["alignment"]["samples"]) < 0.5 and not d["alignment"]["called_input_delay"]
+    for path, form in ((CHECK, {}), ("/v1/model-check/fit", {"effects": "coulomb_friction"})):
+        for bad in ("-1", "21"):
+            got = problem(post(http, path, ("rig.csv", rig_csv), max_logging_skew=bad, **form), 422)
+            assert got["field"] == "max_logging_skew", got
 
 
 def test_parquet_recognised_by_content(http: httpx.Client, rig_csv: bytes, rig_log: Log) -> None:
