@@ -2,7 +2,8 @@
 is above it (1: the noise level itself). An effect then wins in whichever equation it enters: a noise level is an
 estimate, and an effect's material fall below it shows that it was too high (until session 12, effects too were
 held to the equations above the floor, and a 10 kHz log's angle ripple cutting its torque equation from 0.86 to
-0.25 noise units was never named); a constant, named without a material fall, only in an equation above it.
+0.25 noise units was never named); a constant, named without a material fall, only in an equation above it, or
+one whose held-out RMS it halves (``select.ROOM_FALL``, session 22: noise cannot lose half its error to one constant).
 Hand-made regressions (rows independent, residuals in noise units, 4000 rows a third held out)."""
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ import numpy as np
 
 from ocp.identify import DiagnoseOptions
 from ocp.identify.regression import Column, Design
-from ocp.identify.select import _room, fit_model, select
+from ocp.identify.select import ROOM_FALL, _room, fit_model, select
 
 EFFECT = "force_offset"
 
@@ -47,10 +48,22 @@ def test_an_item_is_adopted_for_an_equation_whose_noise_level_was_overestimated(
 
 def test_a_constant_is_not_named_for_an_equation_within_the_floor() -> None:
     """A constant needs no material fall (its materiality is the tolerance), so the floor still holds it: the same
-    armature residual as above, explained by a resistance error, is not named beside the thrust equation at 1.5."""
+    armature residual as above, explained by a resistance error that cuts it by 45 % (under ``ROOM_FALL``), is not
+    named beside the thrust equation at 1.5."""
     d = _design(eq=1, signal=0.8, noise=0.45, other=1.5, item="R")
+    now, named = fit_model(d, [], 0.1), fit_model(d, ["R"], 0.1)
+    assert 0.4 < 1.0 - named.per_eq[1] / now.per_eq[1] < ROOM_FALL
     assert _adopted(d, DiagnoseOptions().noise_floor, "R") == ()
     assert _adopted(d, 0.5, "R") == ("R",)  # (it would win: only the floor stops it)
+
+
+def test_a_constant_that_halves_an_equation_within_the_floor_is_named() -> None:
+    """An armature equation at ~0.94 stated noise units, three quarters of it a resistance error (true noise 0.3): the
+    stated noise level was too high, and the constant that cuts the equation by over half is named."""
+    d = _design(eq=1, signal=0.9, noise=0.3, other=1.5, item="R")
+    now, named = fit_model(d, [], 0.1), fit_model(d, ["R"], 0.1)
+    assert now.per_eq[1] < 1.0 and 1.0 - named.per_eq[1] / now.per_eq[1] > ROOM_FALL
+    assert _adopted(d, DiagnoseOptions().noise_floor, "R") == ("R",)
 
 
 def test_the_search_stops_when_every_equation_is_within_the_floor() -> None:
@@ -70,7 +83,8 @@ def test_a_pair_is_held_to_the_floor_through_its_constants_only() -> None:
     d = _design(eq=1, signal=0.8, noise=0.45, other=1.5, item="R")  # armature within the floor, thrust above
     now = fit_model(d, [], 0.1)
     assert now.per_eq[1] < 1.0 < now.per_eq[2]
-    assert _room(d, now, (EFFECT,), 1.0)  # (EFFECT has no column here: an effect is never held)
-    assert not _room(d, now, ("R",), 1.0)
-    assert not _room(d, now, (EFFECT, "R"), 1.0)
-    assert _room(d, now, ("c_f",), 1.0)  # the thrust equation, above the floor
+    named = fit_model(d, ["R"], 0.1)  # (cuts the armature equation by 45 %: under ROOM_FALL)
+    assert _room(d, now, (EFFECT,), 1.0, now)  # (EFFECT has no column here: an effect is never held)
+    assert not _room(d, now, ("R",), 1.0, named)
+    assert not _room(d, now, (EFFECT, "R"), 1.0, named)
+    assert _room(d, now, ("c_f",), 1.0, now)  # the thrust equation, above the floor
