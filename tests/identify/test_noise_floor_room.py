@@ -58,8 +58,8 @@ def test_a_constant_is_not_named_for_an_equation_within_the_floor() -> None:
 
 
 def test_a_constant_that_halves_an_equation_within_the_floor_is_named() -> None:
-    """An armature equation at ~0.94 stated noise units, three quarters of it a resistance error (true noise 0.3): the
-    stated noise level was too high, and the constant that cuts the equation by over half is named."""
+    """An armature equation at ~0.85 stated noise units, most of it a resistance error (true noise 0.3): the stated
+    noise level was too high, and the constant that cuts the equation by 64 % (over ``ROOM_FALL``) is named."""
     d = _design(eq=1, signal=0.9, noise=0.3, other=1.5, item="R")
     now, named = fit_model(d, [], 0.1), fit_model(d, ["R"], 0.1)
     assert now.per_eq[1] < 1.0 and 1.0 - named.per_eq[1] / now.per_eq[1] > ROOM_FALL
