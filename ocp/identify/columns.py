@@ -122,6 +122,34 @@ def at_rest(s: Signals, log: Log, p: MotorParams) -> np.ndarray:
     return out
 
 
+#: a run at rest is HELD where the nominal torque over it would have changed the speed by more than this many times
+#: what it did (and by over REST_NOISE noise levels; :func:`held_still`; set before any proving-ground run, not tuned)
+HOLD_RATIO = 2.0
+
+
+def held_still(s: Signals, log: Log, p: MotorParams) -> np.ndarray:
+    """Rows (M,) where something holds the rotor (dry friction, a detent): runs at rest (:func:`at_rest`) over which
+    the nominal torque balance would have moved it, ``sum (k_t i - B w - c_tau w|w|) dt / J`` [rad/s] (eq.
+    dc_mechanical), by :data:`HOLD_RATIO` times the speed change the log shows and by :data:`REST_NOISE` noise levels
+    of the low-passed speed, but the rotor stayed. There the torque balance holds an unknown torque (whatever stays
+    within the friction's level), which no column expresses; a rotor passing zero freely, or standing without a
+    torque, is not held. (A ripple's detent holds a rotor too, with a torque its columns do express: cut with the
+    rest, that evidence is lost; proving ground, session 23: 7 of 137 ripples.)"""
+    rest = at_rest(s, log, p)
+    if not rest.any():
+        return rest
+    low = min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt)
+    sigma = speed_noise(log.omega) * math.sqrt(low)
+    # eq. dc_mechanical: the speed change per row the nominal torque balance gives
+    dw = (p.k_t * s.i - p.B * s.w - p.c_tau * s.w * np.abs(s.w)) * s.dt / p.J
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], rest.astype(np.int8), [0]])))
+    out = np.zeros_like(rest)
+    for a, b in zip(edges[::2], edges[1::2], strict=True):
+        moved = abs(float(dw[a:b].sum()))
+        out[a:b] = moved > max(HOLD_RATIO * abs(float(s.w1[b - 1] - s.w0[a])), REST_NOISE * sigma)
+    return out
+
+
 def settle_weight(p: MotorParams, dt: float) -> float:
     """``c = 1/(1 - a) - L/(R dt)``, ``a = exp(-R dt/L)``: the weight of a held row's end speed in the back-EMF that
     its exact armature step sees (:func:`emf_speed`); 1/2 for an armature much slower than a row, 1 for one much

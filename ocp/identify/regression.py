@@ -27,6 +27,9 @@ means over each row (:func:`interval_ripple`), so a ripple faster than the sampl
 of aliasing; its period count is the one whose columns, fitted beside the others, best predict held-out rows
 (:func:`.ripple.pick_periods`; :func:`angle_limits` says when the log cannot show it).
 
+Where something holds the rotor (:func:`.columns.held_still`: dry friction holds whatever stays within its level), the
+torque balance holds a torque no column expresses: those rows are cut from the torque equation for every model.
+
 Rows are split into training and held-out samples (every ``holdout_every``-th segment), or into folds held out
 in turn (cross-validation, :attr:`Design.g_fold`); each equation is weighted by its noise level. Only Gram matrices
 leave this module: fitting a model (a subset of columns, bounded) and scoring it on held-out rows are ``P x P``
@@ -53,6 +56,7 @@ from ocp.identify.columns import (
     constant_columns,
     drop_columns,
     effect_columns,
+    held_still,
     nuisance_columns,
     raw_signals,
     signals,
@@ -256,10 +260,14 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     # eq. dc_mechanical judged by the speed error it causes (speed_view), the others as they are; the
     # edge rows are zeroed on both sides first (still an equation), so their transients do not spread, and the
     # rows next to them tapered in (edge_taper: the low-passed J w' of a log cut off there holds the speed of one row)
-    taper = edge_taper(edge, tau / s.dt if s.dt > 0 else 0.0)
+    # where something holds the rotor the torque balance carries a holding torque no column expresses (dry friction
+    # holds whatever stays within its level): those rows are cut too, for every model alike (cut_taper)
+    stuck = held_still(s, log, p)
+    hidden = edge | stuck
+    taper = cut_taper(edge, stuck, raw is not s, tau / s.dt if s.dt > 0 else 0.0)
 
     def view(y: np.ndarray) -> np.ndarray:  # (M,) or (M, K): rows first
-        return speed_view(np.where(_rows(edge, y), 0.0, y) * _rows(taper, y), s.dt, tau)
+        return speed_view(np.where(_rows(hidden, y), 0.0, y) * _rows(taper, y), s.dt, tau)
 
     for y in (t, *(a for _, a in cols)):
         y[0] = view(y[0])
@@ -328,22 +336,34 @@ def _rows(x: np.ndarray, like: np.ndarray) -> np.ndarray:
 
 
 def edge_taper(edge: np.ndarray, rows: float) -> np.ndarray:
-    """Row weights (M,) for the torque rows before :func:`speed_view`: 0 on the ``edge`` rows (M,), rising as a
-    raised cosine over ``rows`` (the rotor time constant in rows; at most a sixth of the log) on either side of
-    the rows between, 1 beyond. The view of a log cut off at a row weights ``J w'`` as ``J (w - w_low) / tau``,
+    """Row weights (M,) for the torque rows before :func:`speed_view`: 0 on the ``edge`` rows (M,) (the log's cut
+    ends, and the rows where the rotor is held, :func:`.columns.held_still`), rising as a raised cosine over ``rows``
+    (the rotor time constant in rows; at most a sixth of the run) on either side of each run of rows between, 1
+    beyond. The view of a log cut off at a row weights ``J w'`` as ``J (w - w_low) / tau``,
     the speed of that one row against its past: a coarse encoder's speed over one row (61 rad/s steps at 10 kHz
     and 1024 counts) then ran through a rotor time constant's worth of rows as a torque error of ~100 noise units.
     Tapered, the cut weights the speed over ``rows`` rows, its noise averaged as inside the log; every equation
     row is scaled alike (still an equation)."""
-    inside = np.flatnonzero(~edge)
     w = np.where(edge, 0.0, 1.0)
-    k = min(math.ceil(rows), inside.size // 6) if inside.size else 0
-    if k < 2:
-        return w
-    ramp = 0.5 * (1.0 - np.cos(np.pi * (np.arange(k) + 1.0) / (k + 1.0)))
-    w[inside[:k]] = ramp
-    w[inside[-k:]] = ramp[::-1]
+    bounds = np.flatnonzero(np.diff(np.concatenate([[0], (~edge).astype(np.int8), [0]])))
+    for a, b in zip(bounds[::2], bounds[1::2], strict=True):  # each run of rows between cut rows
+        k = min(math.ceil(rows), (b - a) // 6)
+        if k < 2:
+            continue
+        ramp = 0.5 * (1.0 - np.cos(np.pi * (np.arange(k) + 1.0) / (k + 1.0)))
+        w[a:a + k] = ramp
+        w[b - k:b] = ramp[::-1]
     return w
+
+
+def cut_taper(edge: np.ndarray, stuck: np.ndarray, raw_rows: bool, rows: float) -> np.ndarray:
+    """Row weights (M,) for the torque rows cut at the log's ``edge`` (M,) and where the rotor is held, ``stuck`` (M,)
+    (:func:`edge_taper`, ``rows`` the rotor time constant in rows). On ``raw_rows`` (mean speeds from the angle) the
+    rows beside a held run are tapered in as at the log's ends: a raw row's speed is one sample's, a coarse encoder's
+    count per row, and cut off hard it is a step a ripple fits (proving-ground draw 13012: 5 kHz, 1024 counts, a
+    false ripple). Low-passed rows meet a held rotor at its low-passed speed, within noise of zero, and are not
+    tapered there: a taper would fade out the rows where dry friction lets go, which show it."""
+    return edge_taper(edge | stuck if raw_rows else edge, rows)
 
 
 def _blocks(test: np.ndarray, length: int) -> list[np.ndarray]:

@@ -6,7 +6,9 @@ effect is not named. Cross-validation holds every class out in turn, so every ro
 draws from the session's tuning seeds (never the reported seeds 0..199): a 500 Hz log (PRBS, sweep, ramp) and a
 10 kHz log (chirp, steps) of a motor with Stribeck friction and nothing else; the single split missed both until
 session 12, when effects too could win by the torque equation's likelihood ratio: that test names the 10 kHz one
-on the single split as well (its torque rows are few: one held-out class of them is enough for a ratio).
+on the single split as well (its torque rows are few: one held-out class of them is enough for a ratio), until
+session 23: the rows where the rotor is held (140 of them) are now cut from the torque equation, and what the Stribeck
+column fitted there (the holding torque) was part of that single split's evidence; cross-validation names it still.
 """
 
 from __future__ import annotations
@@ -22,7 +24,7 @@ from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import make_case
 
 
-@pytest.mark.parametrize(("seed", "single"), [(2043, []), (2100, ["stribeck"])])
+@pytest.mark.parametrize(("seed", "single"), [(2043, []), (2100, [])])
 def test_stribeck_at_few_reversals_is_named_under_cross_validation(seed: int, single: list[str]) -> None:
     case = make_case(seed)
     assert case.expected == {"stribeck"}

@@ -39,3 +39,16 @@ def test_edge_taper_shape() -> None:
     assert np.allclose(w[5:15], w[94:84:-1])  # symmetric
     assert np.all(edge_taper(edge, 1.0)[~edge] == 1.0)  # under two rows: no taper
     assert np.all(edge_taper(edge, 1e6)[20:80] == 1.0)  # at most a sixth of the rows inside
+
+
+def test_the_rows_beside_a_cut_inside_the_log_are_tapered_too() -> None:
+    """Rows cut inside the log (where the rotor is held, :func:`ocp.identify.columns.held_still`) are cut ends too:
+    each run of rows between cuts rises and falls over the same ramp, at most a sixth of that run."""
+    edge = np.zeros(200, dtype=bool)
+    edge[:5] = edge[-5:] = edge[100:110] = True
+    w = edge_taper(edge, 10.0)
+    assert np.all(w[edge] == 0.0) and np.all(w[15:90] == 1.0) and np.all(w[120:185] == 1.0)
+    assert np.allclose(w[90:100], w[5:15][::-1]) and np.allclose(w[110:120], w[5:15])  # the ends' own ramp
+    short = edge.copy()
+    short[20:190] = True  # a run of 15 rows (5..19): a ramp of at most 2 rows each way
+    assert np.count_nonzero(edge_taper(short, 10.0)[5:20] < 1.0) == 4
