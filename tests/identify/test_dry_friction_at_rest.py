@@ -120,7 +120,7 @@ def test_stribeck_friction_that_holds_the_rotor_is_named(monkeypatch: pytest.Mon
     assert res.verdict == ["stribeck"]
     (fitted,) = res.plant.effects
     assert fitted.tau_s == pytest.approx(case.truth.effects["stribeck"]["tau_s"], rel=0.5)
-    monkeypatch.setattr("ocp.identify.regression.held_still", lambda s, log, p: np.zeros(s.w.size, dtype=bool))
+    monkeypatch.setattr(regression, "held_still", lambda s, log, p: np.zeros(s.w.size, dtype=bool))
     assert "stribeck" not in diagnose(DCMotorPlant(p), log).verdict
 
 
