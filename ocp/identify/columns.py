@@ -106,18 +106,28 @@ REST_NOISE = 3.0
 REST_ROWS = 3
 
 
+def runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """The maximal runs ``[a, b)`` of True rows in ``mask`` (M,), in order."""
+    edges = np.flatnonzero(np.diff(np.concatenate([[0], mask.astype(np.int8), [0]])))
+    return [(int(a), int(b)) for a, b in zip(edges[::2], edges[1::2], strict=True)]
+
+
+def _rest_speed(s: Signals, log: Log, p: MotorParams) -> float:
+    """:data:`REST_NOISE` noise levels [rad/s] of the low-passed speed: the speed column's per-sample noise
+    (:func:`.angle.speed_noise`) through the low-pass."""
+    low = min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt)
+    return REST_NOISE * speed_noise(log.omega) * math.sqrt(low)
+
+
 def at_rest(s: Signals, log: Log, p: MotorParams) -> np.ndarray:
     """Rows (M,) where the rotor is at rest: its low-passed speed within :data:`REST_NOISE` noise levels of zero
-    (the speed column's per-sample noise, :func:`.angle.speed_noise`, through the low-pass) for at least
-    :data:`REST_ROWS` rows in a row. There dry friction is set-valued: it holds whatever torque stays within its
-    level, and the torque equation's residual is wherever the rotor stopped (none on a sweep)."""
-    if s.dt == 0:
-        return np.zeros(s.w.size, dtype=bool)
-    low = min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt)
-    still = np.abs(s.w) <= REST_NOISE * speed_noise(log.omega) * math.sqrt(low)
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], still.astype(np.int8), [0]])))
+    (:func:`_rest_speed`) for at least :data:`REST_ROWS` rows in a row. There dry friction is set-valued: it holds
+    whatever torque stays within its level, and the torque equation's residual is wherever the rotor stopped (none on
+    a sweep)."""
     out = np.zeros(s.w.size, dtype=bool)
-    for a, b in zip(edges[::2], edges[1::2], strict=True):
+    if s.dt == 0:
+        return out
+    for a, b in runs(np.abs(s.w) <= _rest_speed(s, log, p)):
         out[a:b] = b - a >= REST_ROWS
     return out
 
@@ -127,26 +137,22 @@ def at_rest(s: Signals, log: Log, p: MotorParams) -> np.ndarray:
 HOLD_RATIO = 2.0
 
 
-def held_still(s: Signals, log: Log, p: MotorParams) -> np.ndarray:
-    """Rows (M,) where something holds the rotor (dry friction, a detent): runs at rest (:func:`at_rest`) over which
-    the nominal torque balance would have moved it, ``sum (k_t i - B w - c_tau w|w|) dt / J`` [rad/s] (eq.
-    dc_mechanical), by :data:`HOLD_RATIO` times the speed change the log shows and by :data:`REST_NOISE` noise levels
-    of the low-passed speed, but the rotor stayed. There the torque balance holds an unknown torque (whatever stays
-    within the friction's level), which no column expresses; a rotor passing zero freely, or standing without a
-    torque, is not held. (A ripple's detent holds a rotor too, with a torque its columns do express: cut with the
-    rest, that evidence is lost; proving ground, session 23: 7 of 137 ripples.)"""
-    rest = at_rest(s, log, p)
+def held_still(s: Signals, log: Log, p: MotorParams, rest: np.ndarray) -> np.ndarray:
+    """Rows (M,) where something holds the rotor (dry friction, a detent): the runs at rest ``rest`` (M,)
+    (:func:`at_rest`) over which the nominal torque balance would have moved it, ``sum (k_t i - B w - c_tau w|w|) dt
+    / J`` [rad/s] (eq. dc_mechanical), by :data:`HOLD_RATIO` times the speed change the log shows and by
+    :data:`REST_NOISE` noise levels of the low-passed speed, but the rotor stayed. There the torque balance holds an
+    unknown torque (whatever stays within the friction's level), which no column expresses; a rotor passing zero
+    freely, or standing without a torque, is not held. (A ripple's detent holds a rotor too, with a torque its
+    columns do express: cut with the rest, that evidence is lost; proving ground, session 23: 7 of 137 ripples.)"""
+    out = np.zeros_like(rest)
     if not rest.any():
-        return rest
-    low = min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt)
-    sigma = speed_noise(log.omega) * math.sqrt(low)
+        return out
+    level = _rest_speed(s, log, p)
     # eq. dc_mechanical: the speed change per row the nominal torque balance gives
     dw = (p.k_t * s.i - p.B * s.w - p.c_tau * s.w * np.abs(s.w)) * s.dt / p.J
-    edges = np.flatnonzero(np.diff(np.concatenate([[0], rest.astype(np.int8), [0]])))
-    out = np.zeros_like(rest)
-    for a, b in zip(edges[::2], edges[1::2], strict=True):
-        moved = abs(float(dw[a:b].sum()))
-        out[a:b] = moved > max(HOLD_RATIO * abs(float(s.w1[b - 1] - s.w0[a])), REST_NOISE * sigma)
+    for a, b in runs(rest):
+        out[a:b] = abs(float(dw[a:b].sum())) > max(HOLD_RATIO * abs(float(s.w1[b - 1] - s.w0[a])), level)
     return out
 
 

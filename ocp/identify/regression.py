@@ -59,6 +59,7 @@ from ocp.identify.columns import (
     held_still,
     nuisance_columns,
     raw_signals,
+    runs,
     signals,
     targets,
 )
@@ -262,7 +263,8 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     # rows next to them tapered in (edge_taper: the low-passed J w' of a log cut off there holds the speed of one row)
     # where something holds the rotor the torque balance carries a holding torque no column expresses (dry friction
     # holds whatever stays within its level): those rows are cut too, for every model alike (cut_taper)
-    stuck = held_still(s, log, p)
+    rest = at_rest(s, log, p)
+    stuck = held_still(s, log, p, rest)
     hidden = edge | stuck
     taper = cut_taper(edge, stuck, raw is not s, tau / s.dt if s.dt > 0 else 0.0)
 
@@ -278,7 +280,6 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         cogging = [(c, np.vstack([view(a[0]), a[1:]])) for c, a in unviewed]
         cols += cogging
         rich += [a for _, a in cogging]
-        rest = at_rest(s, log, p)
         if rest.any() and DRY.intersection(effects):  # the ripple beside dry friction that holds the rotor at rest
             cols += [(replace(c, at_rest=False), np.vstack([view(np.where(rest, 0.0, a[0])), a[1:]]))
                      for c, a in unviewed]
@@ -345,8 +346,7 @@ def edge_taper(edge: np.ndarray, rows: float) -> np.ndarray:
     Tapered, the cut weights the speed over ``rows`` rows, its noise averaged as inside the log; every equation
     row is scaled alike (still an equation)."""
     w = np.where(edge, 0.0, 1.0)
-    bounds = np.flatnonzero(np.diff(np.concatenate([[0], (~edge).astype(np.int8), [0]])))
-    for a, b in zip(bounds[::2], bounds[1::2], strict=True):  # each run of rows between cut rows
+    for a, b in runs(~edge):  # each run of rows between cut rows
         k = min(math.ceil(rows), (b - a) // 6)
         if k < 2:
             continue

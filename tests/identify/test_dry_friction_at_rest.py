@@ -83,7 +83,7 @@ def test_a_rotor_stands_held_only_against_a_torque(hold: float) -> None:
     cur[stand[0]:stand[1]] = hold
     log = log_from_arrays(log.t, log.voltage, cur, log.thrust, omega=log.omega)
     s = signals(log, p)
-    held = held_still(s, log, p)
+    held = held_still(s, log, p, at_rest(s, log, p))
     assert held.sum() <= at_rest(s, log, p).sum()
     if hold == 0.0:
         assert not held.any()
@@ -103,7 +103,7 @@ def test_a_slow_free_crossing_is_at_rest_but_not_held() -> None:
                           omega=w + 0.05 * rng.normal(size=k.size))
     s = signals(log, p)
     assert at_rest(s, log, p).sum() > 20
-    assert not held_still(s, log, p).any()
+    assert not held_still(s, log, p, at_rest(s, log, p)).any()
 
 
 def test_stribeck_friction_that_holds_the_rotor_is_named(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -115,12 +115,13 @@ def test_stribeck_friction_that_holds_the_rotor_is_named(monkeypatch: pytest.Mon
     assert case.expected == {"stribeck"}
     log = case_log(case)
     p = MotorParams(**case.nominal)
-    assert held_still(signals(log, p), log, p).sum() >= 10
+    s = signals(log, p)
+    assert held_still(s, log, p, at_rest(s, log, p)).sum() >= 10
     res = diagnose(DCMotorPlant(p), log)
     assert res.verdict == ["stribeck"]
     (fitted,) = res.plant.effects
     assert fitted.tau_s == pytest.approx(case.truth.effects["stribeck"]["tau_s"], rel=0.5)
-    monkeypatch.setattr(regression, "held_still", lambda s, log, p: np.zeros(s.w.size, dtype=bool))
+    monkeypatch.setattr(regression, "held_still", lambda s, log, p, rest: np.zeros_like(rest))
     assert "stribeck" not in diagnose(DCMotorPlant(p), log).verdict
 
 
@@ -133,7 +134,8 @@ def test_cut_raw_rows_are_tapered_so_no_ripple_fits_the_cut(monkeypatch: pytest.
     assert case.expected == {"coulomb_friction", "force_offset"} and case.logger.speed == "encoder"
     log = case_log(case)
     p = MotorParams(**case.nominal)
-    assert held_still(signals(log, p), log, p).sum() >= 100
+    s = signals(log, p)
+    assert held_still(s, log, p, at_rest(s, log, p)).sum() >= 100
     assert set(diagnose(DCMotorPlant(p), log).verdict) == case.expected
     # (cut off hard, as low-passed rows are)
     monkeypatch.setattr(regression, "cut_taper", lambda edge, stuck, raw, rows: regression.edge_taper(edge, rows))
