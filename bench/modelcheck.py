@@ -22,7 +22,8 @@ log is reproduced without it by corrections a check makes without naming anythin
 without it. The table is then printed twice: on the labels as drawn, and with those labels optional.
 
 Prints: verdicts exactly right, false alarms on clean logs, per label (effect or named constant)
-precision and recall with counts, alignment error, time per log (diagnose only, and generating).
+precision and recall with counts, time per log (diagnose only, and generating), and the alignment's error against
+the drawn command lag (logs without a delay, by the armature's L/R in samples and by the current filter).
 """
 
 from __future__ import annotations
@@ -30,9 +31,12 @@ from __future__ import annotations
 import argparse
 import functools
 import hashlib
+import itertools
 import json
+import math
 import multiprocessing
 import pickle
+import statistics
 import sys
 import time
 from collections import Counter
@@ -119,14 +123,17 @@ def one(seed: int, cache: str | None = None, quiet: bool = False) -> dict[str, A
         res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
         verdict, err = sorted(res.verdict), None
         align = res.alignment.samples if res.alignment else 0.0
+        measured = bool(res.alignment and res.alignment.identified)
         amb = bool(res.ambiguous)
     except Exception as exc:  # a crash is a wrong verdict, recorded with its message
-        verdict, err, align, amb = [], f"{type(exc).__name__}: {exc}", 0.0, False
+        verdict, err, align, amb, measured = [], f"{type(exc).__name__}: {exc}", 0.0, False, False
     t2 = time.perf_counter()
     lag = case.logger.skew + case.truth.e("input_delay", "delay") / case.logger.dt
     return {"seed": seed, "kind": case.kind, "expected": sorted(case.expected), "verdict": verdict, "error": err,
             "ambiguous": amb, "rate": case.logger.rate, "n": log.n, "speed": case.logger.speed,
-            "excitations": list(case.excitations), "true_lag": lag, "alignment": align,
+            "excitations": list(case.excitations), "true_lag": lag, "alignment": align, "align_measured": measured,
+            "armature": case.nominal["L"] / case.nominal["R"] / case.logger.dt,
+            "current_filter": (1.0 - case.logger.alpha) / case.logger.alpha,
             "constant_error": case.constant_error, "t_generate": t1 - t0, "t_diagnose": t2 - t1, "noise_free": quiet}
 
 
@@ -195,7 +202,36 @@ def table(rows: list[dict[str, Any]], optional: bool = False) -> str:
     kinds = Counter(r["kind"] for r in rows)
     ok = Counter(r["kind"] for r in rows if right(r, optional))
     lines += ["", "by case kind: " + ", ".join(f"{k} {ok[k]}/{kinds[k]}" for k in sorted(kinds))]
-    return "\n".join(lines)
+    return "\n".join(lines + alignment_table(rows))
+
+
+#: the nominal armature time constants L/R [samples] the alignment's errors are grouped by (:func:`alignment_table`)
+ARMATURE_BINS = (0.0, 0.5, 2.0, 7.0, math.inf)
+
+
+def alignment_table(rows: list[dict[str, Any]]) -> list[str]:
+    """The alignment's error, found minus drawn command lag [samples], on the logs without a transport delay whose
+    lag ``diagnose`` measured, by the nominal armature time constant L/R [samples] and by the current filter
+    (records without ``armature``, written before it was recorded, are left out; none: no lines)."""
+    rec = [r for r in rows if "armature" in r and r["error"] is None and "input_delay" not in r["expected"]]
+    if not rec:
+        return []
+    seen = [r for r in rec if r["align_measured"]]
+    lines = ["", f"alignment (found - drawn lag [samples]) on the {len(seen)} of {len(rec)} logs without a delay "
+             f"whose lag was measured:", f"{'':24s} {'logs':>5s} {'median |e|':>10s} {'mean e':>7s} {'|e|>0.5':>7s} "
+             f"{'|e|>1':>6s}"]
+    groups = [(f"L/R {lo:g}-{hi:g} samples", [r for r in seen if lo <= r["armature"] < hi])
+              for lo, hi in itertools.pairwise(ARMATURE_BINS)]
+    groups += [("no current filter", [r for r in seen if r["current_filter"] == 0.0]),
+               ("current filter", [r for r in seen if r["current_filter"] > 0.0]), ("all", seen)]
+    for name, grp in groups:
+        e = [r["alignment"] - r["true_lag"] for r in grp]
+        if not e:
+            continue
+        a = [abs(x) for x in e]
+        lines.append(f"{name:24s} {len(e):5d} {statistics.median(a):10.2f} {sum(e) / len(e):+7.2f} "
+                     f"{sum(x > 0.5 for x in a):7d} {sum(x > 1.0 for x in a):6d}")
+    return lines
 
 
 def compare(old: list[dict[str, Any]], new: list[dict[str, Any]]) -> str:

@@ -52,6 +52,29 @@ def test_records_are_tabulated_merged_by_seed(tmp_path: Path, capsys: pytest.Cap
     assert "seed    1 one" in out and "seed    4 one" in out and "seed    2" not in out
 
 
+def test_the_alignment_error_is_tabulated_by_armature_and_filter() -> None:
+    """The alignment block: found minus drawn lag on the logs without a delay whose lag was measured, grouped by the
+    armature's L/R [samples] and the current filter; records written before those fields were recorded are left out,
+    and a table of only such records has no alignment block."""
+    def rec(seed: int, armature: float, filt: float, found: float, measured: bool = True,
+            expected: tuple[str, ...] = ()) -> dict[str, Any]:
+        return {**_rec(seed, list(expected), []), "true_lag": 1.0, "alignment": found, "align_measured": measured,
+                "armature": armature, "current_filter": filt}
+
+    rows = [rec(1, 0.2, 0.0, 1.1), rec(2, 0.3, 0.4, 0.2), rec(3, 3.0, 0.0, 2.2), rec(4, 3.0, 0.0, 0.0, False),
+            rec(5, 3.0, 0.0, 9.0, expected=("input_delay",)), _rec(6, [], [])]
+    lines = _bench().alignment_table(rows)
+    assert "on the 3 of 4 logs without a delay whose lag was measured" in lines[1]
+    table = {line[:24].strip(): line[24:].split() for line in lines[3:]}
+    assert table["L/R 0-0.5 samples"] == ["2", "0.45", "-0.35", "1", "0"]  # errors +0.1 and -0.8
+    assert table["L/R 2-7 samples"] == ["1", "1.20", "+1.20", "1", "1"]
+    assert "L/R 0.5-2 samples" not in table
+    assert table["no current filter"][0] == "2" and table["current filter"][0] == "1"
+    assert table["all"] == ["3", "0.80", "+0.17", "2", "1"]
+    assert _bench().alignment_table([_rec(7, [], [])]) == []
+    assert "alignment (found - drawn lag" in _bench().table(rows)
+
+
 def test_the_cache_is_keyed_by_the_generator(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     """A cached log is read back only by the proving ground that wrote it: the cache's subfolder is the digest of
     the generator's modules (not of its tests)."""
