@@ -31,7 +31,8 @@ into false delays: not adopted.)
 
 Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
 conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
-drive's update instant); it is removed from the log and reported as ``alignment``. Beyond that, the lag is
+drive's update instant); it is removed from the log (its fraction of a sample as the drive switching within the
+row, :func:`switched`) and reported as ``alignment``. Beyond that, the lag is
 a transport delay: ``input_delay`` enters the verdict with ``delay`` = the whole lag [s] -- when it predicts
 the held-out data better than the best lag within the conventions (:func:`within`; the test is the
 caller's, :mod:`.diagnose`), or when the search's residual there is :data:`DELAY_GAIN` times that of the best lag
@@ -293,11 +294,28 @@ def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
                      align.nominal and known)
 
 
-def realign(log: Log, samples: float) -> Log:
-    """The log with its command moved ``samples`` later, so that row k's command drives k -> k+1 (eq. ZOH)."""
+def switched(samples: float, tau: float) -> float:
+    """The lag [samples] whose linear interpolation (:func:`shifted`) gives each held row the voltage that drives an
+    armature of time constant ``tau`` [samples] (the nominal L/R) over the row as the drive does, which switches from
+    the old command to the new one ``f`` of a row late (``samples = m + f``, ``m`` whole). A slow armature integrates
+    the two levels: ``f`` itself (the interpolation); one that settles within the row shows only the new level at the
+    row's end: ``m`` (its current samples cannot tell when in the row the drive switched; the torque equation's
+    ``switch_phase`` nuisance can, :func:`.columns.nuisance_columns`)."""
+    m = math.floor(samples)
+    f, x = samples - m, 1.0 / max(tau, 1e-9)
+    # eq:dc_electrical over the row, exact for held levels: i1 = a i0 + (1 - a) v / R with
+    # v = V_new - (V_new - V_old) (b - a) / (1 - a), a = exp(-x), b = exp(-x (1 - f)), x = 1 / tau
+    return m + (math.exp(-x * (1.0 - f)) * math.expm1(-x * f) / math.expm1(-x) if x < 700.0 else 0.0)
+
+
+def realign(log: Log, samples: float, tau: float | None = None) -> Log:
+    """The log with its command moved ``samples`` later, so that row k's command drives k -> k+1 (eq. ZOH); with the
+    armature's nominal L/R ``tau`` [samples], a fraction of a sample as a drive switching within the row
+    (:func:`switched`), else interpolated."""
     if samples <= 0 or log.kind is LogKind.STEADY_STATE:
         return log
-    return Log(log.t, shifted(log.voltage, samples), log.current, log.omega, log.theta, log.thrust, log.kind,
+    lag = samples if tau is None else switched(samples, tau)
+    return Log(log.t, shifted(log.voltage, lag), log.current, log.omega, log.theta, log.thrust, log.kind,
                log.source)
 
 

@@ -37,7 +37,17 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.errors import SolverError
-from ocp.identify.align import DELAY_GAIN, SKEW_FRACTION, Alignment, estimate, gain, realign, spread, within
+from ocp.identify.align import (
+    DELAY_GAIN,
+    SKEW_FRACTION,
+    Alignment,
+    estimate,
+    gain,
+    realign,
+    spread,
+    switched,
+    within,
+)
 from ocp.identify.candidates import candidate
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
@@ -245,7 +255,7 @@ def aligned(plant: DCMotorPlant, log: Log, max_logging_skew: float) -> tuple[Ali
     align = estimate(log, max_logging_skew + own, armature)
     if align.delay:
         align = within(align, max_logging_skew + own, log.dt)
-    return align, realign(log, align.samples - own)
+    return align, realign(log, align.samples - own, armature[0] / log.dt)
 
 
 def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None,
@@ -267,9 +277,10 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     if align.delay and "input_delay" in _allowed(opt) and not _delay_wins(plant, log, align, own, opt, sp, noise, seg):
         align = within(align, opt.max_logging_skew + own, log.dt)  # a longer lag predicts no better: not a delay
     delay = (align.samples - own) * log.dt if align.delay and "input_delay" in _allowed(opt) else None
-    aligned = realign(log, align.samples - own)  # the equations always see the command when it acts
+    tau = armature[0] / log.dt  # the nominal L/R [samples]: how the armature shows a fraction of a sample
+    aligned = realign(log, align.samples - own, tau)  # the equations always see the command when it acts
     work = log if delay is not None else aligned  # free runs: the delay, if called, is in the plant
-    held = (log.voltage, max(align.samples - own, 0.0))  # (the drive's dead band acts before the shift)
+    held = (log.voltage, switched(max(align.samples - own, 0.0), tau))  # (the drive's dead band acts before the shift)
     design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align, held)
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
