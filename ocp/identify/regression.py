@@ -370,13 +370,8 @@ def _blocks(test: np.ndarray, length: int) -> list[np.ndarray]:
     """The held-out rows of mask ``test`` (M,) as blocks of row indices: each contiguous run of held-out rows
     (a held-out segment) cut into pieces of at least ``length`` rows (a run shorter than that is one block)."""
     out: list[np.ndarray] = []
-    idx = np.flatnonzero(test)
-    if idx.size == 0:
-        return out
-    runs = np.split(idx, np.flatnonzero(np.diff(idx) > 1) + 1)
-    for run in runs:
-        pieces = max(1, run.size // max(length, 1))
-        out += [piece for piece in np.array_split(run, pieces) if piece.size]
+    for a, b in runs(test):
+        out += [piece for piece in np.array_split(np.arange(a, b), max(1, (b - a) // max(length, 1))) if piece.size]
     return out
 
 
