@@ -410,15 +410,17 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
                 noise: dict[str, float], seg: float) -> bool:
     """Whether a lag beyond the logging conventions predicts the held-out speed and current (what the
     armature voltage drives first; free run, in noise units) better by the selection's ``min_improvement``
-    than the best lag within them, or cuts the alignment search's residual by :data:`.align.DELAY_GAIN` (the
-    armature equation with free coefficients, which other model errors do not swamp, :func:`.align.gain`): only
-    then is it an ``input_delay``."""
+    than the best lag within them (its fraction of a sample taken as the equations take it, the drive switching
+    within the row, :func:`.align.switched`; the longer lag's delay of the held command switches so too), or cuts
+    the alignment search's residual by :data:`.align.DELAY_GAIN` (the armature equation with free coefficients,
+    which other model errors do not swamp, :func:`.align.gain`): only then is it an ``input_delay``."""
     if gain(align, opt.max_logging_skew + own) >= DELAY_GAIN:
         return True
     lag = make_effect("input_delay", {"delay": (align.samples - own) * log.dt})
     short = within(align, opt.max_logging_skew + own, log.dt).samples - own
+    tau = timing(plant, log)[1][0] / log.dt
     err = [score(p, x, sp.test, noise, seg).rms for p, x in
-           ((DCMotorPlant(plant.params, (*plant.effects, lag)), log), (plant, realign(log, short)))]
+           ((DCMotorPlant(plant.params, (*plant.effects, lag)), log), (plant, realign(log, short, tau)))]
     longer, conv = (math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"]) for e in err)
     return longer <= (1.0 - opt.min_improvement) * conv
 

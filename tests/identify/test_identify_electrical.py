@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from ocp.identify import DiagnoseOptions, diagnose
-from ocp.identify.align import DELAY_GAIN, Alignment, estimate, gain, search_range, within
+from ocp.identify.align import DELAY_GAIN, Alignment, estimate, gain, realign, search_range, shifted, within
 from ocp.identify.diagnose import _delay_wins, split
 from ocp.identify.predict import noise_levels
 from ocp.logs import Log, log_from_arrays
@@ -91,6 +91,31 @@ def test_a_longer_lag_is_a_delay_only_when_it_predicts_better(rig: MotorParams) 
                            seg) is wins
         if not wins:
             assert within(al, opt.max_logging_skew, log.dt).samples == pytest.approx(1.0, abs=0.2)
+
+
+def test_the_conventional_lag_is_free_run_as_the_equations_see_it(rig: MotorParams,
+                                                                   monkeypatch: pytest.MonkeyPatch) -> None:
+    """The comparison's conventional side runs the plant on the log realigned as :func:`diagnose` realigns it for
+    the equations: a fraction of a sample as the drive switching within the row at the nominal L/R
+    (:func:`.align.switched`), not the interpolated blend (which the longer lag's delay of the held command is not
+    either). Here the paper rig's armature (L/R about 0.3 samples at 1 kHz) settles within the row: the two differ."""
+    base = generate(rig, RigSpec(seconds=1.5, seed=11))
+    log = Log(base.t, shifted(base.voltage, -1.4), base.current, base.omega, base.theta, base.thrust, base.kind,
+              base.source)  # the command logged 1.4 samples before it acts
+    true = estimate(log)
+    al = Alignment(12.0, 12.0 * log.dt, True, true.rule, true.curve)
+    opt, plant, seg = DiagnoseOptions(), DCMotorPlant(rig), 0.5
+    short = within(al, opt.max_logging_skew, log.dt).samples
+    tau = rig.L / rig.R / log.dt
+    assert 0.2 < short % 1.0 < 0.8 and tau < 0.5  # a fraction the two realignments take differently
+    seen: list[Log] = []
+    real_score = diagnose_module.score
+    monkeypatch.setattr(diagnose_module, "score", lambda p, x, *a: seen.append(x) or real_score(p, x, *a))
+    _delay_wins(plant, log, al, 0.0, opt, split(log, seg, opt.holdout_every), noise_levels(log), seg)
+    conventional = seen[1].voltage
+    np.testing.assert_allclose(conventional, realign(log, short, tau).voltage, rtol=0, atol=1e-12)
+    step = np.max(np.abs(np.diff(log.voltage)))  # the blend and the switch differ by a share of a row's step
+    assert np.max(np.abs(conventional - realign(log, short).voltage)) > 0.25 * step
 
 
 def test_a_delay_is_measured_by_the_armature_equation_where_wrong_constants_swamp_the_free_run(
