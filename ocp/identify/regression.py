@@ -73,9 +73,12 @@ CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 #: logger artefacts every model fits and no verdict names: ``current_lag``, the current sensor's lag [samples]
 #: (a firmware filter) in the torque equation, where the true current is ``i + lag dt i'`` (in the armature
 #: equation the same lag looks like an inductance: an unresolved ``L`` takes it up there); ``switch_phase``, where
-#: within a row the drive applies a new command (:func:`.columns.nuisance_columns`). Each with its box: a sensor lag,
-#: or a lead of up to one sample (a current settling within a sample); the switching instant anywhere in the row
-NUISANCE_BOUNDS: dict[str, tuple[float, float]] = {"current_lag": (-1.0, math.inf), "switch_phase": (-0.5, 0.5)}
+#: within a row the drive applies a new command; ``current_bend``, how far the current bends smoothly between its
+#: samples (:func:`.columns.nuisance_columns`). Each with its box: a sensor lag, or a lead of up to one sample (a
+#: current settling within a sample); the switching instant anywhere in the row; a current from held steps (0) to
+#: one smooth between the samples (1)
+NUISANCE_BOUNDS: dict[str, tuple[float, float]] = {"current_lag": (-1.0, math.inf), "switch_phase": (-0.5, 0.5),
+                                                   "current_bend": (0.0, 1.0)}
 NUISANCES: tuple[str, ...] = tuple(NUISANCE_BOUNDS)
 #: dry friction: set-valued where the rotor is at rest (:func:`.columns.at_rest`); beside it the ripple's columns
 #: are left out there (:func:`.select.fit_model`)
