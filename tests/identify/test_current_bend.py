@@ -13,7 +13,7 @@ import pytest
 
 from ocp.identify import columns
 from ocp.identify.columns import nuisance_columns, raw_signals, signals
-from ocp.logs import log_from_arrays
+from ocp.logs import Log, log_from_arrays
 from ocp.model.params import MotorParams
 
 P = MotorParams(J=1e-4, B=1e-5, c_tau=1e-7, c_f=1e-5, k_t=0.02, k_e=0.02, R=0.5, L=1e-4)
@@ -21,7 +21,7 @@ DT = 1e-3  # [s]
 N = 600
 
 
-def _log(current: np.ndarray) -> object:
+def _log(current: np.ndarray) -> Log:
     t = np.arange(current.size) * DT
     return log_from_arrays(t, np.zeros(t.size), current, np.zeros(t.size), omega=np.full(t.size, 20.0),
                            theta=20.0 * t)
