@@ -371,6 +371,9 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
               f"amplitude {_g(ap['amplitude'], '.3g')} N m, explaining {_g(100 * ap['share'], '.0f')} % of the "
               f"held-out torque residual (median over 1..64: {_g(100 * ap['median_share'], '.0f')} %)"
               + ("" if "cogging" in d["verdict"] else "; not named: it does not win on held-out data"))
+        if ap.get("rivals"):
+            print(f"  the count is not decided by this log: {_rivals(ap['rivals'])} explain the held-out torque "
+                  "as well (a rotor resting at a few angles shows the torque there, not its period)")
         if ap.get("note"):
             print(f"  {ap['note']}")
     print("ranking (held-out error reduction):")
@@ -378,6 +381,18 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
         imp = 100 * e["improvement"] if isinstance(e["improvement"], int | float) else None
         print(f"  {e['effect']:18s} {_g(imp, '6.1f'):>6s} %  {'significant' if e['significant'] else ''}")
     _print_equations(d)
+
+
+def _rivals(counts: list[int]) -> str:
+    """``[3, 4, 5, 9]`` -> "3-5 and 9 periods/rev" (runs of consecutive counts joined)."""
+    runs: list[list[int]] = []
+    for n in counts:
+        if runs and n == runs[-1][-1] + 1:
+            runs[-1].append(n)
+        else:
+            runs.append([n])
+    parts = [f"{r[0]}-{r[-1]}" if len(r) > 2 else ", ".join(map(str, r)) for r in runs]
+    return (", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else parts[0]) + " periods/rev"
 
 
 def cmd_fit(args: argparse.Namespace) -> int:
