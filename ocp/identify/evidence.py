@@ -56,13 +56,18 @@ def equations_of(design: Design, items: Sequence[str]) -> np.ndarray:
     return np.any(design.g_train[:, js, js] > 0, axis=1)
 
 
+def ripple_rows(design: Design) -> float:
+    """The held-out torque rows independent for the ripple (``design.angle["independence"]``,
+    :func:`.angle.ripple_independence`; at least one): a fast ripple decorrelates from a slow residual within a
+    period, not within the rotor time constant."""
+    frac = float(design.angle.get("independence", 0.0))  # type: ignore[arg-type]
+    return max(float(design.n_held[0]) * frac, 1.0)
+
+
 def ripple_beyond(design: Design, before: Fitted, after: Fitted) -> bool:
     """Whether an angle ripple's fall of the torque equation's held-out RMS is beyond two standard errors over
-    the rows independent for the ripple (``design.angle["independence"]``, :func:`.angle.ripple_independence`):
-    a fast ripple decorrelates from a slow residual within a period, not within the rotor time constant."""
-    frac = float(design.angle.get("independence", 0.0))  # type: ignore[arg-type]
-    n = max(float(design.n_held[0]) * frac, 1.0)
-    return before.per_eq[0] > 0 and 1.0 - after.per_eq[0] / before.per_eq[0] >= math.sqrt(2.0 / n)
+    the rows independent for it (:func:`ripple_rows`)."""
+    return before.per_eq[0] > 0 and 1.0 - after.per_eq[0] / before.per_eq[0] >= math.sqrt(2.0 / ripple_rows(design))
 
 
 def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[str], min_improvement: float) -> bool:

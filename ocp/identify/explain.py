@@ -10,7 +10,7 @@ import numpy as np
 
 from ocp.errors import ParameterError
 from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
-from ocp.identify.evidence import Fitted
+from ocp.identify.evidence import Fitted, ripple_rows
 from ocp.identify.regression import CONSTANTS, Design
 from ocp.model.effects import CATALOGUE, BrushDrop, EffectBase, make_effect
 from ocp.model.params import MotorParams
@@ -183,8 +183,7 @@ def spectrum_peak(design: Design) -> dict[str, Any] | None:
         return None
     s = np.asarray(design.spectrum)
     best = float(s[design.periods - 1])
-    independent = max(float(design.n_held[0]) * float(design.angle.get("independence", 0.0)), 1.0)  # type: ignore[arg-type]
-    near = best - 2.0 * math.sqrt(2.0 / independent)
+    near = best - 2.0 * math.sqrt(2.0 / ripple_rows(design))
     rivals = [n for n in range(1, s.size + 1) if n != design.periods and s[n - 1] >= near]
     return {"periods": design.periods, "share": best, "median_share": float(np.median(s)),
             "shares": [float(v) for v in s], "rivals": rivals, **design.angle,
