@@ -27,7 +27,13 @@ too (no fast enough command change at all), the lag is unidentifiable: none is a
 delay. (On the tuning seeds, 15 of 516 fast-armature logs had a flat free search; the held one put 9 of them within
 a sample of the true lag. Used on every fast-armature log, as the geometric mean with the free fit's residual, it
 cut lag errors over a sample from 20 to 6, but moved two well-measured lags of 2.3 samples past the conventions
-into false delays: not adopted.)
+into false delays: not adopted.) Held at a slower armature's ``L/R`` of ``tau`` samples, a 50 % inductance error
+moves the lag by ``tau / 2`` (:data:`HELD_L_ERROR`): a lag found so is claimed only as a delay beyond that share
+(:attr:`Alignment.bias`), which must then predict the held-out data better than the longer ``L/R`` that would
+explain it (the caller's test, :mod:`.diagnose`; :func:`gain` does not vouch for a held curve); a lag within it is
+not claimed (a 10 kHz chirp, ``L/R`` of 7 samples: an 8.7-sample delay found at 8.67). Of the 1,800 proving-ground
+logs, 45 with a slow armature had a flat free search: six delays, of which this finds two, and no false one among
+the 39 others, nor with their inductance 50 % above nominal; with it twice nominal, one.
 
 Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
 conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
@@ -63,6 +69,9 @@ SKEW_FRACTION = 0.75
 #: longest nominal armature time constant L/R [samples] for which a lag is measured with it held
 #: (:func:`_nominal_curve`): a 50 % inductance error then moves the lag by at most a sample
 NOMINAL_TAU = 2.0
+#: the inductance error [fraction of nominal] a lag measured with a slower armature held must be clear of
+#: (:func:`estimate`): the same 50 % that bounds :data:`NOMINAL_TAU`'s one sample
+HELD_L_ERROR = 0.5
 #: how many times lower the search residual (eq. dc_electrical, free coefficients) must be at a lag beyond the
 #: conventions than at the best lag within them for that lag to be measured as a delay by itself (:func:`gain`)
 DELAY_GAIN = 2.0
@@ -83,6 +92,8 @@ class Alignment:
         curve: (lags [samples], normalised residual RMS) of the search, for plots
         identified: False when the search's residual is flat (then ``samples`` is 0 by assumption, not measured)
         nominal: True when the lag was found only with the armature's nominal ``L/R`` and ``k_e`` (module doc)
+        bias: [samples] how far a :data:`HELD_L_ERROR` inductance error moves a lag found with a nominal ``L/R``
+            over :data:`NOMINAL_TAU` samples (0 otherwise): such a lag is claimed only as a delay beyond it
     """
 
     samples: float
@@ -92,6 +103,7 @@ class Alignment:
     curve: tuple[tuple[float, ...], tuple[float, ...]] = ((), ())
     identified: bool = True
     nominal: bool = False
+    bias: float = 0.0
 
     def to_dict(self) -> dict[str, Any]:
         return {"samples": round(self.samples, 3), "seconds": self.seconds, "called_input_delay": self.delay,
@@ -168,18 +180,25 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
 
     lags, res = _search(curve, top)
     samples, sharp = _pick(lags, res)
-    nominal = False
-    if not sharp and armature is not None and armature[0] <= NOMINAL_TAU * log.dt:
-        lags, res = _search(_nominal_curve(log, armature[0] / log.dt, armature[1], k), top)
-        samples, sharp = _pick(lags, res)
-        nominal = sharp
+    nominal, bias = False, 0.0
+    if not sharp and armature is not None:
+        tau = armature[0] / log.dt
+        lags, res = _search(_nominal_curve(log, tau, armature[1], k), top)
+        held, sharp = _pick(lags, res)
+        # a slower armature's lag is claimed only as a delay clear of a HELD_L_ERROR inductance error's share of it
+        bias = HELD_L_ERROR * tau if tau > NOMINAL_TAU else 0.0
+        sharp = sharp and (bias == 0.0 or held - bias > max_logging_skew + SKEW_FRACTION)
+        samples, nominal = (held if sharp else 0.0), sharp
         rule += ("; the free search was flat (a smooth command: a delay looks like a longer armature lag), so the lag "
                  "was measured with the armature's time constant held at its nominal L/R" if sharp else "")
+        if sharp and bias:
+            rule += (f" ({tau:.3g} samples: a {100 * HELD_L_ERROR:.0f} % inductance error would move it by "
+                     f"{bias:.2g}, and it is a delay beyond that; a lag within it is not claimed)")
     if not sharp:
         rule += "; here the lag is not identifiable (flat residual), none is assumed"
     plot = (tuple(float(x) for x in lags), tuple(float(x / (np.std(i) or 1.0)) for x in res))
     return Alignment(float(samples), float(samples * log.dt), bool(samples > max_logging_skew + SKEW_FRACTION), rule,
-                     plot, sharp, nominal)
+                     plot, sharp, nominal, bias if nominal else 0.0)
 
 
 def _search(curve: Callable[[np.ndarray], np.ndarray], top: int) -> tuple[np.ndarray, np.ndarray]:
@@ -272,21 +291,26 @@ def gain(align: Alignment, max_logging_skew: float) -> float:
     wrong nominal constant or a missing load effect biases it little, where a free run under nominal constants is
     dominated by them (a 34 % ``J`` error, a dead band). 1 where the lag is not a minimum bracketed inside the
     search (the residual still falls at its end: a smooth command traded against the armature's lag, not a
-    measured delay) or not identified."""
+    measured delay), not identified, or found with a slow armature held (:attr:`Alignment.bias`: a held curve
+    falls as deep for an inductance error as for a delay)."""
     lags, res = (np.asarray(x, float) for x in align.curve)
     keep = _conventional(lags, max_logging_skew)
-    if not align.identified or not keep.any() or keep.all() or align.samples >= lags[-1] - 0.5:
+    if not align.identified or align.bias or not keep.any() or keep.all() or align.samples >= lags[-1] - 0.5:
         return 1.0
     return float(res[keep].min() / max(float(np.interp(align.samples, lags, res)), 1e-300))
 
 
 def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
     """``align`` restricted to what logging conventions explain (lags up to ``max_logging_skew`` + 0.75
-    samples): the best lag of its search curve there, never a delay (a longer lag was not confirmed)."""
+    samples): the best lag of its search curve there, never a delay (a longer lag was not confirmed); none (not
+    identified) for a curve held at a slow armature (:attr:`Alignment.bias`), whose lags there are its ``L``'s."""
     lags, res = (np.asarray(x, float) for x in align.curve)
     keep = _conventional(lags, max_logging_skew)
-    if not keep.any():
-        return Alignment(0.0, 0.0, False, align.rule, align.curve, False)
+    if not keep.any() or align.bias:  # (a slow held armature's lag within the conventions: not claimed)
+        return Alignment(0.0, 0.0, False, align.rule + (
+            f"; the {align.samples:.2f}-sample lag did not predict the held-out data better than the conventions' "
+            "lags or a longer L/R, and no lag within them is claimed from a slow armature held" if align.bias else ""),
+            align.curve, False)
     samples, known = _pick(lags[keep], res[keep])
     return Alignment(samples, samples * dt, False, align.rule + f"; the {align.samples:.2f}-sample lag of the "
                      "search did not predict the held-out data better than one within the conventions, so the "

@@ -67,6 +67,7 @@ from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
 from ocp.identify.select import Selection, select
 from ocp.logs import Log, LogKind
 from ocp.model.effects import make_effect
+from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 
 
@@ -413,16 +414,25 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
     than the best lag within them (its fraction of a sample taken as the equations take it, the drive switching
     within the row, :func:`.align.switched`; the longer lag's delay of the held command switches so too), or cuts
     the alignment search's residual by :data:`.align.DELAY_GAIN` (the armature equation with free coefficients,
-    which other model errors do not swamp, :func:`.align.gain`): only then is it an ``input_delay``."""
+    which other model errors do not swamp, :func:`.align.gain`): only then is it an ``input_delay``. A lag measured
+    with a slow armature's nominal L/R held (:attr:`.align.Alignment.bias`) must also beat that L/R made as much
+    longer as puts the lag at the conventions' edge (within the factor-two prior, :data:`IMPLAUSIBLE_FACTOR`): on a
+    smooth command the two look alike, and only held-out data tell an inductance error from a delay."""
     if gain(align, opt.max_logging_skew + own) >= DELAY_GAIN:
         return True
     lag = make_effect("input_delay", {"delay": (align.samples - own) * log.dt})
     short = within(align, opt.max_logging_skew + own, log.dt).samples - own
     tau = timing(plant, log)[1][0] / log.dt
+    rivals = [(plant, realign(log, short, tau))]
+    edge = opt.max_logging_skew + SKEW_FRACTION
+    longer = 1.0 + (align.samples - own - edge) / tau  # the L/R, x nominal, that puts the lag at the edge
+    if align.bias and longer <= IMPLAUSIBLE_FACTOR:  # (a held slow armature: the same lag as a longer L/R)
+        rivals.append((DCMotorPlant(MotorParams(**{**plant.params.model_dump(), "L": longer * plant.params.L}),
+                                    plant.effects), realign(log, edge, longer * tau)))
     err = [score(p, x, sp.test, noise, seg).rms for p, x in
-           ((DCMotorPlant(plant.params, (*plant.effects, lag)), log), (plant, realign(log, short, tau)))]
-    longer, conv = (math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"]) for e in err)
-    return longer <= (1.0 - opt.min_improvement) * conv
+           ((DCMotorPlant(plant.params, (*plant.effects, lag)), log), *rivals)]
+    delayed, *conv = (math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"]) for e in err)
+    return delayed <= (1.0 - opt.min_improvement) * min(conv)
 
 
 def _allowed(opt: DiagnoseOptions) -> set[str]:
