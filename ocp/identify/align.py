@@ -32,8 +32,8 @@ moves the lag by ``tau / 2`` (:data:`HELD_L_ERROR`): a lag found so is claimed o
 (:attr:`Alignment.bias`), which must then predict the held-out data better than the longer ``L/R`` that would
 explain it (the caller's test, :mod:`.diagnose`; :func:`gain` does not vouch for a held curve); a lag within it is
 not claimed (a 10 kHz chirp, ``L/R`` of 7 samples: an 8.7-sample delay found at 8.67). Of the 1,800 proving-ground
-logs, 45 with a slow armature had a flat free search: six delays, of which this finds two, and no false one among
-the 39 others, nor with their inductance 50 % above nominal; with it twice nominal, one.
+logs, 45 with a slow armature had a flat free search: six delays, of which this finds three, and no false one
+among the 39 others, nor with their inductance 50 % above nominal; with it twice nominal, one.
 
 Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
 conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
