@@ -247,8 +247,7 @@ def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
     false ripple beside Coulomb friction: ``tests/identify/test_emf_speed.py``, rig 3203.)"""
     z = np.zeros_like(s.w)
     if s.dt == 0:
-        return {"current_lag": np.vstack([z, z, z]), "switch_phase": np.vstack([z, z, z]),
-                "current_bend": np.vstack([z, z, z])}
+        return {name: np.vstack([z, z, z]) for name in ("current_lag", "switch_phase", "current_bend")}
     step = s.i1 - s.i0
     d = 0.5 * (step + np.concatenate([step[:1], step[:-1]]))  # (M,): the first row has no previous step: its own
     q = step + p.k_e / p.R * (s.w1 - s.w0)  # [A] (M,)

@@ -67,7 +67,6 @@ from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
 from ocp.identify.select import Selection, select
 from ocp.logs import Log, LogKind
 from ocp.model.effects import make_effect
-from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 
 
@@ -432,8 +431,8 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
     edge = opt.max_logging_skew + SKEW_FRACTION
     longer = 1.0 + (align.samples - own - edge) / tau  # the L/R, x nominal, that puts the lag at the edge
     if align.bias and longer <= IMPLAUSIBLE_FACTOR:  # (a held slow armature: the same lag as a longer L/R)
-        rivals.append((DCMotorPlant(MotorParams(**{**plant.params.model_dump(), "L": longer * plant.params.L}),
-                                    plant.effects), realign(log, edge, longer * tau)))
+        rivals.append((DCMotorPlant(plant.params.model_copy(update={"L": longer * plant.params.L}), plant.effects),
+                       realign(log, edge, longer * tau)))
     err = [score(p, x, sp.test, noise, seg, centred=True).rms for p, x in
            ((DCMotorPlant(plant.params, (*plant.effects, lag)), log), *rivals)]
     delayed, *conv = (math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"]) for e in err)
