@@ -254,7 +254,9 @@ def cmd_check(args: argparse.Namespace) -> int:
         _print_equations(d)
         return 0
     _print_alignment(d)
-    print("free run (model simulated under the measured voltage) RMS error:")
+    lag = d["free_run"].get("current_sensor_lag") or 0.0
+    print("free run (model simulated under the measured voltage) RMS error"
+          + (f"; current read through the sensor's lag fitted, {lag:.1f} samples:" if lag else ":"))
     for ch, v in d["free_run"]["rms"].items():
         print(f"  {ch:8s} {_g(v, '.4g')}   (sensor noise ~{_g(d['noise'][ch], '.3g')})")
     print("one-step equation residual RMS:")

@@ -3,7 +3,8 @@
 Two kinds of error, always labelled:
 
 * ``free_run`` -- the plant simulated under the measured voltage (restarted from the measured state
-  every ``segment_s``), compared with the measured speed [rad/s], current [A], thrust [N];
+  every ``segment_s``), compared with the measured speed [rad/s], current [A] (read through the current sensor's
+  first-order lag that matches the log best, reported: :func:`ocp.identify.predict.read_current`), thrust [N];
 * ``one_step`` -- the equation residuals after one sample from the measured state: torque [N m]
   (eq. dc_mechanical), voltage [V] (eq. dc_electrical), thrust [N] (eq. thrust_model).
 
@@ -43,6 +44,7 @@ from ocp.identify.predict import (
     free_run,
     noise_levels,
     one_step,
+    read_current,
 )
 from ocp.identify.steady import PointCheck, check_points
 from ocp.logs import Log, LogKind
@@ -117,6 +119,7 @@ class CheckResult:
             "kind": self.kind,
             "alignment": self.alignment.to_dict(),
             "free_run": {"label": f"plant simulated under the measured voltage, restarted every {self.segment_s} s",
+                         "current_sensor_lag": self.free.current_lag,
                          "rms": fd, "max": {k: finite(v) for k, v in self.free_run_max.items()},
                          "units": CHANNEL_UNITS},
             "one_step": {"label": "equation residuals after one sample from the measured state",
@@ -162,7 +165,7 @@ def check(plant: DCMotorPlant, log: Log, options: CheckOptions | None = None) ->
     if not dynamic(log):  # issue #13 hook: sweeps, ESC rigs, flight logs: equation by equation, point by point
         return check_points(plant, log)
     align, log = aligned(plant, log, opt.max_logging_skew)
-    fr = free_run(plant, log, opt.segment_s)
+    fr = read_current(free_run(plant, log, opt.segment_s), log, np.ones(log.n, bool))
     res = one_step(plant, log)
     err = {ch: getattr(log, ch)[fr.idx] - fr.channel(ch) for ch in CHANNELS}
     breakdown = {

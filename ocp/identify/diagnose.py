@@ -62,7 +62,7 @@ from ocp.identify.explain import (
     spectrum_peak,
     units,
 )
-from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels
+from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels, read_current
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
 from ocp.identify.select import Selection, select
 from ocp.logs import Log, LogKind
@@ -125,22 +125,27 @@ def split(log: Log, segment_s: float, every: int, cross: bool = False) -> Split:
 
 @dataclass(frozen=True)
 class Score:
-    """Held-out free-run error of one plant: per channel RMS [channel unit] and the combined E [-]."""
+    """Held-out free-run error of one plant: per channel RMS [channel unit], the combined E [-], and the current
+    sensor's lag [samples] the current was read through (:func:`.predict.read_current`)."""
 
     rms: dict[str, float]
     combined: float
+    current_lag: float = 0.0
 
 
 def score(plant: DCMotorPlant, log: Log, mask: np.ndarray, noise: dict[str, float], segment_s: float,
-          centred: bool = False) -> Score:
+          centred: bool = False, sensor: bool = True) -> Score:
     """Free run of ``plant`` over ``log`` in ``segment_s`` segments, its error on the rows ``mask`` (N,) per
-    channel (``centred``: about its mean on those rows, a standard deviation: a constant sensor offset left out)."""
+    channel (``centred``: about its mean on those rows, a standard deviation: a constant sensor offset left out);
+    ``sensor``: the current read through the current sensor's lag fitted on the other rows."""
     fr = free_run(plant, log, segment_s)
+    if sensor:
+        fr = read_current(fr, log, ~mask)
     keep = mask[fr.idx]
     err = {ch: getattr(log, ch)[fr.idx][keep] - fr.channel(ch)[keep] for ch in CHANNELS}
     rms = {ch: float(np.std(e) if centred else np.sqrt(np.mean(e ** 2))) for ch, e in err.items()}
     comb = math.sqrt(sum((rms[ch] / noise[ch]) ** 2 for ch in CHANNELS) / len(CHANNELS))
-    return Score(rms, comb if math.isfinite(comb) else math.inf)
+    return Score(rms, comb if math.isfinite(comb) else math.inf, fr.current_lag)
 
 
 @dataclass(frozen=True)
@@ -204,6 +209,7 @@ class DiagnoseResult:
             "units": CHANNEL_UNITS,
             "rounds": [{"baseline_rms": {k: finite(v) for k, v in r.baseline.rms.items()},
                         "baseline_score": finite(r.baseline.combined),
+                        "current_sensor_lag": r.baseline.current_lag,
                         "ranking": [e.to_dict() for e in r.entries]} for r in self.rounds],
         }
 
@@ -433,7 +439,7 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
     if align.bias and longer <= IMPLAUSIBLE_FACTOR:  # (a held slow armature: the same lag as a longer L/R)
         rivals.append((DCMotorPlant(plant.params.model_copy(update={"L": longer * plant.params.L}), plant.effects),
                        realign(log, edge, longer * tau)))
-    err = [score(p, x, sp.test, noise, seg, centred=True).rms for p, x in
+    err = [score(p, x, sp.test, noise, seg, centred=True, sensor=False).rms for p, x in
            ((DCMotorPlant(plant.params, (*plant.effects, lag)), log), *rivals)]
     delayed, *conv = (math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"]) for e in err)
     return delayed <= (1.0 - opt.min_improvement) * min(conv)

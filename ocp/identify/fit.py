@@ -30,7 +30,16 @@ from ocp.identify.align import Alignment
 from ocp.identify.candidates import candidate
 from ocp.identify.diagnose import aligned, dynamic, finite
 from ocp.identify.estimate import Estimate, equation_error_fit, equation_scales, free_run_errors, free_run_fit
-from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, EQUATION_UNITS, EQUATIONS, free_run, noise_levels, one_step
+from ocp.identify.predict import (
+    CHANNEL_UNITS,
+    CHANNELS,
+    EQUATION_UNITS,
+    EQUATIONS,
+    free_run,
+    noise_levels,
+    one_step,
+    read_current,
+)
 from ocp.logs import Log, LogKind
 from ocp.model.effects import plant_to_mapping
 from ocp.model.plant import DCMotorPlant
@@ -48,8 +57,9 @@ class FitOptions(BaseModel):
 
 
 def channel_rms(plant: DCMotorPlant, log: Log, segment_s: float) -> dict[str, float]:
-    """Free-run RMS error per channel [rad/s, A, N] over the whole log."""
-    fr = free_run(plant, log, segment_s)
+    """Free-run RMS error per channel [rad/s, A, N] over the whole log (the current read through the current
+    sensor's lag that matches it best, :func:`.predict.read_current`)."""
+    fr = read_current(free_run(plant, log, segment_s), log, np.ones(log.n, bool))
     return {ch: float(np.sqrt(np.mean((getattr(log, ch)[fr.idx] - fr.channel(ch)) ** 2))) for ch in CHANNELS}
 
 

@@ -123,6 +123,10 @@ function showCheck(res, reportHtml) {
     `${fmt(al.samples, 3)} samples (${fmt(1e3 * al.seconds, 3)} ms) after its row` +
     (al.identified ? "." : " (not identifiable from this log: none assumed).") : "";
   const fr = res.free_run || {}, os_ = res.one_step || {}, noise = res.noise || {};
+  if (fr.current_sensor_lag) {
+    $("#m-check-alignment").textContent += ` The simulated current is read through the current sensor's lag ` +
+      `that fits the log, ${fmt(fr.current_sensor_lag, 2)} samples (a logger's filter, not the model's failure).`;
+  }
   const units = fr.units || CHANNEL_UNITS;
   const eb = emptied("#m-errors tbody");
   for (const ch of Object.keys(fr.rms || {})) {
