@@ -173,7 +173,9 @@ class CheckPublic(_Open):
     """:meth:`ocp.identify.CheckResult.to_dict`: where the model fails (free-run and one-step errors, breakdowns)."""
 
     kind: Literal["time-series", "steady-state"]
-    free_run: dict[str, Any] = Field(description="label, rms, max, units per channel (omega, current, thrust)")
+    free_run: dict[str, Any] = Field(description="label, rms, max, units per channel (omega, current, thrust); "
+                                                 "current_sensor_lag [samples]: the current sensor's first-order lag "
+                                                 "the simulated current was read through")
     one_step: dict[str, Any] = Field(description="label, rms, mean, units per equation")
     noise: dict[str, float | None]
     breakdown: dict[str, Any] = Field(description="group -> bin -> statistics")

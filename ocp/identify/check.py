@@ -165,7 +165,7 @@ def check(plant: DCMotorPlant, log: Log, options: CheckOptions | None = None) ->
     if not dynamic(log):  # issue #13 hook: sweeps, ESC rigs, flight logs: equation by equation, point by point
         return check_points(plant, log)
     align, log = aligned(plant, log, opt.max_logging_skew)
-    fr = read_current(free_run(plant, log, opt.segment_s), log, np.ones(log.n, bool))
+    fr = read_current(free_run(plant, log, opt.segment_s), log)
     res = one_step(plant, log)
     err = {ch: getattr(log, ch)[fr.idx] - fr.channel(ch) for ch in CHANNELS}
     breakdown = {

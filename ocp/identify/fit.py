@@ -59,7 +59,7 @@ class FitOptions(BaseModel):
 def channel_rms(plant: DCMotorPlant, log: Log, segment_s: float) -> dict[str, float]:
     """Free-run RMS error per channel [rad/s, A, N] over the whole log (the current read through the current
     sensor's lag that matches it best, :func:`.predict.read_current`)."""
-    fr = read_current(free_run(plant, log, segment_s), log, np.ones(log.n, bool))
+    fr = read_current(free_run(plant, log, segment_s), log)
     return {ch: float(np.sqrt(np.mean((getattr(log, ch)[fr.idx] - fr.channel(ch)) ** 2))) for ch in CHANNELS}
 
 

@@ -207,15 +207,15 @@ def lagged_current(fr: FreeRun, lag: float) -> np.ndarray:
     return out.reshape(-1)
 
 
-def read_current(fr: FreeRun, log: Log, rows: np.ndarray) -> FreeRun:
+def read_current(fr: FreeRun, log: Log, rows: np.ndarray | None = None) -> FreeRun:
     """``fr`` with its current read through the current sensor's lag (:data:`CURRENT_LAGS`, :func:`lagged_current`)
-    that best matches the logged current on ``rows`` (bool (N,): rows the lag is fitted on; a held-out score fits it
-    on the training rows). A logger's filter is not the model's failure: unread, the exact plant's ``check`` was a
-    median 2.6 noise units off in current on the 52 clean and constant-only proving-ground logs of seeds 0..199, 19
-    at the 90th percentile (1.5 and 5.1 read through the lag fitted, within 0.3 samples of the logger's on the 50
-    whose alignment is within a quarter sample; a sample's misalignment is partly taken up as lag). Equilibria
-    (``length`` 1) and runs with no fitting row are returned as they are."""
-    keep = rows[fr.idx]
+    that best matches the logged current on ``rows`` (bool (N,): rows the lag is fitted on, default every row; a
+    held-out score fits it on the training rows). A logger's filter is not the model's failure: unread, the exact
+    plant's ``check`` was a median 2.6 noise units off in current on the 52 clean and constant-only proving-ground
+    logs of seeds 0..199, 19 at the 90th percentile (1.5 and 5.1 read through the lag fitted, within 0.3 samples of
+    the logger's on the 50 whose alignment is within a quarter sample; a sample's misalignment is partly taken up as
+    lag: ``bench/checkfloor.py``). Equilibria (``length`` 1) and runs with no fitting row are returned as they are."""
+    keep = np.ones(fr.idx.size, bool) if rows is None else rows[fr.idx]
     if fr.length < 2 or not keep.any():
         return fr
     measured = log.current[fr.idx][keep]
