@@ -425,7 +425,10 @@ def cmd_fit(args: argparse.Namespace) -> int:
     print(f"fitted ({d['stage']} stage):")
     for n, p in d["parameters"].items():
         print(f"  {n:28s} {_g(p['value'], '.5g')}  +- {_g(p['stderr'], '.2g')}")
-    print("free-run RMS error   before -> after:" if d.get("route") != "point-by-point" else
+    lag = d.get("current_sensor_lag") or {}
+    read = (f" (current read through the sensor's lag fitted, {lag['before']:.1f} -> {lag['after']:.1f} samples)"
+            if any(lag.values()) else "")
+    print(f"free-run RMS error   before -> after{read}:" if d.get("route") != "point-by-point" else
           "equation residual RMS   before -> after:")
     for ch in d["rms_before"]:
         print(f"  {ch:8s} {_g(d['rms_before'][ch], '.4g')} -> {_g(d['rms_after'][ch], '.4g')}")

@@ -59,8 +59,14 @@ class FitOptions(BaseModel):
 def channel_rms(plant: DCMotorPlant, log: Log, segment_s: float) -> dict[str, float]:
     """Free-run RMS error per channel [rad/s, A, N] over the whole log (the current read through the current
     sensor's lag that matches it best, :func:`.predict.read_current`)."""
+    return _read_rms(plant, log, segment_s)[0]
+
+
+def _read_rms(plant: DCMotorPlant, log: Log, segment_s: float) -> tuple[dict[str, float], float]:
+    """:func:`channel_rms` and the current sensor's lag [samples] the current was read through."""
     fr = read_current(free_run(plant, log, segment_s), log)
-    return {ch: float(np.sqrt(np.mean((getattr(log, ch)[fr.idx] - fr.channel(ch)) ** 2))) for ch in CHANNELS}
+    rms = {ch: float(np.sqrt(np.mean((getattr(log, ch)[fr.idx] - fr.channel(ch)) ** 2))) for ch in CHANNELS}
+    return rms, fr.current_lag
 
 
 def equation_rms(plant: DCMotorPlant, log: Log) -> dict[str, float]:
@@ -85,6 +91,7 @@ class FitResult:
     before_equations: dict[str, float]
     after_equations: dict[str, float]
     alignment: Alignment | None = None  # time series only (a sweep's rows have no command timing)
+    current_sensor_lag: tuple[float, float] = (0.0, 0.0)  # [samples] before, after: :func:`channel_rms`'s read
 
     def calibrated(self, name: str | None = None) -> dict[str, Any]:
         """The calibrated parameter file as a mapping (JSON-ready)."""
@@ -108,6 +115,7 @@ class FitResult:
                             "matrix": [[finite(float(c)) for c in row] for row in self.correlation]},
             "rms_before": {k: finite(v) for k, v in self.before.items()},
             "rms_after": {k: finite(v) for k, v in self.after.items()},
+            "current_sensor_lag": dict(zip(("before", "after"), self.current_sensor_lag, strict=True)),
             "equation_rms_before": {k: finite(v) for k, v in self.before_equations.items()},
             "equation_rms_after": {k: finite(v) for k, v in self.after_equations.items()},
             "units": {**CHANNEL_UNITS, **{f"equation.{k}": v for k, v in EQUATION_UNITS.items()}},
@@ -139,9 +147,10 @@ def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptio
         e_ref = _combined(free_run_errors(refined.plant, log, every, noise, opt.segment_s))
         if e_ref < e_start:
             est, stage = refined, "free-run"
+    (before, lag_before), (after, lag_after) = (_read_rms(p, log, opt.segment_s) for p in (plant, est.plant))
     return FitResult(
         plant=est.plant, effects=tuple(c.name for c in cands), stage=stage, names=est.names, values=est.values,
-        stderr=est.stderr, correlation=est.correlation,
-        before=channel_rms(plant, log, opt.segment_s), after=channel_rms(est.plant, log, opt.segment_s),
+        stderr=est.stderr, correlation=est.correlation, before=before, after=after,
         before_equations=equation_rms(plant, log), after_equations=equation_rms(est.plant, log), alignment=align,
+        current_sensor_lag=(lag_before, lag_after),
     )

@@ -16,7 +16,7 @@ import pytest
 
 from bench.modelcheck import case_log
 from clients.cli import main
-from ocp.identify import check, diagnose
+from ocp.identify import FitOptions, check, diagnose, fit
 from ocp.identify.check import CheckOptions, CheckResult
 from ocp.identify.diagnose import DiagnoseOptions, aligned, score, split
 from ocp.identify.predict import CURRENT_LAGS, FreeRun, free_run, lagged_current, read_current
@@ -131,3 +131,23 @@ def test_the_cli_says_through_which_lag_the_current_was_read(tmp_path: Path,
     assert lag > 0.3
     assert main(["check", str(log_path), "--params", str(params)]) == 0
     assert f"current read through the sensor's lag fitted, {lag:.1f} samples:" in capsys.readouterr().out
+
+
+def test_fit_says_through_which_lags_its_before_and_after_were_read(tmp_path: Path,
+                                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    """``fit``'s before/after free-run errors are read as ``check``'s are: the user's plant through the lag
+    ``check`` fits (the same log, the same alignment), both lags in the JSON and on the CLI's before/after line."""
+    case = make_case(DRAWS[0], "clean")
+    plant, log = DCMotorPlant(MotorParams(**case.nominal)), case_log(case)
+    res = fit(plant, log, ["param:R"], FitOptions(refine=False))
+    checked = check(plant, log)
+    assert isinstance(checked, CheckResult)
+    lags = res.to_dict()["current_sensor_lag"]
+    assert lags["before"] == checked.free.current_lag > 0.3 and lags["after"] > 0.3
+    assert res.before["current"] == pytest.approx(checked.free_run_rms["current"], rel=1e-9)
+    log_path, params = tmp_path / "rig.csv", tmp_path / "motor.json"
+    write_log_csv(log, log_path)
+    params.write_text(json.dumps(case.nominal), encoding="utf-8")
+    assert main(["fit", str(log_path), "--params", str(params), "--effects", "param:R",
+                 "--out", str(tmp_path / "out.json")]) == 0
+    assert "current read through the sensor's lag fitted, " in capsys.readouterr().out
