@@ -204,6 +204,9 @@ class FitPublic(_Open):
     parameters: dict[str, dict[str, float | None]] = Field(description="name -> {value, stderr}")
     rms_before: dict[str, float | None]
     rms_after: dict[str, float | None]
+    current_sensor_lag: dict[str, float] | None = Field(
+        default=None, description="[samples] before, after: the current sensor's first-order lag the free run's "
+        "current was read through")
     alignment: dict[str, Any] | None = Field(default=None, description="the command-to-sensor lag logging "
                                              "conventions explain, removed before fitting (time series)")
     calibrated_params: dict[str, Any]
