@@ -83,6 +83,11 @@ NUISANCES: tuple[str, ...] = tuple(NUISANCE_BOUNDS)
 #: dry friction: set-valued where the rotor is at rest (:func:`.columns.at_rest`); beside it the ripple's columns
 #: are left out there (:func:`.select.fit_model`)
 DRY = frozenset({"coulomb_friction", "stribeck"})
+#: effects whose columns act on a band of the rows only (a Stribeck band: near zero speed), their materiality also
+#: judged on that band (:attr:`Design.footprint`, :func:`.evidence.is_material`)
+BANDED = frozenset({"stribeck"})
+#: a banded column acts on the rows where it reaches this share of its largest magnitude (weighted, after the view)
+FOOTPRINT = 0.1
 #: effects found by regression (input_delay is found by the alignment)
 REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")
 #: the torque equation's weight is at least this fraction of the smallest torque error a free run shows at
@@ -159,6 +164,9 @@ class Design:
     c_fold: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     n_fold: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     block_fold: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
+    #: per column j of a banded effect (:data:`BANDED`), the held-out rows where it acts (:data:`FOOTPRINT`): per fold
+    #: (one split: its held-out rows) ``(g (K, 3, Q, Q), h (K, 3, Q), c (K, 3), n (K, 3))`` as ``g_fold`` etc.
+    footprint: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
@@ -182,7 +190,9 @@ class Design:
                        g_test=self.g_fold[k], h_test=self.h_fold[k], c_test=self.c_fold[k], n_test=self.n_fold[k],
                        g_blocks=self.g_blocks[b], h_blocks=self.h_blocks[b], c_blocks=self.c_blocks[b],
                        g_fold=self.g_fold[:0], h_fold=self.h_fold[:0], c_fold=self.c_fold[:0], n_fold=self.n_fold[:0],
-                       block_fold=self.block_fold[:0])
+                       block_fold=self.block_fold[:0],
+                       footprint={j: (g[k:k + 1], h[k:k + 1], c[k:k + 1], n[k:k + 1])
+                                  for j, (g, h, c, n) in self.footprint.items()})
 
 
 def _noise_residual(t: np.ndarray, rich: list[np.ndarray], fixed: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
@@ -316,7 +326,9 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     gb, hb, cb = _grams(a_all, tw, [b for bs in per_fold for b in bs])
     design = Design([c_ for c_, _ in cols], g_tr, g_te, h_tr, h_te, c_tr, c_te, np.full(3, n_tr), np.full(3, n_te),
                     sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
-                    independence, g_blocks=gb, h_blocks=hb, c_blocks=cb)
+                    independence, g_blocks=gb, h_blocks=hb, c_blocks=cb,
+                    footprint={j: _footprint(a_all[:, :, j], a_all, tw, tests)
+                               for j, (c_, _) in enumerate(cols) if c_.item in BANDED})
     if not folds:
         return design
     return replace(design, g_fold=fg, h_fold=fh, c_fold=fc, n_fold=np.array([np.full(3, int(m.sum())) for m in tests]),
@@ -332,6 +344,17 @@ def _grams(a_all: np.ndarray, tw: np.ndarray, rows: list[np.ndarray]) -> tuple[n
     return (np.stack([np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for m in rows]),
             np.stack([np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for m in rows]),
             np.stack([np.einsum("en,en->e", tw[:, m], tw[:, m]) for m in rows]))
+
+
+def _footprint(col: np.ndarray, a_all: np.ndarray, tw: np.ndarray, tests: list[np.ndarray]
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The Gram matrices (:func:`_grams`) and row counts (K, 3) of each held-out set of ``tests`` within the rows
+    where the weighted column ``col`` (3, N) acts (:data:`FOOTPRINT` of its largest magnitude in some equation)."""
+    mag = np.abs(col)
+    top = mag.max(axis=1, keepdims=True)
+    acts = np.any((mag >= FOOTPRINT * top) & (top > 0), axis=0)
+    masks = [m & acts for m in tests]
+    return (*_grams(a_all, tw, masks), np.array([np.full(3, int(m.sum())) for m in masks]).reshape(len(masks), 3))
 
 
 def _rows(x: np.ndarray, like: np.ndarray) -> np.ndarray:

@@ -20,7 +20,8 @@ a 10 kHz log was never explained while effects too were held to equations above 
 The tests differ by item, so the best-scoring one may fail where the next passes (they are in
 :mod:`.evidence`): the score falls beyond sampling noise (the pooled score's scatter, or one
 equation's own) -- for an effect also by at least ``min_improvement`` (its materiality, on the score with every
-equation the effect does not enter counted at most at its noise level); a constant's materiality is the tolerance
+equation the effect does not enter counted at most at its noise level, or for a Stribeck band on the rows it acts
+on); a constant's materiality is the tolerance
 itself (calibration already takes the first ``tol`` of its error, and beyond it the user wants the name), so a
 constant freed beyond it needs only to win beyond sampling noise -- or, the models being nested and scored on the
 same rows, in a paired comparison over held-out blocks or a likelihood ratio (the torque equation's likelihood

@@ -1,0 +1,79 @@
+"""Materiality on the rows a banded effect acts on (regression.Design.footprint, evidence.band_score): a Stribeck
+band acts near zero speed only, so its fall of the held-out error is judged there too, not only on the whole log's
+score, which the rows it cannot touch dilute. Checked against a brute-force K-fold least squares on the rows
+themselves (the independent oracle), and on a log whose friction acts on 4 % of the rows."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ocp.identify.evidence import band_score, is_material
+from ocp.identify.regression import FOOTPRINT, Column, Design, _footprint, _grams
+from ocp.identify.select import fit_model
+
+N, K = 1200, 3
+
+
+def _rows(seed: int, level: float) -> tuple[np.ndarray, np.ndarray, list[np.ndarray]]:
+    """Weighted torque-equation columns (3, N, 2): a B error (``B w`` over a slow sine) and a Stribeck band that
+    acts on the rows near the sine's zero crossings only (a Gaussian of the speed, signed); targets with 2 % of B,
+    the band at ``level`` and noise of unit RMS; K folds of 60-row segments."""
+    rng = np.random.default_rng(seed)
+    w = 8.0 * np.sin(np.linspace(0.0, 4 * np.pi, N))
+    a = np.zeros((3, N, 2))
+    a[0, :, 0] = w
+    a[0, :, 1] = np.sign(w) * np.exp(-(w / 0.25) ** 2)
+    t = np.einsum("enq,q->en", a, [0.02, level]) + rng.normal(size=(3, N)) * np.array([[1.0], [0.0], [0.0]])
+    t[1:] = rng.normal(size=(2, N))  # the other equations: noise (no column enters them)
+    folds = [(np.arange(N) // 60) % K == k for k in range(K)]
+    return a, t, folds
+
+
+def _design(a: np.ndarray, t: np.ndarray, folds: list[np.ndarray]) -> Design:
+    g, h, c = (x.sum(axis=0) for x in _grams(a, t, folds))
+    fg, fh, fc = _grams(a, t, folds)
+    return Design([Column("B", "B"), Column("stribeck", "tau_s", 0.25)], g, g, h, h, c, c, np.full(3, N),
+                  np.full(3, N), np.ones(3), g_fold=fg, h_fold=fh, c_fold=fc,
+                  n_fold=np.array([np.full(3, int(m.sum())) for m in folds]),
+                  block_fold=np.zeros(0, dtype=int), footprint={1: _footprint(a[:, :, 1], a, t, folds)})
+
+
+def _band_oracle(a: np.ndarray, t: np.ndarray, folds: list[np.ndarray], cols: list[int]) -> float:
+    """The torque equation's held-out RMS on the band's rows: each fold's rows where the band column reaches
+    FOOTPRINT of its peak, predicted by ``cols`` fitted on every other row (all equations stacked)."""
+    acts = np.abs(a[0, :, 1]) >= FOOTPRINT * np.abs(a[0, :, 1]).max()
+    sse, n = 0.0, 0
+    for m in folds:
+        x = np.linalg.lstsq(a[:, ~m][:, :, cols].reshape(-1, len(cols)), t[:, ~m].ravel(), rcond=None)[0]
+        rows = m & acts
+        sse += float(np.sum((t[0, rows] - a[0, rows][:, cols] @ x) ** 2))
+        n += int(rows.sum())
+    return float(np.sqrt(sse / n))
+
+
+def test_the_band_score_is_the_k_fold_held_out_error_on_the_bands_rows() -> None:
+    a, t, folds = _rows(11, 1.5)
+    d = _design(a, t, folds)
+    acts = np.array([True, False, False])
+    for items, cols in (((), [0]), (("stribeck",), [0, 1])):
+        f = fit_model(d, items, tol=0.5)
+        assert np.isclose(band_score(d, f, 1, acts), _band_oracle(a, t, folds, cols), rtol=1e-9)
+    # the band's rows: a few per cent of the log (the oracle's mask, counted independently)
+    rows = int(d.footprint[1][3][:, 0].sum())
+    assert 0.02 * N < rows < 0.15 * N
+
+
+def test_a_band_too_small_for_the_whole_score_is_material_on_its_rows() -> None:
+    """A friction acting on a few per cent of the rows cuts the whole score by a few per cent (under a 12 %
+    materiality) and its own rows' error by half: material there. Without the footprint it would not be."""
+    a, t, folds = _rows(12, 1.5)
+    d = _design(a, t, folds)
+    before, after = fit_model(d, (), tol=0.5), fit_model(d, ("stribeck",), tol=0.5)
+    assert after.per_eq[0] > 0.88 * before.per_eq[0]  # the whole torque equation: not 12 % better
+    assert is_material(d, before, after, ("stribeck",), 0.12)
+    assert not is_material(Design(**{**d.__dict__, "footprint": {}}), before, after, ("stribeck",), 0.12)
+    # noise alone on those rows (no friction drawn): not material there either
+    a0, t0, f0 = _rows(13, 0.0)
+    d0 = _design(a0, t0, f0)
+    assert not is_material(d0, fit_model(d0, (), tol=0.5), fit_model(d0, ("stribeck",), tol=0.5), ("stribeck",),
+                           0.12)
