@@ -96,7 +96,7 @@ def band_score(design: Design, f: Fitted, j: int, acts: np.ndarray) -> float:
         idx = np.array(g.cols, dtype=int)
         return cc[0] - 2.0 * hh[0][:, idx] @ g.x + np.einsum("q,eqr,r->e", g.x, gg[0][:, idx][:, :, idx], g.x), nn[0]
     parts = [sse(design.fold(k), f.folds[k]) for k in range(design.folds)] if design.folds else [sse(design, f)]
-    total, n = sum(p[0] for p in parts), sum(p[1] for p in parts)
+    total, n = np.sum([p[0] for p in parts], axis=0), np.sum([p[1] for p in parts], axis=0)
     live = acts & (n > 0)
     return float(np.sqrt(np.mean(np.maximum(total[live], 0.0) / n[live]))) if live.any() else math.inf
 
