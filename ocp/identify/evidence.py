@@ -83,7 +83,8 @@ def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[s
     acts = equations_of(design, items)
     if capped_score(design, after, acts) <= (1.0 - min_improvement) * capped_score(design, before, acts):
         return True
-    bands = [j for j in after.cols if j in design.footprint and design.columns[j].item in items][:1]
+    prints = design.footprint
+    bands = [j for j in after.cols if prints is not None and j in prints and design.columns[j].item in items][:1]
     return any(band_score(design, after, j, acts) <= (1.0 - min_improvement) * band_score(design, before, j, acts)
                for j in bands)
 
@@ -91,14 +92,15 @@ def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[s
 def band_score(design: Design, f: Fitted, j: int, acts: np.ndarray) -> float:
     """The held-out score of ``f`` on the rows where banded column ``j`` acts (:attr:`.regression.Design.footprint`)
     in the equations ``acts`` (3,): each fold's rows scored by the model fitted without them."""
-    def sse(d: Design, g: Fitted) -> tuple[np.ndarray, np.ndarray]:
-        gg, hh, cc, nn = d.footprint[j]
-        idx = np.array(g.cols, dtype=int)
-        return cc[0] - 2.0 * hh[0][:, idx] @ g.x + np.einsum("q,eqr,r->e", g.x, gg[0][:, idx][:, :, idx], g.x), nn[0]
-    parts = [sse(design.fold(k), f.folds[k]) for k in range(design.folds)] if design.folds else [sse(design, f)]
-    total, n = np.sum([p[0] for p in parts], axis=0), np.sum([p[1] for p in parts], axis=0)
-    live = acts & (n > 0)
-    return float(np.sqrt(np.mean(np.maximum(total[live], 0.0) / n[live]))) if live.any() else math.inf
+    assert design.footprint is not None  # (a fold's design has none: scored at the top level only)
+    g, h, c, n = design.footprint.grams(j)
+    total = np.zeros(3)
+    for k, fk in enumerate(f.folds or (f,)):  # (one split: the model itself on the held-out rows)
+        idx = np.array(fk.cols, dtype=int)
+        total += c[k] - 2.0 * h[k][:, idx] @ fk.x + np.einsum("q,eqr,r->e", fk.x, g[k][:, idx][:, :, idx], fk.x)
+    rows = n.sum(axis=0)
+    live = acts & (rows > 0)
+    return float(np.sqrt(np.mean(np.maximum(total[live], 0.0) / rows[live]))) if live.any() else math.inf
 
 
 def capped_score(design: Design, f: Fitted, acts: np.ndarray) -> float:

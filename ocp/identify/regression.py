@@ -164,9 +164,9 @@ class Design:
     c_fold: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     n_fold: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     block_fold: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
-    #: per column j of a banded effect (:data:`BANDED`), the held-out rows where it acts (:data:`FOOTPRINT`): per fold
-    #: (one split: its held-out rows) ``(g (K, 3, Q, Q), h (K, 3, Q), c (K, 3), n (K, 3))`` as ``g_fold`` etc.
-    footprint: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = field(default_factory=dict)
+    #: the banded effects' columns (:data:`BANDED`) and the held-out rows where each acts (:class:`Footprints`);
+    #: None in a fold's design (:meth:`fold`)
+    footprint: Footprints | None = None
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
@@ -190,9 +190,7 @@ class Design:
                        g_test=self.g_fold[k], h_test=self.h_fold[k], c_test=self.c_fold[k], n_test=self.n_fold[k],
                        g_blocks=self.g_blocks[b], h_blocks=self.h_blocks[b], c_blocks=self.c_blocks[b],
                        g_fold=self.g_fold[:0], h_fold=self.h_fold[:0], c_fold=self.c_fold[:0], n_fold=self.n_fold[:0],
-                       block_fold=self.block_fold[:0],
-                       footprint={j: (g[k:k + 1], h[k:k + 1], c[k:k + 1], n[k:k + 1])
-                                  for j, (g, h, c, n) in self.footprint.items()})
+                       block_fold=self.block_fold[:0], footprint=None)
 
 
 def _noise_residual(t: np.ndarray, rich: list[np.ndarray], fixed: list[np.ndarray], rows: np.ndarray) -> np.ndarray:
@@ -327,8 +325,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     design = Design([c_ for c_, _ in cols], g_tr, g_te, h_tr, h_te, c_tr, c_te, np.full(3, n_tr), np.full(3, n_te),
                     sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
                     independence, g_blocks=gb, h_blocks=hb, c_blocks=cb,
-                    footprint={j: _footprint(a_all[:, :, j], a_all, tw, tests)
-                               for j, (c_, _) in enumerate(cols) if c_.item in BANDED})
+                    footprint=Footprints(a_all, tw, tests, [j for j, (c_, _) in enumerate(cols) if c_.item in BANDED]))
     if not folds:
         return design
     return replace(design, g_fold=fg, h_fold=fh, c_fold=fc, n_fold=np.array([np.full(3, int(m.sum())) for m in tests]),
@@ -346,15 +343,42 @@ def _grams(a_all: np.ndarray, tw: np.ndarray, rows: list[np.ndarray]) -> tuple[n
             np.stack([np.einsum("en,en->e", tw[:, m], tw[:, m]) for m in rows]))
 
 
-def _footprint(col: np.ndarray, a_all: np.ndarray, tw: np.ndarray, tests: list[np.ndarray]
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The Gram matrices (:func:`_grams`) and row counts (K, 3) of each held-out set of ``tests`` within the rows
-    where the weighted column ``col`` (3, N) acts (:data:`FOOTPRINT` of its largest magnitude in some equation)."""
-    mag = np.abs(col)
-    top = mag.max(axis=1, keepdims=True)
-    acts = np.any((mag >= FOOTPRINT * top) & (top > 0), axis=0)
-    masks = [m & acts for m in tests]
-    return (*_grams(a_all, tw, masks), np.array([np.full(3, int(m.sum())) for m in masks]).reshape(len(masks), 3))
+class Footprints:
+    """Where each banded column acts (:data:`FOOTPRINT` of its largest weighted magnitude in some equation) among
+    the held-out rows, and, when first asked for a column (:meth:`grams`), the Gram matrices there per fold: only
+    the bands a model picks are ever scored so (:func:`.evidence.band_score`). Keeps the rows where some band acts."""
+
+    def __init__(self, a_all: np.ndarray, tw: np.ndarray, tests: list[np.ndarray], bands: list[int]) -> None:
+        """``a_all`` (3, N, Q) weighted columns, ``tw`` (3, N) weighted targets, ``tests`` K held-out masks (N,)
+        (disjoint: folds, or one split's held-out rows), ``bands`` the banded columns' indices."""
+        held = np.full(a_all.shape[1], -1)
+        for k, m in enumerate(tests):
+            held[m] = k
+        acts = {}
+        for j in bands:
+            mag = np.abs(a_all[:, :, j])
+            top = mag.max(axis=1, keepdims=True)
+            acts[j] = np.any((mag >= FOOTPRINT * top) & (top > 0), axis=0) & (held >= 0)
+        rows = np.flatnonzero(np.any(list(acts.values()), axis=0)) if acts else np.zeros(0, dtype=int)
+        self.folds = len(tests)
+        self._a, self._t, self._fold = a_all[:, rows], tw[:, rows], held[rows]
+        self._acts = {j: m[rows] for j, m in acts.items()}
+        self._grams: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    def __contains__(self, j: object) -> bool:
+        return j in self._acts
+
+    def grams(self, j: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per fold, on the held-out rows where column ``j`` acts: ``g`` (K, 3, Q, Q), ``h`` (K, 3, Q), ``c`` (K, 3)
+        and the row counts ``n`` (K, 3), as :attr:`Design.g_fold` etc."""
+        if j not in self._grams:
+            masks = (self._acts[j] & (self._fold == k) for k in range(self.folds))
+            sub = [(self._a[:, m], self._t[:, m]) for m in masks]
+            self._grams[j] = (np.stack([np.matmul(a.transpose(0, 2, 1), a) for a, _ in sub]),
+                              np.stack([np.einsum("enq,en->eq", a, t) for a, t in sub]),
+                              np.stack([np.einsum("en,en->e", t, t) for _, t in sub]),
+                              np.array([np.full(3, a.shape[1]) for a, _ in sub]).reshape(len(sub), 3))
+        return self._grams[j]
 
 
 def _rows(x: np.ndarray, like: np.ndarray) -> np.ndarray:

@@ -1,14 +1,16 @@
-"""Materiality on the rows a banded effect acts on (regression.Design.footprint, evidence.band_score): a Stribeck
+"""Materiality on the rows a banded effect acts on (regression.Footprints, evidence.band_score): a Stribeck
 band acts near zero speed only, so its fall of the held-out error is judged there too, not only on the whole log's
 score, which the rows it cannot touch dilute. Checked against a brute-force K-fold least squares on the rows
 themselves (the independent oracle), and on a log whose friction acts on 4 % of the rows."""
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ocp.identify.evidence import band_score, is_material
-from ocp.identify.regression import FOOTPRINT, Column, Design, _footprint, _grams
+from ocp.identify.regression import FOOTPRINT, Column, Design, Footprints, _grams
 from ocp.identify.select import fit_model
 
 N, K = 1200, 3
@@ -35,7 +37,7 @@ def _design(a: np.ndarray, t: np.ndarray, folds: list[np.ndarray]) -> Design:
     return Design([Column("B", "B"), Column("stribeck", "tau_s", 0.25)], g, g, h, h, c, c, np.full(3, N),
                   np.full(3, N), np.ones(3), g_fold=fg, h_fold=fh, c_fold=fc,
                   n_fold=np.array([np.full(3, int(m.sum())) for m in folds]),
-                  block_fold=np.zeros(0, dtype=int), footprint={1: _footprint(a[:, :, 1], a, t, folds)})
+                  block_fold=np.zeros(0, dtype=int), footprint=Footprints(a, t, folds, [1]))
 
 
 def _band_oracle(a: np.ndarray, t: np.ndarray, folds: list[np.ndarray], cols: list[int]) -> float:
@@ -59,7 +61,8 @@ def test_the_band_score_is_the_k_fold_held_out_error_on_the_bands_rows() -> None
         f = fit_model(d, items, tol=0.5)
         assert np.isclose(band_score(d, f, 1, acts), _band_oracle(a, t, folds, cols), rtol=1e-9)
     # the band's rows: a few per cent of the log (the oracle's mask, counted independently)
-    rows = int(d.footprint[1][3][:, 0].sum())
+    assert d.footprint is not None
+    rows = int(d.footprint.grams(1)[3][:, 0].sum())
     assert 0.02 * N < rows < 0.15 * N
 
 
@@ -71,7 +74,7 @@ def test_a_band_too_small_for_the_whole_score_is_material_on_its_rows() -> None:
     before, after = fit_model(d, (), tol=0.5), fit_model(d, ("stribeck",), tol=0.5)
     assert after.per_eq[0] > 0.88 * before.per_eq[0]  # the whole torque equation: not 12 % better
     assert is_material(d, before, after, ("stribeck",), 0.12)
-    assert not is_material(Design(**{**d.__dict__, "footprint": {}}), before, after, ("stribeck",), 0.12)
+    assert not is_material(replace(d, footprint=None), before, after, ("stribeck",), 0.12)
     # noise alone on those rows (no friction drawn): not material there either
     a0, t0, f0 = _rows(13, 0.0)
     d0 = _design(a0, t0, f0)
