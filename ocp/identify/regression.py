@@ -346,7 +346,8 @@ def _grams(a_all: np.ndarray, tw: np.ndarray, rows: list[np.ndarray]) -> tuple[n
 class Footprints:
     """Where each banded column acts (:data:`FOOTPRINT` of its largest weighted magnitude in some equation) among
     the held-out rows, and, when first asked for a column (:meth:`grams`), the Gram matrices there per fold: only
-    the bands a model picks are ever scored so (:func:`.evidence.band_score`). Keeps the rows where some band acts."""
+    the bands a model picks are ever scored so (:func:`.evidence.band_score`). Holds the design's weighted columns
+    (not a copy: the build's own arrays, alive as long as the design) and the indices of the rows where a band acts."""
 
     def __init__(self, a_all: np.ndarray, tw: np.ndarray, tests: list[np.ndarray], bands: list[int]) -> None:
         """``a_all`` (3, N, Q) weighted columns, ``tw`` (3, N) weighted targets, ``tests`` K held-out masks (N,)
@@ -361,7 +362,7 @@ class Footprints:
             acts[j] = np.any((mag >= FOOTPRINT * top) & (top > 0), axis=0) & (held >= 0)
         rows = np.flatnonzero(np.any(list(acts.values()), axis=0)) if acts else np.zeros(0, dtype=int)
         self.folds = len(tests)
-        self._a, self._t, self._fold = a_all[:, rows], tw[:, rows], held[rows]
+        self._a, self._t, self._rows, self._fold = a_all, tw, rows, held[rows]
         self._acts = {j: m[rows] for j, m in acts.items()}
         self._grams: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
 
@@ -372,8 +373,8 @@ class Footprints:
         """Per fold, on the held-out rows where column ``j`` acts: ``g`` (K, 3, Q, Q), ``h`` (K, 3, Q), ``c`` (K, 3)
         and the row counts ``n`` (K, 3), as :attr:`Design.g_fold` etc."""
         if j not in self._grams:
-            masks = (self._acts[j] & (self._fold == k) for k in range(self.folds))
-            sub = [(self._a[:, m], self._t[:, m]) for m in masks]
+            picks = (self._rows[self._acts[j] & (self._fold == k)] for k in range(self.folds))
+            sub = [(self._a[:, m], self._t[:, m]) for m in picks]
             self._grams[j] = (np.stack([np.matmul(a.transpose(0, 2, 1), a) for a, _ in sub]),
                               np.stack([np.einsum("enq,en->eq", a, t) for a, t in sub]),
                               np.stack([np.einsum("en,en->e", t, t) for _, t in sub]),
