@@ -83,10 +83,28 @@ def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[s
     acts = equations_of(design, items)
     if capped_score(design, after, acts) <= (1.0 - min_improvement) * capped_score(design, before, acts):
         return True
+    j = _band(design, after, items)
+    return j is not None and \
+        band_score(design, after, j, acts) <= (1.0 - min_improvement) * band_score(design, before, j, acts)
+
+
+def _band(design: Design, f: Fitted, items: Sequence[str]) -> int | None:
+    """The first column of ``f`` that is a band of one of ``items`` (:class:`.regression.Footprints`), or None."""
     prints = design.footprint
-    bands = [j for j in after.cols if prints is not None and j in prints and design.columns[j].item in items][:1]
-    return any(band_score(design, after, j, acts) <= (1.0 - min_improvement) * band_score(design, before, j, acts)
-               for j in bands)
+    return next((j for j in f.cols if prints is not None and j in prints and design.columns[j].item in items), None)
+
+
+def band_fall(design: Design, before: Fitted, after: Fitted, item: str) -> tuple[float, float] | None:
+    """For a banded ``item`` fitted in ``after``: the fall of the held-out error from ``before`` on the rows its band
+    acts on (a fraction, :func:`band_score`), and those rows' share of the held-out rows; None for another item."""
+    j = _band(design, after, (item,))
+    if j is None or design.footprint is None:
+        return None
+    acts = equations_of(design, (item,))
+    was, now = band_score(design, before, j, acts), band_score(design, after, j, acts)
+    rows = design.footprint.grams(j)[3].sum(axis=0)
+    share = float(np.max(rows[acts]) / max(float(np.max(design.n_test[acts])), 1.0)) if acts.any() else 0.0
+    return (1.0 - now / was if 0.0 < was < math.inf else 0.0), share
 
 
 def band_score(design: Design, f: Fitted, j: int, acts: np.ndarray) -> float:

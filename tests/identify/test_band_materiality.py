@@ -9,7 +9,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ocp.identify.evidence import band_score, is_material
+from ocp.identify.evidence import band_fall, band_score, is_material
 from ocp.identify.regression import FOOTPRINT, Column, Design, Footprints, _grams
 from ocp.identify.select import fit_model
 
@@ -80,3 +80,18 @@ def test_a_band_too_small_for_the_whole_score_is_material_on_its_rows() -> None:
     d0 = _design(a0, t0, f0)
     assert not is_material(d0, fit_model(d0, (), tol=0.5), fit_model(d0, ("stribeck",), tol=0.5), ("stribeck",),
                            0.12)
+
+
+def test_the_bands_fall_and_share_as_the_ranking_reports_them() -> None:
+    """``band_fall`` (the ranking's sentence: diagnose._entry): the fall of the band's rows' held-out error and their
+    share of the held-out rows, from the oracle's numbers; None for an item without a band."""
+    a, t, folds = _rows(12, 1.5)
+    d = _design(a, t, folds)
+    before, after = fit_model(d, (), tol=0.5), fit_model(d, ("stribeck",), tol=0.5)
+    fall = band_fall(d, before, after, "stribeck")
+    assert fall is not None
+    want = 1.0 - _band_oracle(a, t, folds, [0, 1]) / _band_oracle(a, t, folds, [0])
+    acts = np.abs(a[0, :, 1]) >= FOOTPRINT * np.abs(a[0, :, 1]).max()
+    assert np.isclose(fall[0], want, rtol=1e-9) and 0.25 < want < 0.5
+    assert np.isclose(fall[1], acts.sum() / N)
+    assert band_fall(d, before, fit_model(d, ("B",), tol=0.5), "B") is None
