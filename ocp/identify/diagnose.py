@@ -49,7 +49,7 @@ from ocp.identify.align import (
     within,
 )
 from ocp.identify.candidates import candidate
-from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, band_fall, implausible_factor
+from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
     KEYS,
     calibration,
@@ -61,6 +61,7 @@ from ocp.identify.explain import (
     relative,
     spectrum_peak,
     units,
+    with_band,
 )
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels, read_current
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
@@ -242,11 +243,7 @@ def _entry(name: str, fit_: Fitted, before: Fitted, significant: bool, plant: DC
     if name in CONSTANTS:
         values = {name: float(getattr(plant.params, KEYS[name][0])) * (1 + relative(design, fit_, name))}
     imp = 1.0 - fit_.score / before.score if before.score > 0 else 0.0
-    text = explain(name, values, plant.params, design, fit_)
-    band = band_fall(design, before, fit_, name)
-    if band is not None:  # (its materiality is judged there too: evidence.is_material)
-        text = text.rstrip(".") + (f". On the {100 * band[1]:.0f} % of held-out rows where its band acts, the "
-                                   f"held-out error falls {100 * band[0]:.0f} %.")
+    text = with_band(explain(name, values, plant.params, design, fit_), design, before, fit_, name)
     return RankEntry(item_name(name), imp, significant, values, units(name), heldout, text)
 
 

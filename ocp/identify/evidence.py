@@ -77,7 +77,7 @@ def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[s
     armature equation, say) is one these effects can neither explain nor be blamed for, and averaged into the
     score it would dilute the fall they bring where they act (a torque ripple halving the torque equation's
     error beside an armature equation at 18 noise units moved the pooled score by 0.5 %). A banded effect (a
-    Stribeck band, :data:`.regression.BANDED`) acts on a few rows of those equations too: its fall counts as well on
+    Stribeck band, :data:`.footprint.BANDED`) acts on a few rows of those equations too: its fall counts as well on
     the held-out rows where its column acts (:func:`band_score`; proving-ground seed 6003, 2 kHz: 21 mN m of Stribeck
     friction acting on 5 % of the held-out rows cut the torque equation's error there by 24 %, the score by 11 %)."""
     acts = equations_of(design, items)
@@ -89,9 +89,11 @@ def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[s
 
 
 def _band(design: Design, f: Fitted, items: Sequence[str]) -> int | None:
-    """The first column of ``f`` that is a band of one of ``items`` (:class:`.regression.Footprints`), or None."""
+    """The first column of ``f`` that is a band of one of ``items`` (:class:`.footprint.Footprints`), or None."""
     prints = design.footprint
-    return next((j for j in f.cols if prints is not None and j in prints and design.columns[j].item in items), None)
+    if prints is None:
+        return None
+    return next((j for j in f.cols if j in prints and design.columns[j].item in items), None)
 
 
 def band_fall(design: Design, before: Fitted, after: Fitted, item: str) -> tuple[float, float] | None:

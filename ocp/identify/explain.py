@@ -10,7 +10,7 @@ import numpy as np
 
 from ocp.errors import ParameterError
 from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
-from ocp.identify.evidence import Fitted, ripple_rows
+from ocp.identify.evidence import Fitted, band_fall, ripple_rows
 from ocp.identify.regression import CONSTANTS, Design
 from ocp.model.effects import CATALOGUE, BrushDrop, EffectBase, make_effect
 from ocp.model.params import MotorParams
@@ -188,3 +188,13 @@ def spectrum_peak(design: Design) -> dict[str, Any] | None:
     return {"periods": design.periods, "share": best, "median_share": float(np.median(s)),
             "shares": [float(v) for v in s], "rivals": rivals, **design.angle,
             "torque_rows": "raw" if design.raw_torque else "low-passed"}
+
+
+def with_band(text: str, design: Design, before: Fitted, f: Fitted, item: str) -> str:
+    """``text`` (an item's explanation) with, for a banded effect (a Stribeck band), the fall of the held-out error on
+    the rows its band acts on, where its materiality is judged too (:func:`.evidence.band_fall`)."""
+    band = band_fall(design, before, f, item)
+    if band is None:
+        return text
+    return text.rstrip(".") + (f". On the {100 * band[1]:.0f} % of held-out rows where its band acts, the held-out "
+                               f"error falls {100 * band[0]:.0f} %.")

@@ -63,6 +63,7 @@ from ocp.identify.columns import (
     signals,
     targets,
 )
+from ocp.identify.footprint import BANDED, Footprints
 from ocp.identify.ripple import pick_periods, residualizer
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE
@@ -83,11 +84,6 @@ NUISANCES: tuple[str, ...] = tuple(NUISANCE_BOUNDS)
 #: dry friction: set-valued where the rotor is at rest (:func:`.columns.at_rest`); beside it the ripple's columns
 #: are left out there (:func:`.select.fit_model`)
 DRY = frozenset({"coulomb_friction", "stribeck"})
-#: effects whose columns act on a band of the rows only (a Stribeck band: near zero speed), their materiality also
-#: judged on that band (:attr:`Design.footprint`, :func:`.evidence.is_material`)
-BANDED = frozenset({"stribeck"})
-#: a banded column acts on the rows where it reaches this share of its largest magnitude (weighted, after the view)
-FOOTPRINT = 0.1
 #: effects found by regression (input_delay is found by the alignment)
 REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")
 #: the torque equation's weight is at least this fraction of the smallest torque error a free run shows at
@@ -164,8 +160,8 @@ class Design:
     c_fold: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     n_fold: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     block_fold: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=int))
-    #: the banded effects' columns (:data:`BANDED`) and the held-out rows where each acts (:class:`Footprints`);
-    #: None in a fold's design (:meth:`fold`)
+    #: the banded effects' columns (:data:`.footprint.BANDED`) and the held-out rows where each acts
+    #: (:class:`.footprint.Footprints`); None in a fold's design (:meth:`fold`)
     footprint: Footprints | None = None
 
     def index(self, item: str) -> list[int]:
@@ -341,45 +337,6 @@ def _grams(a_all: np.ndarray, tw: np.ndarray, rows: list[np.ndarray]) -> tuple[n
     return (np.stack([np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for m in rows]),
             np.stack([np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for m in rows]),
             np.stack([np.einsum("en,en->e", tw[:, m], tw[:, m]) for m in rows]))
-
-
-class Footprints:
-    """Where each banded column acts (:data:`FOOTPRINT` of its largest weighted magnitude in some equation) among
-    the held-out rows, and, when first asked for a column (:meth:`grams`), the Gram matrices there per fold: only
-    the bands a model picks are ever scored so (:func:`.evidence.band_score`). Holds the design's weighted columns
-    (not a copy: the build's own arrays, alive as long as the design) and the indices of the rows where a band acts."""
-
-    def __init__(self, a_all: np.ndarray, tw: np.ndarray, tests: list[np.ndarray], bands: list[int]) -> None:
-        """``a_all`` (3, N, Q) weighted columns, ``tw`` (3, N) weighted targets, ``tests`` K held-out masks (N,)
-        (disjoint: folds, or one split's held-out rows), ``bands`` the banded columns' indices."""
-        held = np.full(a_all.shape[1], -1)
-        for k, m in enumerate(tests):
-            held[m] = k
-        acts = {}
-        for j in bands:
-            mag = np.abs(a_all[:, :, j])
-            top = mag.max(axis=1, keepdims=True)
-            acts[j] = np.any((mag >= FOOTPRINT * top) & (top > 0), axis=0) & (held >= 0)
-        rows = np.flatnonzero(np.any(list(acts.values()), axis=0)) if acts else np.zeros(0, dtype=int)
-        self.folds = len(tests)
-        self._a, self._t, self._rows, self._fold = a_all, tw, rows, held[rows]
-        self._acts = {j: m[rows] for j, m in acts.items()}
-        self._grams: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
-
-    def __contains__(self, j: object) -> bool:
-        return j in self._acts
-
-    def grams(self, j: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Per fold, on the held-out rows where column ``j`` acts: ``g`` (K, 3, Q, Q), ``h`` (K, 3, Q), ``c`` (K, 3)
-        and the row counts ``n`` (K, 3), as :attr:`Design.g_fold` etc."""
-        if j not in self._grams:
-            picks = (self._rows[self._acts[j] & (self._fold == k)] for k in range(self.folds))
-            sub = [(self._a[:, m], self._t[:, m]) for m in picks]
-            self._grams[j] = (np.stack([np.matmul(a.transpose(0, 2, 1), a) for a, _ in sub]),
-                              np.stack([np.einsum("enq,en->eq", a, t) for a, t in sub]),
-                              np.stack([np.einsum("en,en->e", t, t) for _, t in sub]),
-                              np.array([np.full(3, a.shape[1]) for a, _ in sub]).reshape(len(sub), 3))
-        return self._grams[j]
 
 
 def _rows(x: np.ndarray, like: np.ndarray) -> np.ndarray:

@@ -1,4 +1,4 @@
-"""Materiality on the rows a banded effect acts on (regression.Footprints, evidence.band_score): a Stribeck
+"""Materiality on the rows a banded effect acts on (footprint.Footprints, evidence.band_score): a Stribeck
 band acts near zero speed only, so its fall of the held-out error is judged there too, not only on the whole log's
 score, which the rows it cannot touch dilute. Checked against a brute-force K-fold least squares on the rows
 themselves (the independent oracle), and on rows whose friction acts on 3 % of them."""
@@ -10,7 +10,8 @@ from dataclasses import replace
 import numpy as np
 
 from ocp.identify.evidence import band_fall, band_score, is_material
-from ocp.identify.regression import FOOTPRINT, Column, Design, Footprints, _grams
+from ocp.identify.footprint import FOOTPRINT, Footprints
+from ocp.identify.regression import Column, Design, _grams
 from ocp.identify.select import fit_model
 
 N, K = 1200, 3

@@ -35,9 +35,11 @@ def test_ripple_named_beside_an_armature_error_it_cannot_touch() -> None:
 
 
 class _Design:
-    """The two attributes :func:`capped_score` reads: three live equations, columns of one item in eq. 0."""
+    """The attributes :func:`capped_score` and :func:`is_material` read: three live equations, columns of one item in
+    eq. 0, no banded effect."""
 
     n_test = np.array([100, 100, 100])
+    footprint = None
     g_train = np.zeros((3, 1, 1))
     g_train[0, 0, 0] = 1.0
 

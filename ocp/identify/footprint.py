@@ -1,0 +1,57 @@
+"""Where a banded effect acts: the held-out rows on which its materiality is also judged.
+
+A Stribeck band acts near zero speed only, a few per cent of a log's rows; the whole log's held-out score, which the
+rows it cannot touch dilute, would hide a fall that is material where it acts (:func:`.evidence.is_material`,
+:func:`.evidence.band_score`). :class:`Footprints` keeps, for each banded column of a design
+(:class:`.regression.Design`), the held-out rows where it acts, and builds their Gram matrices per fold the first
+time a model is scored there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: effects whose columns act on a band of the rows only (a Stribeck band: near zero speed), their materiality also
+#: judged on that band (:attr:`.regression.Design.footprint`, :func:`.evidence.is_material`)
+BANDED = frozenset({"stribeck"})
+#: a banded column acts on the rows where it reaches this share of its largest magnitude (weighted, after the view)
+FOOTPRINT = 0.1
+
+
+class Footprints:
+    """Where each banded column acts (:data:`FOOTPRINT` of its largest weighted magnitude in some equation) among
+    the held-out rows, and, when first asked for a column (:meth:`grams`), the Gram matrices there per fold: only
+    the bands a model picks are ever scored so (:func:`.evidence.band_score`). Holds the design's weighted columns
+    (not a copy: the build's own arrays, alive as long as the design) and the indices of the rows where a band acts."""
+
+    def __init__(self, a_all: np.ndarray, tw: np.ndarray, tests: list[np.ndarray], bands: list[int]) -> None:
+        """``a_all`` (3, N, Q) weighted columns, ``tw`` (3, N) weighted targets, ``tests`` K held-out masks (N,)
+        (disjoint: folds, or one split's held-out rows), ``bands`` the banded columns' indices."""
+        held = np.full(a_all.shape[1], -1)
+        for k, m in enumerate(tests):
+            held[m] = k
+        acts = {}
+        for j in bands:
+            mag = np.abs(a_all[:, :, j])
+            top = mag.max(axis=1, keepdims=True)
+            acts[j] = np.any((mag >= FOOTPRINT * top) & (top > 0), axis=0) & (held >= 0)
+        rows = np.flatnonzero(np.any(list(acts.values()), axis=0)) if acts else np.zeros(0, dtype=int)
+        self.folds = len(tests)
+        self._a, self._t, self._rows, self._fold = a_all, tw, rows, held[rows]
+        self._acts = {j: m[rows] for j, m in acts.items()}
+        self._grams: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    def __contains__(self, j: object) -> bool:
+        return j in self._acts
+
+    def grams(self, j: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Per fold, on the held-out rows where column ``j`` acts: ``g`` (K, 3, Q, Q), ``h`` (K, 3, Q), ``c`` (K, 3)
+        and the row counts ``n`` (K, 3), as :attr:`.regression.Design.g_fold` etc."""
+        if j not in self._grams:
+            picks = (self._rows[self._acts[j] & (self._fold == k)] for k in range(self.folds))
+            sub = [(self._a[:, m], self._t[:, m]) for m in picks]
+            self._grams[j] = (np.stack([np.matmul(a.transpose(0, 2, 1), a) for a, _ in sub]),
+                              np.stack([np.einsum("enq,en->eq", a, t) for a, t in sub]),
+                              np.stack([np.einsum("en,en->e", t, t) for _, t in sub]),
+                              np.array([np.full(3, a.shape[1]) for a, _ in sub]).reshape(len(sub), 3))
+        return self._grams[j]
