@@ -83,12 +83,12 @@ def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[s
     acts = equations_of(design, items)
     if capped_score(design, after, acts) <= (1.0 - min_improvement) * capped_score(design, before, acts):
         return True
-    j = _band(design, after, items)
+    j = band_of(design, after, items)
     return j is not None and \
         band_score(design, after, j, acts) <= (1.0 - min_improvement) * band_score(design, before, j, acts)
 
 
-def _band(design: Design, f: Fitted, items: Sequence[str]) -> int | None:
+def band_of(design: Design, f: Fitted, items: Sequence[str]) -> int | None:
     """The first column of ``f`` that is a band of one of ``items`` (:class:`.footprint.Footprints`), or None."""
     prints = design.footprint
     if prints is None:
@@ -99,7 +99,7 @@ def _band(design: Design, f: Fitted, items: Sequence[str]) -> int | None:
 def band_fall(design: Design, before: Fitted, after: Fitted, item: str) -> tuple[float, float] | None:
     """For a banded ``item`` fitted in ``after``: the fall of the held-out error from ``before`` on the rows its band
     acts on (a fraction, :func:`band_score`), and those rows' share of the held-out rows; None for another item."""
-    j = _band(design, after, (item,))
+    j = band_of(design, after, (item,))
     if j is None or design.footprint is None:
         return None
     acts = equations_of(design, (item,))

@@ -55,6 +55,8 @@ from ocp.identify.boxqp import box_qp
 from ocp.identify.evidence import (
     IMPLAUSIBLE_FACTOR,
     Fitted,
+    band_of,
+    band_score,
     beyond_scatter,
     blocks_agree,
     equations_of,
@@ -387,12 +389,23 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
             continue
         alt = fit_model(design, [b if i == a else i for i in items], tol)
         na, nb = (f"param:{x}" if x in CONSTANTS else x for x in (a, b))
-        if alt.score <= best.score * (1.0 + margin):
+        if alt.score <= best.score * (1.0 + margin) and _band_alike(design, a, best, alt, margin):
             out.append({"adopted": a, "alternative": b, "score": best.score, "alternative_score": alt.score,
                         "reason": f"replacing {na} by {nb} fits the held-out data as well "
                                   f"({alt.score:.3g} vs {best.score:.3g} noise units, within {100 * margin:.1f} %): "
                                   f"this log cannot tell them apart{_prior_note(design, alt, a, b)}"})
     return out
+
+
+def _band_alike(design: Design, item: str, best: Fitted, alt: Fitted, margin: float) -> bool:
+    """Whether ``alt`` fits the rows where ``item``'s band acts within ``margin`` of ``best``, for a banded ``item``
+    (a Stribeck band: its materiality is judged on those rows too, :func:`.evidence.is_material`); True for any other
+    item. Else the pooled score, which those rows barely move, would call a thrust-equation item its equal."""
+    j = band_of(design, best, (item,))
+    if j is None:
+        return True
+    acts = equations_of(design, (item,))
+    return band_score(design, alt, j, acts) <= band_score(design, best, j, acts) * (1.0 + margin)
 
 
 def _prior_note(design: Design, alt: Fitted, adopted: str, const: str) -> str:

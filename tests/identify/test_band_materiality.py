@@ -12,7 +12,7 @@ import numpy as np
 from ocp.identify.evidence import band_fall, band_score, is_material
 from ocp.identify.footprint import FOOTPRINT, Footprints
 from ocp.identify.regression import Column, Design, _grams
-from ocp.identify.select import fit_model
+from ocp.identify.select import _challenge, fit_model
 
 N, K = 1200, 3
 
@@ -96,3 +96,15 @@ def test_the_bands_fall_and_share_as_the_ranking_reports_them() -> None:
     assert np.isclose(fall[0], want, rtol=1e-9) and 0.25 < want < 0.5
     assert np.isclose(fall[1], acts.sum() / N)
     assert band_fall(d, before, fit_model(d, ("B",), tol=0.5), "B") is None
+
+
+def test_an_alternative_must_fit_the_bands_rows_too_to_be_its_equal() -> None:
+    """The ambiguity challenge (select._challenge): the pooled score, which the band's rows barely move, cannot tell
+    a Stribeck band from a B correction here; on the band's rows B explains nothing, so the band is not ambiguous
+    with it. Without the footprint the pooled score alone calls them equal."""
+    a, t, folds = _rows(12, 1.5)
+    d = _design(a, t, folds)
+    best = fit_model(d, ("stribeck",), tol=0.5)
+    assert _challenge(d, ["stribeck"], ["stribeck", "B"], best, tol=0.5, margin=0.12) == []
+    alike = _challenge(replace(d, footprint=None), ["stribeck"], ["stribeck", "B"], best, tol=0.5, margin=0.12)
+    assert [(x["adopted"], x["alternative"]) for x in alike] == [("stribeck", "B")]
