@@ -4,7 +4,7 @@ A Stribeck band acts near zero speed only, a few per cent of a log's rows; the w
 rows it cannot touch dilute, would hide a fall that is material where it acts (:func:`.evidence.is_material`,
 :func:`.evidence.band_score`). :class:`Footprints` keeps, for each banded column of a design
 (:class:`.regression.Design`), the held-out rows where it acts, and builds their Gram matrices per fold the first
-time a model is scored there.
+time a model is scored there; and the Gram matrices of any sets of rows (:func:`grams`), the design's own.
 """
 
 from __future__ import annotations
@@ -16,6 +16,17 @@ import numpy as np
 BANDED = frozenset({"stribeck"})
 #: a banded column acts on the rows where it reaches this share of its largest magnitude (weighted, after the view)
 FOOTPRINT = 0.1
+
+
+def grams(a_all: np.ndarray, tw: np.ndarray, rows: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per set of rows (K masks or index arrays over N): from the weighted columns ``a_all`` (3, N, Q) and targets
+    ``tw`` (3, N), the Gram matrices ``A'A`` (K, 3, Q, Q), ``A'r`` (K, 3, Q) and ``r'r`` (K, 3) per equation."""
+    q = a_all.shape[2]
+    if not rows:
+        return np.zeros((0, 3, q, q)), np.zeros((0, 3, q)), np.zeros((0, 3))
+    return (np.stack([np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for m in rows]),
+            np.stack([np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for m in rows]),
+            np.stack([np.einsum("en,en->e", tw[:, m], tw[:, m]) for m in rows]))
 
 
 class Footprints:
@@ -48,10 +59,7 @@ class Footprints:
         """Per fold, on the held-out rows where column ``j`` acts: ``g`` (K, 3, Q, Q), ``h`` (K, 3, Q), ``c`` (K, 3)
         and the row counts ``n`` (K, 3), as :attr:`.regression.Design.g_fold` etc."""
         if j not in self._grams:
-            picks = (self._rows[self._acts[j] & (self._fold == k)] for k in range(self.folds))
-            sub = [(self._a[:, m], self._t[:, m]) for m in picks]
-            self._grams[j] = (np.stack([np.matmul(a.transpose(0, 2, 1), a) for a, _ in sub]),
-                              np.stack([np.einsum("enq,en->eq", a, t) for a, t in sub]),
-                              np.stack([np.einsum("en,en->e", t, t) for _, t in sub]),
-                              np.array([np.full(3, a.shape[1]) for a, _ in sub]).reshape(len(sub), 3))
+            picks = [self._rows[self._acts[j] & (self._fold == k)] for k in range(self.folds)]
+            counts = np.array([np.full(3, m.size) for m in picks]).reshape(-1, 3)
+            self._grams[j] = (*grams(self._a, self._t, picks), counts)
         return self._grams[j]

@@ -63,7 +63,7 @@ from ocp.identify.columns import (
     signals,
     targets,
 )
-from ocp.identify.footprint import BANDED, Footprints
+from ocp.identify.footprint import BANDED, Footprints, grams
 from ocp.identify.ripple import pick_periods, residualizer
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE
@@ -304,12 +304,12 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     a_all = np.stack([a for _, a in cols], axis=2) / sigma[:, None, None]  # (3, N, Q)
     tw = t / sigma[:, None]
     tests = [m[:rows] & ~edge for m in folds] if folds else [test]
-    fg, fh, fc = _grams(a_all, tw, tests)  # (one set when not cross-validating: the held-out rows)
+    fg, fh, fc = grams(a_all, tw, tests)  # (one set when not cross-validating: the held-out rows)
     if folds:  # cross-validation: every row is fitted on, the folds are held out in turn (Design.fold)
         (g_tr, h_tr, c_tr), n_tr = (fg.sum(axis=0), fh.sum(axis=0), fc.sum(axis=0)), sum(int(m.sum()) for m in tests)
         g_te, h_te, c_te, n_te = g_tr, h_tr, c_tr, n_tr
     else:
-        (g_tr, h_tr, c_tr), n_tr = (x[0] for x in _grams(a_all, tw, [train])), int(train.sum())
+        (g_tr, h_tr, c_tr), n_tr = (x[0] for x in grams(a_all, tw, [train])), int(train.sum())
         g_te, h_te, c_te, n_te = fg[0], fh[0], fc[0], int(test.sum())
     independence = _independence(p, log, s, tau)
     if angle and raw.theta is not None:  # the ripple's own independence against the torque residual (select)
@@ -317,7 +317,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         angle["independence"] = ripple_independence(theta, periods, float(independence[0]),
                                                     1.0 if raw is not s else float(independence[1]))
     per_fold = [_blocks(m, math.ceil(BLOCK_INDEPENDENT / float(independence.min()))) for m in tests]
-    gb, hb, cb = _grams(a_all, tw, [b for bs in per_fold for b in bs])
+    gb, hb, cb = grams(a_all, tw, [b for bs in per_fold for b in bs])
     design = Design([c_ for c_, _ in cols], g_tr, g_te, h_tr, h_te, c_tr, c_te, np.full(3, n_tr), np.full(3, n_te),
                     sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
                     independence, g_blocks=gb, h_blocks=hb, c_blocks=cb,
@@ -326,17 +326,6 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         return design
     return replace(design, g_fold=fg, h_fold=fh, c_fold=fc, n_fold=np.array([np.full(3, int(m.sum())) for m in tests]),
                    block_fold=np.array([k for k, bs in enumerate(per_fold) for _ in bs], dtype=int))
-
-
-def _grams(a_all: np.ndarray, tw: np.ndarray, rows: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per set of rows (K masks or index arrays over N): from the weighted columns ``a_all`` (3, N, Q) and targets
-    ``tw`` (3, N), the Gram matrices ``A'A`` (K, 3, Q, Q), ``A'r`` (K, 3, Q) and ``r'r`` (K, 3) per equation."""
-    q = a_all.shape[2]
-    if not rows:
-        return np.zeros((0, 3, q, q)), np.zeros((0, 3, q)), np.zeros((0, 3))
-    return (np.stack([np.einsum("enq,enr->eqr", a_all[:, m], a_all[:, m]) for m in rows]),
-            np.stack([np.einsum("enq,en->eq", a_all[:, m], tw[:, m]) for m in rows]),
-            np.stack([np.einsum("en,en->e", tw[:, m], tw[:, m]) for m in rows]))
 
 
 def _rows(x: np.ndarray, like: np.ndarray) -> np.ndarray:

@@ -10,8 +10,8 @@ from dataclasses import replace
 import numpy as np
 
 from ocp.identify.evidence import band_fall, band_score, is_material
-from ocp.identify.footprint import FOOTPRINT, Footprints
-from ocp.identify.regression import Column, Design, _grams
+from ocp.identify.footprint import FOOTPRINT, Footprints, grams
+from ocp.identify.regression import Column, Design
 from ocp.identify.select import _challenge, fit_model
 
 N, K = 1200, 3
@@ -33,8 +33,8 @@ def _rows(seed: int, level: float) -> tuple[np.ndarray, np.ndarray, list[np.ndar
 
 
 def _design(a: np.ndarray, t: np.ndarray, folds: list[np.ndarray]) -> Design:
-    g, h, c = (x.sum(axis=0) for x in _grams(a, t, folds))
-    fg, fh, fc = _grams(a, t, folds)
+    g, h, c = (x.sum(axis=0) for x in grams(a, t, folds))
+    fg, fh, fc = grams(a, t, folds)
     return Design([Column("B", "B"), Column("stribeck", "tau_s", 0.25)], g, g, h, h, c, c, np.full(3, N),
                   np.full(3, N), np.ones(3), g_fold=fg, h_fold=fh, c_fold=fc,
                   n_fold=np.array([np.full(3, int(m.sum())) for m in folds]),
