@@ -12,7 +12,10 @@ fitted by least squares (raw samples) for whole-sample lags up to :func:`search_
 whichever is longer, at most 64 samples), then on a grid of 1/8 sample around the best; the lag of the
 smallest residual, refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k
 command drives k -> k+1). The dead-band term is the held commands' dead band shifted (the drive's nonlinearity
-acts on each held level before two of them share a sample). A minimum that is not sharp (residual within 1 % one
+acts on each held level before two of them share a sample), ``v_db tanh(V / v_db)`` (the catalogue's form, eq.
+voltage_deadband) with its width searched per lag on :data:`DEAD_BAND_WIDTHS` (a width fixed at 5 % of the command's
+spread left a 2.3 V dead band under a 10 V PI command 8 A off inside the band, and the lag a sample short; proving
+ground 117). A minimum that is not sharp (residual within 1 % one
 sample either side) is a plateau: bounded inside the search and at most two samples wide (a slow two-level
 command, whose rare level changes tell the lag only to within about a sample), its midpoint is the alignment;
 wider or reaching an end of the search (slow, smooth excitation), the free fit cannot tell the lag: a smooth
@@ -75,6 +78,8 @@ HELD_L_ERROR = 0.5
 #: how many times lower the search residual (eq. dc_electrical, free coefficients) must be at a lag beyond the
 #: conventions than at the best lag within them for that lag to be measured as a delay by itself (:func:`gain`)
 DELAY_GAIN = 2.0
+#: the dead band's widths tried in the free search [fractions of the command's standard deviation] (module doc)
+DEAD_BAND_WIDTHS = (0.05, 0.1, 0.2, 0.3, 0.5)
 #: widest flat minimum [samples] taken as a measured lag (its midpoint): a level change of a two-level command
 #: pins the lag to within about a sample on either side; a wider one is a smooth excitation's (no lag measured)
 PLATEAU = 2.0
@@ -120,9 +125,12 @@ def smooth(y: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
 
 
 def shifted(y: np.ndarray, lag: float) -> np.ndarray:
-    """``y`` (N,) delayed by ``lag`` samples (fractional: linear interpolation; edges held)."""
-    k = np.arange(y.size, dtype=float)
-    return np.interp(k - lag, k, y)
+    """``y`` (N,) or each column of ``y`` (N, B) delayed by ``lag`` samples (fractional: linear interpolation;
+    edges held)."""
+    k = np.arange(y.shape[0], dtype=float)
+    if y.ndim == 1:
+        return np.interp(k - lag, k, y)
+    return np.column_stack([np.interp(k - lag, k, c) for c in y.T])
 
 
 def cutoff_hz(log: Log, tau_m: float) -> float:
@@ -138,21 +146,26 @@ def search_range(dt: float) -> int:
 
 
 def _residual(target: np.ndarray, gram: np.ndarray, cross: np.ndarray, cols: np.ndarray, v: np.ndarray,
-              band: np.ndarray) -> float:
-    """RMS of the least-squares fit of ``target`` (M,) by ``cols`` (M, P) (Gram ``gram``, ``cross`` = cols' target),
-    the command ``v`` (M,) and its dead-band term ``band`` (M,); normal equations (few columns, many rows)."""
-    extra = np.column_stack([v, band])
+              bands: np.ndarray) -> float:
+    """Smallest RMS over the dead-band terms ``bands`` (M, B) of the least-squares fit of ``target`` (M,) by ``cols``
+    (M, P) (Gram ``gram``, ``cross`` = cols' target), the command ``v`` (M,) and one dead-band term; normal equations
+    (few columns, many rows), every product over the rows formed once for all B terms."""
+    extra = np.column_stack([v, bands])  # (M, 1 + B)
     p = cols.shape[1]
-    g = np.empty((p + 2, p + 2))
-    g[:p, :p] = gram
-    g[:p, p:] = np.einsum("mp,mq->pq", cols, extra)
-    g[p:, :p] = g[:p, p:].T
-    g[p:, p:] = np.einsum("mp,mq->pq", extra, extra)
-    h = np.concatenate([cross, np.einsum("mq,m->q", extra, target)])
-    d = np.sqrt(np.maximum(np.diag(g), 1e-300))
-    x = np.linalg.lstsq(g / np.outer(d, d), h / d, rcond=1e-12)[0] / d
-    ss = float(target @ target - 2 * h @ x + x @ g @ x)
-    return math.sqrt(max(ss, 0.0) / target.size)
+    cx, xx, hx = cols.T @ extra, extra.T @ extra, extra.T @ target
+    best = math.inf
+    for b in range(1, extra.shape[1]):
+        pick = [0, b]
+        g = np.empty((p + 2, p + 2))
+        g[:p, :p] = gram
+        g[:p, p:] = cx[:, pick]
+        g[p:, :p] = g[:p, p:].T
+        g[p:, p:] = xx[np.ix_(pick, pick)]
+        h = np.concatenate([cross, hx[pick]])
+        d = np.sqrt(np.maximum(np.diag(g), 1e-300))
+        x = np.linalg.lstsq(g / np.outer(d, d), h / d, rcond=1e-12)[0] / d
+        best = min(best, float(target @ target - 2 * h @ x + x @ g @ x))
+    return math.sqrt(max(best, 0.0) / target.size)
 
 
 def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, float] | None = None) -> Alignment:
@@ -172,10 +185,10 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
     # the drive's dead band acts on each held command, before the held commands share a sample: shifted after
     # the nonlinearity (else, for a two-level command, it is a free column on the rows where the level changes,
     # and absorbs any sub-sample lag there)
-    band = np.tanh(v / (0.05 * np.std(v) + 1e-12))
+    bands = np.tanh(v[:, None] / (np.asarray(DEAD_BAND_WIDTHS) * np.std(v) + 1e-12))  # (N, B)
 
-    def curve(lags: np.ndarray) -> np.ndarray:
-        return np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k], shifted(band, lag)[k])
+    def curve(lags: np.ndarray) -> np.ndarray:  # (at each lag, the best dead-band width)
+        return np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k], shifted(bands, lag)[k])
                          for lag in lags])
 
     lags, res = _search(curve, top)
