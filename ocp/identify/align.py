@@ -149,19 +149,16 @@ def _residual(target: np.ndarray, gram: np.ndarray, cross: np.ndarray, cols: np.
               bands: np.ndarray) -> float:
     """Smallest RMS over the dead-band terms ``bands`` (M, B) of the least-squares fit of ``target`` (M,) by ``cols``
     (M, P) (Gram ``gram``, ``cross`` = cols' target), the command ``v`` (M,) and one dead-band term; normal equations
-    (few columns, many rows), every product over the rows formed once for all B terms."""
+    (few columns, many rows)."""
     extra = np.column_stack([v, bands])  # (M, 1 + B)
+    cx = cols.T @ extra
+    g_all = np.block([[gram, cx], [cx.T, extra.T @ extra]])  # every product over the rows, once
+    h_all = np.concatenate([cross, extra.T @ target])
     p = cols.shape[1]
-    cx, xx, hx = cols.T @ extra, extra.T @ extra, extra.T @ target
     best = math.inf
     for b in range(1, extra.shape[1]):
-        pick = [0, b]
-        g = np.empty((p + 2, p + 2))
-        g[:p, :p] = gram
-        g[:p, p:] = cx[:, pick]
-        g[p:, :p] = g[:p, p:].T
-        g[p:, p:] = xx[np.ix_(pick, pick)]
-        h = np.concatenate([cross, hx[pick]])
+        pick = [*range(p + 1), p + b]  # cols, v and one dead-band term
+        g, h = g_all[np.ix_(pick, pick)], h_all[pick]
         d = np.sqrt(np.maximum(np.diag(g), 1e-300))
         x = np.linalg.lstsq(g / np.outer(d, d), h / d, rcond=1e-12)[0] / d
         best = min(best, float(target @ target - 2 * h @ x + x @ g @ x))
