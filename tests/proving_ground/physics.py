@@ -50,20 +50,28 @@ def _sgn(x: float, eps: float) -> float:
     return math.tanh(x / eps)
 
 
-def load_torque(t: Truth, w: float, theta: float) -> float:
-    """Torque [N m] opposing the drive: viscous + propeller drag + hidden friction/ripple."""
-    tau = t.B * w + t.c_tau * w * abs(w)
-    eps = 1e-3 * t.v_max / t.k  # 0.1 % of the no-load speed: sharp, not the identifier's smoothing
-    if "coulomb_friction" in t.effects:
-        tau += t.e("coulomb_friction", "tau_c") * _sgn(w, eps)
-    if "stribeck" in t.effects:
-        ws = t.e("stribeck", "omega_s")
-        tau += t.e("stribeck", "tau_s") * math.exp(-(w / ws) ** 2) * _sgn(w, eps)
-    if "drag_asymmetry" in t.effects and w < 0:
-        tau += t.e("drag_asymmetry", "dc_tau") * w * abs(w)
-    if "cogging" in t.effects:
-        n = t.e("cogging", "periods")
-        tau += t.e("cogging", "amplitude") * math.sin(n * theta + t.e("cogging", "phase"))
+def load_torque(t: Truth) -> Callable[[float, float], float]:
+    """The torque [N m] opposing the drive, ``(w [rad/s], theta [rad]) -> tau``: viscous + propeller drag + hidden
+    friction/ripple, the effects' parameters looked up once (the integrator's inner loop)."""
+    b, c_tau, eps, fx = t.B, t.c_tau, 1e-3 * t.v_max / t.k, t.effects
+    tau_c = t.e("coulomb_friction", "tau_c") if "coulomb_friction" in fx else None
+    tau_s, ws = (t.e("stribeck", "tau_s"), t.e("stribeck", "omega_s")) if "stribeck" in fx else (None, 1.0)
+    dc_tau = t.e("drag_asymmetry", "dc_tau") if "drag_asymmetry" in fx else None
+    ripple = (t.e("cogging", "amplitude"), t.e("cogging", "periods"), t.e("cogging", "phase")) \
+        if "cogging" in fx else None
+
+    def tau(w: float, theta: float) -> float:
+        x = b * w + c_tau * w * abs(w)
+        if tau_c is not None:
+            x += tau_c * math.tanh(w / eps)
+        if tau_s is not None:
+            x += tau_s * math.exp(-(w / ws) ** 2) * math.tanh(w / eps)
+        if dc_tau is not None and w < 0:
+            x += dc_tau * w * abs(w)
+        if ripple is not None:
+            x += ripple[0] * math.sin(ripple[1] * theta + ripple[2])
+        return x
+
     return tau
 
 
@@ -121,12 +129,7 @@ class Rig:
         self.w = self.i = self.theta = 0.0
         self.f_lag = 0.0
         self.tau_f = truth.e("thrust_lag", "tau", 0.0)
-
-    def _mech(self, w: float, theta: float, f_lag: float, i: float) -> tuple[float, float, float]:
-        t = self.t
-        dw = (t.k * i - load_torque(t, w, theta)) / t.J
-        df = (quasi_static_thrust(t, w) - f_lag) / self.tau_f if self.tau_f > 0 else 0.0
-        return dw, w, df
+        self._torque = load_torque(truth)
 
     def _armature(self, va: float, w: float, h: float) -> tuple[float, float]:
         """(end current [A], mean current [A]) over ``h`` [s] from the present current, the drive putting out
@@ -152,22 +155,46 @@ class Rig:
         return end - t.k * (w1 - w0) / (h * t.R) * (h * e - t.L / t.R * (1.0 - e))
 
     def substep(self, v_cmd: float, h: float) -> None:
-        """Advance ``h`` [s]: RK4 on the rotor and thrust lag, each stage driven by the armature's exact mean current
-        over the step at that stage's speed (so the back-EMF's damping is inside the stages: with L/R far below
-        ``h`` the current follows the speed within the step, as it does physically); then the current
-        (:meth:`_end_current`)."""
-        va = drive_voltage(self.t, v_cmd)
-        y = (self.w, self.theta, self.f_lag)
+        """Advance ``h`` [s] (:meth:`advance`, one step)."""
+        self.advance(v_cmd, h, 1)
 
-        def f(x: tuple[float, ...]) -> tuple[float, float, float]:
-            return self._mech(x[0], x[1], x[2], self._armature(va, x[0], h)[1])
+    def advance(self, v_cmd: float, h: float, m: int) -> None:
+        """Advance ``m`` steps of ``h`` [s] under the held command ``v_cmd`` [V]: RK4 on the rotor and thrust lag, each
+        stage driven by the armature's exact mean current over the step at that stage's speed (so the back-EMF's
+        damping is inside the stages: with L/R far below ``h`` the current follows the speed within the step, as it
+        does physically); then the current (:meth:`_end_current`). (Without brushes, :meth:`_armature` and
+        :meth:`_end_current` are written out with their factors formed once per call, the arithmetic unchanged: the
+        inner loop of every proving-ground log.)"""
+        t = self.t
+        va = drive_voltage(t, v_cmd)
+        k, r, el, j, tau_f, torque = t.k, t.R, t.L, t.J, self.tau_f, self._torque
+        brush = t.e("brush_drop", "v_b") if "brush_drop" in t.effects else None
+        a = math.exp(-h * r / el)
+        oma, rh, hh, h6, bend = 1.0 - a, r * h, 0.5 * h, h / 6.0, h * a - el / r * (1.0 - a)
 
-        k1 = f(y)
-        k2 = f(tuple(y[j] + 0.5 * h * k1[j] for j in range(3)))
-        k3 = f(tuple(y[j] + 0.5 * h * k2[j] for j in range(3)))
-        k4 = f(tuple(y[j] + h * k3[j] for j in range(3)))
-        self.w, self.theta, self.f_lag = (y[j] + h / 6.0 * (k1[j] + 2 * k2[j] + 2 * k3[j] + k4[j]) for j in range(3))
-        self.i = self._end_current(va, y[0], self.w, h)
+        def f(w: float, theta: float, f_lag: float, i0: float) -> tuple[float, float, float]:
+            if brush is None:  # _armature's mean current
+                i_ss = (va - k * w) / r
+                i = i_ss + (i0 - i_ss) * oma * el / rh
+            else:
+                i = brush_current_step(va - k * w, brush, r, el, i0, h)[1]
+            # eq. rotor, the angle, the wake lag
+            return (k * i - torque(w, theta)) / j, w, (quasi_static_thrust(t, w) - f_lag) / tau_f if tau_f > 0 else 0.0
+
+        for _ in range(m):
+            w0, th0, fl0, i0 = self.w, self.theta, self.f_lag, self.i
+            k1 = f(w0, th0, fl0, i0)
+            k2 = f(w0 + hh * k1[0], th0 + hh * k1[1], fl0 + hh * k1[2], i0)
+            k3 = f(w0 + hh * k2[0], th0 + hh * k2[1], fl0 + hh * k2[2], i0)
+            k4 = f(w0 + h * k3[0], th0 + h * k3[1], fl0 + h * k3[2], i0)
+            self.w = w0 + h6 * (k1[0] + 2 * k2[0] + 2 * k3[0] + k4[0])
+            self.theta = th0 + h6 * (k1[1] + 2 * k2[1] + 2 * k3[1] + k4[1])
+            self.f_lag = fl0 + h6 * (k1[2] + 2 * k2[2] + 2 * k3[2] + k4[2])
+            if brush is None:  # _end_current
+                i_ss = (va - k * self.w) / r
+                self.i = i_ss + (i0 - i_ss) * a - k * (self.w - w0) / rh * bend
+            else:
+                self.i = self._end_current(va, w0, self.w, h)
 
     def thrust(self) -> float:
         f = self.f_lag if self.tau_f > 0 else quasi_static_thrust(self.t, self.w)
@@ -199,6 +226,5 @@ def run(truth: Truth, command: Callable[[int, np.ndarray], float], n: int, dt: f
         for p, (span, m) in enumerate(pieces):
             j = k - int(whole) - (1 if cut and p == 0 else 0)
             v = float(cmds[j]) if j >= 0 else 0.0
-            for _ in range(m):
-                rig.substep(v, span / m)
+            rig.advance(v, span / m, m)
     return out, cmds
