@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Set up everything a fresh machine needs, then run the whole test suite: ruff, mypy, pytest.
-# Extra arguments go to pytest (e.g. `-m "not slow"`, `-k optimize`).
+# Extra arguments go to pytest (e.g. `-m "not slow"`, `-k optimize`). The tests run in one process per core
+# (pytest-xdist, a test file's tests together in one process, in order); THRUSTSHAPE_TEST_PROCS=0 runs them in this one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 VENV=${THRUSTSHAPE_VENV:-.venv}
@@ -16,4 +17,4 @@ if [ ! -x /usr/bin/chromium ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/
 fi
 "$VENV/bin/ruff" check .
 "$VENV/bin/mypy"
-exec "$VENV/bin/python" -m pytest "$@"
+exec "$VENV/bin/python" -m pytest -n "${THRUSTSHAPE_TEST_PROCS:-auto}" --dist loadfile "$@"
