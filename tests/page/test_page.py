@@ -11,13 +11,12 @@ from __future__ import annotations
 import io
 import json
 import zipfile
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from tests.browser import chromium, playwright, served, watched
+from tests.browser import playwright
 from tests.page.test_page_example import HIDDEN, MISSION
 from tests.service.test_service_support import ROOT, Server
 
@@ -26,25 +25,6 @@ pytestmark = pytest.mark.integration
 ARTIFACTS = ROOT / "test-artifacts"
 LONG = 120_000  # ms: diagnose fits every catalogue effect (seconds on a shared 2-core machine)
 sync_api = playwright()
-
-
-@pytest.fixture(scope="module")
-def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    with served(tmp_path_factory.mktemp("page-server"), THRUSTSHAPE_WORKERS="2") as srv:
-        yield srv
-
-
-@pytest.fixture(scope="module")
-def browser(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Any]:
-    with chromium(tmp_path_factory.mktemp("chromium-profile"), accept_downloads=True) as ctx:
-        yield ctx
-
-
-@pytest.fixture()
-def page(browser: Any, server: Server) -> Iterator[Any]:
-    """A fresh tab on the server; fails the test on any uncaught script error."""
-    with watched(browser.new_page()) as pg:
-        yield pg
 
 
 def shot(page: Any, name: str) -> None:

@@ -14,14 +14,14 @@ from ocp.logs import write_log_csv
 from ocp.model.params import load_params
 from ocp.model.plant import DCMotorPlant
 from tests.identify.test_angle_periodic import RIPPLE
-from tests.page.test_page import LONG, browser, open_tab, page, server  # noqa: F401  (fixtures)
+from tests.page.test_page import LONG, open_tab
 from tests.service.test_service_support import Server
 from tests.synthetic_rig import RigSpec, generate
 
 pytestmark = pytest.mark.integration
 
 
-def test_an_undecided_count_is_said_on_the_page(page: Any, server: Server, tmp_path: Path) -> None:  # noqa: F811
+def test_an_undecided_count_is_said_on_the_page(page: Any, server: Server, tmp_path: Path) -> None:
     rig = load_params("paper-rig")
     log = generate(rig, RigSpec(effects={"cogging": RIPPLE}, seconds=1.5, seed=12, rate=200.0))
     rivals = diagnose(DCMotorPlant(rig), log).angle_periodic["rivals"]  # type: ignore[index]

@@ -12,14 +12,14 @@ import pytest
 
 from ocp.logs import Log, write_log_csv
 from ocp.model.params import load_params
-from tests.page.test_page import LONG, browser, open_tab, page, server  # noqa: F401  (fixtures)
+from tests.page.test_page import LONG, open_tab
 from tests.service.test_service_support import Server
 from tests.synthetic_rig import RigSpec, generate
 
 pytestmark = pytest.mark.integration
 
 
-def test_an_unresolved_constant_is_shown_as_kept_at_nominal(page: Any, server: Server,  # noqa: F811
+def test_an_unresolved_constant_is_shown_as_kept_at_nominal(page: Any, server: Server,
                                                             tmp_path: Path) -> None:
     log = generate(load_params("paper-rig"), RigSpec(seconds=1.0, seed=9))
     a = np.exp(-0.25)  # first-order current filter, time constant 4 samples: L's column takes it up

@@ -17,14 +17,14 @@ from ocp.logs import write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.identify.test_current_sensor_lag import DRAWS
-from tests.page.test_page import LONG, browser, open_tab, page, server  # noqa: F401  (fixtures)
+from tests.page.test_page import LONG, open_tab
 from tests.proving_ground import make_case
 from tests.service.test_service_support import Server
 
 pytestmark = pytest.mark.integration
 
 
-def test_the_fitted_current_lag_is_said_on_the_page(page: Any, server: Server, tmp_path: Path) -> None:  # noqa: F811
+def test_the_fitted_current_lag_is_said_on_the_page(page: Any, server: Server, tmp_path: Path) -> None:
     case = make_case(DRAWS[0], "clean")
     log = case_log(case)
     res = check(DCMotorPlant(MotorParams(**case.nominal)), log)

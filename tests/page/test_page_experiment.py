@@ -14,14 +14,14 @@ import pytest
 
 from ocp.logs import log_from_arrays, write_log_csv
 from ocp.optimize.mission import Mission
-from tests.page.test_page import LONG, browser, downloaded, open_tab, page, server, shot  # noqa: F401  (fixtures)
+from tests.page.test_page import LONG, downloaded, open_tab, shot
 from tests.proving_ground.experiment import draw, single_speed
 from tests.service.test_service_support import Server
 
 pytestmark = pytest.mark.integration
 
 
-def test_the_model_tab_designs_the_experiment_and_downloads_its_mission(page: Any, server: Server,  # noqa: F811
+def test_the_model_tab_designs_the_experiment_and_downloads_its_mission(page: Any, server: Server,
                                                                         tmp_path: Path) -> None:
     rig = draw(6, "coulomb_friction")
     cols = single_speed(rig, 6)

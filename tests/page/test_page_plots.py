@@ -1,4 +1,4 @@
-"""The page's plots in headless Chromium (the server, browser and page fixtures of tests/test_page.py):
+"""The page's plots in headless Chromium (the server, browser and page fixtures of tests/page/conftest.py):
 drag-to-zoom on a reversal (the Design plots zoom together), the legend reads out the sample under the
 cursor, double-click zooms out; every plot downloads as PNG, SVG (the zoomed view) and CSV; the Compare
 table downloads as CSV; the zip reader skips macOS metadata entries."""
@@ -14,11 +14,8 @@ from typing import Any
 
 import pytest
 
-import tests.page.test_page as base
 from tests.page.test_page import LONG, _mission, open_tab, shot
 from tests.service.test_service_support import Server
-
-server, browser, page = base.server, base.browser, base.page  # the same fixtures (one server, one browser)
 
 THRUST = "#d-plot-thrust .plot"
 

@@ -132,9 +132,10 @@ class Server:
 def start_server(tmp: Path, env: dict[str, str], *, port: int | None = None, factory: bool = True,
                  timeout: float = 90.0, warm: bool = False) -> Server:
     """A real uvicorn server on 127.0.0.1 (``thrustshape serve`` when ``factory`` is False); ``warm``: also
-    wait until /healthz says every worker process has started."""
+    wait until /healthz says every worker process has started. One solver and one fallback worker unless ``env``
+    says otherwise (each process imports the solver stack and warms up: seconds of CPU per server start)."""
     port = port or free_port()
-    full_env = {**os.environ, "THRUSTSHAPE_WORKERS": "1", **env}
+    full_env = {**os.environ, "THRUSTSHAPE_WORKERS": "1", "THRUSTSHAPE_FALLBACK_WORKERS": "1", **env}
     log = tmp / f"server-{port}-{time.time_ns()}.log"
     if factory:
         cmd = [sys.executable, "-m", "uvicorn", "--factory", "tests.service.test_service_support:make_app",
