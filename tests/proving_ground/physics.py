@@ -46,14 +46,12 @@ class Truth:
         return self.effects.get(name, {}).get(key, default)
 
 
-def _sgn(x: float, eps: float) -> float:
-    return math.tanh(x / eps)
-
-
 def load_torque(t: Truth) -> Callable[[float, float], float]:
     """The torque [N m] opposing the drive, ``(w [rad/s], theta [rad]) -> tau``: viscous + propeller drag + hidden
     friction/ripple, the effects' parameters looked up once (the integrator's inner loop)."""
-    b, c_tau, eps, fx = t.B, t.c_tau, 1e-3 * t.v_max / t.k, t.effects
+    b, c_tau, fx = t.B, t.c_tau, t.effects
+    eps = 1e-3 * t.v_max / t.k  # a dry friction's sign, tanh(w / eps): 0.1 % of the no-load speed, sharp (not the
+    # identifier's smoothing)
     tau_c = t.e("coulomb_friction", "tau_c") if "coulomb_friction" in fx else None
     tau_s, ws = (t.e("stribeck", "tau_s"), t.e("stribeck", "omega_s")) if "stribeck" in fx else (None, 1.0)
     dc_tau = t.e("drag_asymmetry", "dc_tau") if "drag_asymmetry" in fx else None
@@ -178,7 +176,7 @@ class Rig:
                 i = i_ss + (i0 - i_ss) * oma * el / rh
             else:
                 i = brush_current_step(va - k * w, brush, r, el, i0, h)[1]
-            # eq. rotor, the angle, the wake lag
+            # eq:dc_mechanical, the angle, the wake lag
             return (k * i - torque(w, theta)) / j, w, (quasi_static_thrust(t, w) - f_lag) / tau_f if tau_f > 0 else 0.0
 
         for _ in range(m):
