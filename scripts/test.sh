@@ -10,7 +10,7 @@ if [ ! -x "$VENV/bin/python" ]; then
 fi
 "$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip
 "$VENV/bin/python" -m pip install -q --disable-pip-version-check -e '.[dev]'
-# The web page's browser tests drive Debian's chromium (tests/test_page.py skips, saying why, when it is absent).
+# The web page's browser tests drive Debian's chromium (tests/browser.py skips them, saying why, when it is absent).
 if [ ! -x /usr/bin/chromium ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
   apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null \
     || echo "test.sh: could not install chromium; the page tests will be skipped" >&2
