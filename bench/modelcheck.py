@@ -10,6 +10,7 @@ nominal constants; its verdict is compared with the truth.
     python bench/modelcheck.py --n 40 --first 1000   # a tuning set (keep tuning seeds apart from these)
     python bench/modelcheck.py --n 100 --first 1000 --cache /tmp/pg   # keep generated logs for the next run
     python bench/modelcheck.py --n 200 --first 2000 --json new.json   # every record, for the two below
+    python bench/modelcheck.py --seeds 6003 9204 10014 --json few.json   # a chosen class of logs, before and after
     python bench/modelcheck.py --records a.json b.json   # the table of recorded runs (merged), nothing diagnosed
     python bench/modelcheck.py --compare old.json new.json   # seed by seed: the logs a change fixed and broke
     python bench/modelcheck.py --n 200 --first 2000 --noise-free --json quiet.json   # the same logs without noise
@@ -256,7 +257,7 @@ def _records(paths: list[str]) -> list[dict[str, Any]]:
     return [rows[s] for s in sorted(rows)]
 
 
-def _run(seeds: range, args: argparse.Namespace) -> list[dict[str, Any]]:
+def _run(seeds: list[int], args: argparse.Namespace) -> list[dict[str, Any]]:
     """Every seed's record (:func:`one`) in ``args.procs`` processes, by seed."""
     with multiprocessing.get_context("spawn").Pool(args.procs) as pool:
         rows = []
@@ -268,10 +269,17 @@ def _run(seeds: range, args: argparse.Namespace) -> list[dict[str, Any]]:
     return sorted(rows, key=lambda r: r["seed"])
 
 
+def seeds(args: argparse.Namespace) -> list[int]:
+    """The seeds a run diagnoses: ``--seeds`` (sorted, once each), else ``--n`` from ``--first``."""
+    return sorted(set(args.seeds)) if args.seeds else list(range(args.first, args.first + args.n))
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--n", type=int, default=200, help="number of logs")
     ap.add_argument("--first", type=int, default=0, help="first seed (tuning: use seeds >= 1000)")
+    ap.add_argument("--seeds", type=int, nargs="+", metavar="SEED", help="these seeds instead of --n/--first (a class "
+                    "of logs, e.g. those with a label drawn, judged before and after a change)")
     ap.add_argument("--procs", type=int, default=2)
     ap.add_argument("--json", default=None, help="write every record here")
     ap.add_argument("--cache", default=None,
@@ -292,7 +300,7 @@ def main(argv: list[str] | None = None) -> int:
         print(compare(*(_records([p]) for p in args.compare)))
         return 0
     t0 = time.perf_counter()
-    rows = _records(args.records) if args.records else _run(range(args.first, args.first + args.n), args)
+    rows = _records(args.records) if args.records else _run(seeds(args), args)
     if args.audit:
         with multiprocessing.get_context("spawn").Pool(args.procs) as pool:
             rows = pool.map(functools.partial(audited, cache=args.cache), rows)

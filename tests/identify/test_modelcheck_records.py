@@ -4,6 +4,7 @@ diagnosing, ``--compare`` lists seed by seed what a change fixed and broke -- ho
 
 from __future__ import annotations
 
+import argparse
 import importlib.util
 import json
 from pathlib import Path
@@ -160,3 +161,12 @@ def test_the_audit_of_a_drawn_case_is_kept_in_the_cache(tmp_path: Path, monkeypa
 
     monkeypatch.setattr(calibration, "audit", fail)
     assert mod.audited(rec, str(tmp_path))["footprints"] == out["footprints"]
+
+
+def test_a_run_takes_the_seeds_asked_for_or_a_range() -> None:
+    """``--seeds`` names the logs (a class of them, judged before and after a change), each once, in order; without
+    it ``--n`` logs from ``--first``."""
+    bench = _bench()
+    args = argparse.Namespace(seeds=[9204, 6003, 9204], n=200, first=0)
+    assert bench.seeds(args) == [6003, 9204]
+    assert bench.seeds(argparse.Namespace(seeds=None, n=3, first=13000)) == [13000, 13001, 13002]
