@@ -1,34 +1,20 @@
 """The page's model tab with an ESC sweep (real uvicorn server, Debian's headless Chromium): the read
 options reach the server (pole pairs and the rest: tests/test_readers_api.py), the answer lists the
-equations checked and not, the verdict names the asymmetry."""
+equations checked and not, the verdict names the asymmetry. The server, browser and tab: tests/page/conftest.py."""
 
 from __future__ import annotations
 
 import json
-from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import pytest
 
-from tests.browser import chromium, served, watched
 from tests.logfiles import Thruster, thruster_sweep, write_csv
 from tests.page.test_page import LONG, open_tab, shot
 from tests.service.test_service_support import Server
 
 pytestmark = pytest.mark.integration
-
-
-@pytest.fixture(scope="module")
-def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    with served(tmp_path_factory.mktemp("readers-page")) as srv:
-        yield srv
-
-
-@pytest.fixture(scope="module")
-def page(tmp_path_factory: pytest.TempPathFactory, server: Server) -> Iterator[Any]:
-    with chromium(tmp_path_factory.mktemp("chromium-profile")) as ctx, watched(ctx.new_page()) as pg:
-        yield pg
 
 
 def _custom_params(page: Any, params: dict[str, float]) -> None:
