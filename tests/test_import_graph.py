@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import ast
 import importlib
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -115,3 +117,12 @@ def test_no_service_or_client_module_is_over_the_size_limit() -> None:
     sizes = {str(p.relative_to(ROOT)): len(p.read_text(encoding="utf-8").splitlines())
              for layer in ("service", "clients") for p in sorted((ROOT / layer).rglob("*.py"))}
     assert {name: n for name, n in sizes.items() if n > MAX_LINES} == {}
+
+
+def test_the_server_process_does_not_import_scipy() -> None:
+    """The server only validates and dispatches; SciPy (~1 s to import) belongs in the workers that compute.
+    Every server start (``serve.sh``, a restart, each integration test's server) pays for what the app imports."""
+    code = ("import sys\nfrom service.app import create_app\nfrom service.settings import Settings\n"
+            "create_app(Settings())\nprint(sorted(m for m in sys.modules if m.split('.')[0] == 'scipy')[:3])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=ROOT)
+    assert out.stdout.strip() == "[]"

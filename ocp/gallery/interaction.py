@@ -27,8 +27,6 @@ from dataclasses import dataclass
 from enum import StrEnum
 
 import numpy as np
-from scipy.integrate import solve_ivp
-from scipy.optimize import brentq
 
 from ocp.errors import MissionError, SolverError
 
@@ -192,6 +190,9 @@ def shape_reversals(t: np.ndarray, x2d: np.ndarray, dx2d: np.ndarray, crossings:
 def interaction_reference(law: Law, setup: InteractionSetup | None = None,
                           rate: float = 1000.0) -> InteractionReference:
     """Ideal and shaped thrust references of ``law`` sampled at ``rate`` [1/normalised time]."""
+    from scipy.integrate import solve_ivp  # here: the server imports this module for ``Law`` (scipy: ~0.6 s)
+    from scipy.optimize import brentq
+
     s = InteractionSetup() if setup is None else setup
     model = _impedance(s) if law is Law.IMPEDANCE else _admittance(s)
     x0 = np.zeros(2 if law is Law.IMPEDANCE else 4)  # at rest at the origin
