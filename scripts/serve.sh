@@ -4,10 +4,6 @@
 # Extra arguments go to `thrustshape serve` (e.g. `--port 9000 --workers 4`).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-VENV=${THRUSTSHAPE_VENV:-.venv}
-if [ ! -x "$VENV/bin/python" ]; then
-  python3 -m venv "$VENV"
-fi
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e '.[flightlogs,xlsx]'  # flight logs and .xlsx sweeps for the model check; add ,dask for --dask
+. scripts/venv.sh
+venv_install flightlogs,xlsx  # flight logs and .xlsx sweeps for the model check; add ,dask for --dask
 exec "$VENV/bin/thrustshape" serve "$@"

@@ -4,12 +4,8 @@
 # (pytest-xdist, a test file's tests together in one process, in order); THRUSTSHAPE_TEST_PROCS=0 runs them in this one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-VENV=${THRUSTSHAPE_VENV:-.venv}
-if [ ! -x "$VENV/bin/python" ]; then
-  python3 -m venv "$VENV"
-fi
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip
-"$VENV/bin/python" -m pip install -q --disable-pip-version-check -e '.[dev]'
+. scripts/venv.sh
+venv_install dev
 # The web page's browser tests drive Debian's chromium (tests/browser.py skips them, saying why, when it is absent).
 if [ ! -x /usr/bin/chromium ] && [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then
   apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null \

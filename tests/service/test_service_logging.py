@@ -35,7 +35,7 @@ def test_server_logs_start_resume_requests_tasks_timeouts(tmp_path: Path) -> Non
     store.close()
     env = {"TS_TEST_TASKS": "hang-optimize", "THRUSTSHAPE_DB_PATH": str(db), "TS_TEST_ITEM_SECONDS": "0.05",
            "THRUSTSHAPE_OPTIMIZE_DEADLINE_S": "2", "THRUSTSHAPE_FALLBACK_RESERVE_S": "1"}
-    with running_server(tmp_path, env) as srv, httpx.Client(base_url=srv.url, timeout=60) as http:
+    with running_server(tmp_path, env, warm=True) as srv, httpx.Client(base_url=srv.url, timeout=60) as http:
         ok = http.post("/v1/references/analytic", json=SIN, headers={"X-Request-ID": "tour-1"})
         assert ok.status_code == 200 and ok.headers["x-request-id"] == "tour-1"
         bad = http.post("/v1/references/analytic", json={**SIN, "q": -1})
