@@ -7,6 +7,7 @@ VENV=${THRUSTSHAPE_VENV:-.venv}
 if [ ! -x "$VENV/bin/python" ]; then
   python3 -m venv "$VENV"
 fi
+# (UV_LINK_MODE=copy: uv's cache and a venv under /tmp may be on different file systems, where it warns of hard links)
 venv_install() {
   if "$VENV/bin/python" -m pip install -q --disable-pip-version-check uv \
       && UV_LINK_MODE=copy "$VENV/bin/python" -m uv pip install -q --compile-bytecode --python "$VENV/bin/python" -e ".[$1]"; then

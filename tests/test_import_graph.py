@@ -1,5 +1,6 @@
 """The core's house rules, checked on its source: every ``ocp`` module imports, its import graph (module level
-imports, read with ``ast``) has no cycle, and no module is over the size limit of the style guide."""
+imports, read with ``ast``) has no cycle, and no module is over the size limit of the style guide; and, run in a
+process of its own, the server's app imports no SciPy (the numerical stack is the workers')."""
 
 from __future__ import annotations
 
