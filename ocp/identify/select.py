@@ -26,6 +26,8 @@ itself (calibration already takes the first ``tol`` of its error, and beyond it 
 constant freed beyond it needs only to win beyond sampling noise -- or, the models being nested and scored on the
 same rows, in a paired comparison over held-out blocks or a likelihood ratio (the torque equation's likelihood
 ratio judges an effect's material fall too: on a fast, short log its rows are too few for any other test).
+An angle ripple that wins by its own test alone (its rows' independence is a fast ripple's) yields to an effect
+that scores better and is material (:func:`_slower_first`): the residual it took is slow.
 After the forward rounds, each adopted constant, then each effect but the last one adopted, is tested again
 beside all the other adopted items, and dropped (a constant: calibrated, not named) where it no longer wins: a
 greedy first pick that stood for a mix of the items adopted after it (a thrust asymmetry taken first for a wake lag
@@ -272,6 +274,7 @@ def _forward(design: Design, pool: list[str], items: list[str], current: Fitted,
         win = next((k for k, (c, f) in enumerate(tried) if _wins(design, current, c, f, min_improvement)
                     and physical(f) and _room(design, current, (c,), noise_floor, f)), None) \
             if worst(design, current) > noise_floor else None
+        win = _slower_first(design, current, tried, win, min_improvement, physical)
         if win is not None:
             tried = [tried[win], *tried[:win], *tried[win + 1:]]
         ok = win is not None
@@ -360,6 +363,23 @@ def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement
     return beyond_scatter(design, current, f, (item,)) or ratio_agrees(design, current, item, f) \
         or (item in CONSTANTS and blocks_agree(design, current, item, f)) \
         or (item == "cogging" and ripple_beyond(design, current, f))
+
+
+def _slower_first(design: Design, current: Fitted, tried: list[tuple[str, Fitted]], win: int | None,
+                  min_improvement: float, physical: Callable[[Fitted], bool]) -> int | None:
+    """The round's winner ``win`` (an index into ``tried``, best-scoring first), or, where an angle ripple wins by its
+    own test alone (:func:`.evidence.ripple_beyond`: a fast ripple's chance correlation with a slow residual averages
+    out over many independent pieces) while an effect that scores better on held-out data fails its test, that
+    effect (material and physical). The ripple's win says the current model leaves torque the log shows beyond noise;
+    a slow effect that predicts the held-out rows better is the better explanation of it, and its residual is not
+    the fast one the ripple's test assumes (the ambiguity challenge lists the ripple beside it where it fits within
+    the margin). Proving ground 14183: Stribeck friction on a 10 kHz tachometer log, named an angle ripple of 20
+    periods/rev, whose columns follow a phase tracked along the speed's integral."""
+    if win is None or tried[win][0] != "cogging" or beyond_scatter(design, current, tried[win][1], ("cogging",)) \
+            or ratio_agrees(design, current, "cogging", tried[win][1]):
+        return win
+    return next((k for k, (c, f) in enumerate(tried[:win]) if c not in CONSTANTS and physical(f)
+                 and is_material(design, current, f, (c,), min_improvement)), win)
 
 
 def _prefer_effects(design: Design, tried: list[tuple[str, Fitted]], margin: float) -> list[tuple[str, Fitted]]:
