@@ -63,6 +63,7 @@ from ocp.identify.explain import (
     units,
     with_band,
 )
+from ocp.identify.inductance import TIMING_MIMICS, filter_headroom, inductance_wins, open_timing, timed_inductance
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels, read_current
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
 from ocp.identify.select import Selection, select
@@ -291,7 +292,18 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     aligned = realign(log, align.samples - own, tau)  # the equations always see the command when it acts
     work = log if delay is not None else aligned  # free runs: the delay, if called, is in the plant
     held = (log.voltage, switched(max(align.samples - own, 0.0), tau))  # (the drive's dead band acts before the shift)
-    design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align, held)
+
+    def judged(design: Design, f: Fitted) -> bool:  # a named L against the timing that mimics it, on free runs
+        return inductance_wins(plant, plant_of(plant, design, f, delay), f.items, log,
+                               None if delay is not None else align.samples - own, tau, free_error, opt.min_improvement,
+                               opt.max_logging_skew)
+
+    def free_error(p: DCMotorPlant, x: Log) -> float:  # speed and current, free run, noise units, about their means
+        e = score(p, x, sp.test, noise, seg, centred=True, sensor=False).rms
+        return math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"])
+
+    design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align, held,
+                           judged)
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:
@@ -338,19 +350,22 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],
              noise: dict[str, float], opt: DiagnoseOptions, delayed: bool,
              progress: Callable[[float], None] | None, align: Alignment,
-             held: tuple[np.ndarray, float] | None = None) -> tuple[Design, Selection]:
+             held: tuple[np.ndarray, float] | None = None,
+             judged: Callable[[Design, Fitted], bool] | None = None) -> tuple[Design, Selection]:
     """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
     ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
     search residual) or was found only with the nominal armature (:attr:`.align.Alignment.nominal`: it assumed
-    ``L``), ``L`` is judged beside the timing error it cannot be told from (:func:`_open_timing`)."""
+    ``L``), ``L`` is judged beside the timing error it cannot be told from (:func:`.inductance.open_timing`).
+    A measured one: ``L`` named only where ``judged`` (:func:`.inductance.inductance_wins`) says it predicts
+    the held-out free run better than the timing that mimics it; else it is unresolved, the selection redone."""
     design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True, held=held,
                    folds=list(sp.folds) or None)
     if log.kind is LogKind.TIME_SERIES:
         if not align.identified or align.nominal:  # (a lag found with the nominal armature assumed L)
-            _open_timing(design, plant, log, opt)
+            open_timing(design, plant, log, opt.tolerance, opt.max_logging_skew)
         elif "L" in design.unresolved:
-            _timed_inductance(design, plant, log, opt, spread(align))
-        _filter_headroom(design, plant, log)
+            timed_inductance(design, plant, log, opt.tolerance, spread(align))
+        filter_headroom(design, plant, log)
     if progress is not None:
         progress(0.2)
     ok = functools.partial(physical, design)
@@ -368,52 +383,13 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
                                   "logging conventions explains the armature equation as well")
         sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
                      opt.ambiguity_margin, physical=ok)
+    elif judged is not None and "L" in sel.final.items and not judged(design, sel.final):
+        for box in (design.slack, design.above, design.one_sided):
+            box.pop("L", None)
+        design.unresolved["L"] = TIMING_MIMICS
+        sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
+                     opt.ambiguity_margin, physical=ok)
     return design, sel
-
-
-def _open_timing(design: Design, plant: DCMotorPlant, log: Log, opt: DiagnoseOptions) -> None:
-    """``L`` where the command timing is not identified (flat alignment residual): a timing error of ``d`` samples
-    within the conventions (``|d|`` up to ``max_logging_skew + SKEW_FRACTION``) leaves ``-d dt R i'`` in eq.
-    dc_electrical, as an inductance error ``x = d dt R / L`` does. Up to that ``x`` it widens ``L``'s calibration
-    box (:attr:`.regression.Design.slack`), and an error beyond both is still named (e.g. 43 % at an L/R of 11
-    samples, where the timing mimics at most 25 %). Where the box would reach a factor of two below nominal
-    (``tol + x >= 1 - 1 / IMPLAUSIBLE_FACTOR``: L/R under about 7 samples), no plausible error is left to name on
-    that side: ``L`` is unresolved, with the reason (as it is when the selection names ``L`` beyond a factor two
-    (:func:`_explain`): a timing error beyond the conventions, an unconfirmed delay, is the likelier cause)."""
-    x = (opt.max_logging_skew + SKEW_FRACTION) * log.dt * plant.params.R / plant.params.L
-    if opt.tolerance + x < 1.0 - 1.0 / IMPLAUSIBLE_FACTOR:
-        design.slack["L"] = x
-        return
-    design.unresolved.setdefault("L", "the command timing is not identifiable in this log (flat alignment "
-                                      "residual): an inductance error cannot be told from a sub-sample timing error")
-
-
-def _timed_inductance(design: Design, plant: DCMotorPlant, log: Log, opt: DiagnoseOptions, timing: float) -> None:
-    """``L`` where L/R is under two samples but the command timing is measured (to ``timing`` samples,
-    :func:`.align.spread`): a current filter of time constant ``t_f`` (eq. dc_electrical on the filtered current:
-    ``L i' + R (i + t_f i')``) only RAISES the apparent inductance, by ``R t_f``; what can lower it is a timing
-    error ``d`` the alignment left, ``-d dt R i'``. So ``L`` stays free above nominal (a nuisance, as when
-    unresolved) and is boxed below at ``tol`` widened by that timing error, ``x = timing dt R / L``: an apparent
-    ``L`` clearly below both can only be a smaller inductance, and is named. Where that box would reach a factor two
-    below nominal (L/R under about a third of a sample on a sharp alignment), nothing plausible is left to name."""
-    x = timing * log.dt * plant.params.R / plant.params.L
-    if opt.tolerance + x >= 1.0 - 1.0 / IMPLAUSIBLE_FACTOR:
-        return
-    design.one_sided["L"] = (design.unresolved.pop("L") + f"; free above nominal (a filter raises L), named only "
-                             f"below it by more than {100 * (opt.tolerance + x):.0f} % (the timing measured to "
-                             f"{timing:.2g} samples)")
-    design.slack["L"] = x
-    design.above["L"] = math.inf
-
-
-def _filter_headroom(design: Design, plant: DCMotorPlant, log: Log) -> None:
-    """``L``'s calibration box widened ABOVE nominal by the current filter the torque equation measures: the
-    current lag ``l`` [samples] each model fits (the ``current_lag`` nuisance, where the true current is
-    ``i + l dt i'``) raises the apparent inductance in eq. dc_electrical by ``R l dt``, a relative ``l dt R / L``
-    that is the logger's, not the motor's (a clean 10 kHz log with a 0.3-sample filter showed ``L`` 20 % high). A
-    lead (``l < 0``) widens nothing (:func:`.select.fit_model`)."""
-    if "L" not in design.unresolved and "L" not in design.above:
-        design.lag_inductance = log.dt * plant.params.R / plant.params.L
 
 
 def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt: DiagnoseOptions, sp: Split,

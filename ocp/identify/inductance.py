@@ -1,0 +1,104 @@
+"""What a log can say about the inductance ``L`` beside what mimics its error (issue #11), eq. dc_electrical.
+
+An inductance error ``x`` leaves ``x L i'`` in the armature equation; a command timing error of ``d`` samples leaves
+``-d dt R i'``, and a current filter of time constant ``t_f`` raises the apparent inductance by ``R t_f``. The
+functions here set ``L``'s box in the regression (:attr:`.regression.Design.unresolved`, ``slack``, ``one_sided``,
+``above``, ``lag_inductance``) from what the alignment measured, and judge a named ``L`` against the timing that
+mimics it on held-out free runs (:func:`inductance_wins`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+
+from ocp.errors import SolverError
+from ocp.identify.align import SKEW_FRACTION, realign
+from ocp.identify.evidence import IMPLAUSIBLE_FACTOR
+from ocp.identify.explain import KEYS
+from ocp.identify.regression import Design
+from ocp.logs import Log
+from ocp.model.effects import make_effect
+from ocp.model.plant import DCMotorPlant
+
+#: why a named ``L`` is left unresolved when the timing that mimics it predicts as well (:func:`inductance_wins`)
+TIMING_MIMICS = ("the command timing moved by the lag that mimics this L error (x L/R samples) predicts the "
+                 "held-out speed and current as well: the log cannot tell the inductance from the timing")
+
+
+def open_timing(design: Design, plant: DCMotorPlant, log: Log, tolerance: float, max_skew: float) -> None:
+    """``L`` where the command timing is not identified (flat alignment residual): a timing error of ``d`` samples
+    within the conventions (``|d|`` up to ``max_logging_skew + SKEW_FRACTION``) leaves ``-d dt R i'`` in eq.
+    dc_electrical, as an inductance error ``x = d dt R / L`` does. Up to that ``x`` it widens ``L``'s calibration
+    box (:attr:`.regression.Design.slack`), and an error beyond both is still named (e.g. 43 % at an L/R of 11
+    samples, where the timing mimics at most 25 %). Where the box would reach a factor of two below nominal
+    (``tol + x >= 1 - 1 / IMPLAUSIBLE_FACTOR``: L/R under about 7 samples), no plausible error is left to name on
+    that side: ``L`` is unresolved, with the reason (as it is when the selection names ``L`` beyond a factor two
+    (:func:`.diagnose._explain`): a timing error beyond the conventions, an unconfirmed delay, is the likelier
+    cause)."""
+    x = (max_skew + SKEW_FRACTION) * log.dt * plant.params.R / plant.params.L
+    if tolerance + x < 1.0 - 1.0 / IMPLAUSIBLE_FACTOR:
+        design.slack["L"] = x
+        return
+    design.unresolved.setdefault("L", "the command timing is not identifiable in this log (flat alignment "
+                                      "residual): an inductance error cannot be told from a sub-sample timing error")
+
+
+def timed_inductance(design: Design, plant: DCMotorPlant, log: Log, tolerance: float, timing: float) -> None:
+    """``L`` where L/R is under two samples but the command timing is measured (to ``timing`` samples,
+    :func:`.align.spread`): a current filter of time constant ``t_f`` (eq. dc_electrical on the filtered current:
+    ``L i' + R (i + t_f i')``) only RAISES the apparent inductance, by ``R t_f``; what can lower it is a timing
+    error ``d`` the alignment left, ``-d dt R i'``. So ``L`` stays free above nominal (a nuisance, as when
+    unresolved) and is boxed below at ``tol`` widened by that timing error, ``x = timing dt R / L``: an apparent
+    ``L`` clearly below both can only be a smaller inductance, and is named. Where that box would reach a factor two
+    below nominal (L/R under about a third of a sample on a sharp alignment), nothing plausible is left to name."""
+    x = timing * log.dt * plant.params.R / plant.params.L
+    if tolerance + x >= 1.0 - 1.0 / IMPLAUSIBLE_FACTOR:
+        return
+    design.one_sided["L"] = (design.unresolved.pop("L") + f"; free above nominal (a filter raises L), named only "
+                             f"below it by more than {100 * (tolerance + x):.0f} % (the timing measured to "
+                             f"{timing:.2g} samples)")
+    design.slack["L"] = x
+    design.above["L"] = math.inf
+
+
+def filter_headroom(design: Design, plant: DCMotorPlant, log: Log) -> None:
+    """``L``'s calibration box widened ABOVE nominal by the current filter the torque equation measures: the
+    current lag ``l`` [samples] each model fits (the ``current_lag`` nuisance, where the true current is
+    ``i + l dt i'``) raises the apparent inductance in eq. dc_electrical by ``R l dt``, a relative ``l dt R / L``
+    that is the logger's, not the motor's (a clean 10 kHz log with a 0.3-sample filter showed ``L`` 20 % high). A
+    lead (``l < 0``) widens nothing (:func:`.select.fit_model`)."""
+    if "L" not in design.unresolved and "L" not in design.above:
+        design.lag_inductance = log.dt * plant.params.R / plant.params.L
+
+
+def inductance_wins(plant: DCMotorPlant, final: DCMotorPlant, named: Sequence[str], log: Log, shift: float | None,
+                    tau: float, heldout: Callable[[DCMotorPlant, Log], float], min_improvement: float,
+                    max_skew: float) -> bool:
+    """Whether ``final`` (``plant`` explained, its ``L`` named at a relative error ``x``) predicts the held-out speed
+    and current (``heldout``: free run, noise units) better by ``min_improvement`` than its rival: the nominal ``L``
+    with the command timing moved by the lag that mimics ``x``, ``x tau`` samples (``tau`` the nominal L/R in
+    samples; a lag ``d`` samples long leaves ``-d dt R i'``, an L error ``x L i'``), the adopted effects and the
+    other ``named`` constants as fitted, every other constant nominal. ``shift``: the lag [samples] the log is
+    realigned by for ``final``; None when ``final`` holds an ``input_delay`` (then that delay is moved). Only a
+    timing the conventions explain is a rival (0 to ``max_skew`` + :data:`.align.SKEW_FRACTION` samples): a longer
+    lag is a delay, which the alignment judged already (a 10 kHz log's ``L`` 40 % off, mimicked by 3.9 samples). The
+    alignment's search carries the sensors' noise, and a lag a sample off is an ``L`` error of ``1 / tau``
+    (proving ground: clean 2 kHz log 23172, lag 2.22 for 1.13 samples at an L/R of 2.36: ``L`` -49 %). A plant
+    too stiff to free-run keeps ``L`` named."""
+    x = final.params.L / plant.params.L - 1.0
+    if shift is not None and not 0.0 <= shift + x * tau <= max_skew + SKEW_FRACTION:
+        return True
+    keys = [key for c in named if c != "L" and c in KEYS for key in KEYS[c]]
+    params = plant.params.model_copy(update={key: getattr(final.params, key) for key in keys})
+    moved = tuple(make_effect("input_delay", {"delay": max(float(getattr(e, "delay", 0.0)) + x * tau * log.dt, 0.0)})
+                  if e.name == "input_delay" else e for e in final.effects)
+    try:
+        if shift is None:
+            own, rival = heldout(final, log), heldout(DCMotorPlant(params, moved), log)
+        else:
+            own = heldout(final, realign(log, shift, tau))
+            rival = heldout(DCMotorPlant(params, final.effects), realign(log, shift + x * tau, tau))
+    except SolverError:
+        return True
+    return own <= (1.0 - min_improvement) * rival
