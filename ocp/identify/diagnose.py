@@ -371,22 +371,20 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
     ok = functools.partial(physical, design)
     sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
                  opt.ambiguity_margin, None if progress is None else (lambda f: progress(0.2 + 0.6 * f)), ok)
+    why = None
     if "L" in design.slack and "L" in sel.final.items and implausible_factor(design, sel.final, "L") is not None:
         # beyond a factor two under an open timing: a timing error beyond the conventions (an unconfirmed
-        # delay) is the likelier explanation (the prior of .select): L is unresolved, the selection redone
-        del design.slack["L"]
-        design.above.pop("L", None)
-        design.one_sided.pop("L", None)
-        design.unresolved["L"] = (("the command timing is not identifiable in this log (flat alignment residual) and "
-                                   if not align.identified else "L/R is under two samples and ") +
-                                  "L would have to be off by more than a factor two: a timing error beyond the "
-                                  "logging conventions explains the armature equation as well")
-        sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
-                     opt.ambiguity_margin, physical=ok)
+        # delay) is the likelier explanation (the prior of .select)
+        why = (("the command timing is not identifiable in this log (flat alignment residual) and "
+                if not align.identified else "L/R is under two samples and ") +
+               "L would have to be off by more than a factor two: a timing error beyond the "
+               "logging conventions explains the armature equation as well")
     elif judged is not None and "L" in sel.final.items and not judged(design, sel.final):
+        why = TIMING_MIMICS
+    if why is not None:  # L is unresolved, the selection redone
         for box in (design.slack, design.above, design.one_sided):
             box.pop("L", None)
-        design.unresolved["L"] = TIMING_MIMICS
+        design.unresolved["L"] = why
         sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
                      opt.ambiguity_margin, physical=ok)
     return design, sel
