@@ -14,6 +14,7 @@ nominal constants; its verdict is compared with the truth.
     python bench/modelcheck.py --records a.json b.json   # the table of recorded runs (merged), nothing diagnosed
     python bench/modelcheck.py --compare old.json new.json   # seed by seed: the logs a change fixed and broke
     python bench/modelcheck.py --n 200 --first 2000 --noise-free --json quiet.json   # the same logs without noise
+    python bench/modelcheck.py --n 200 --first 2000 --no-angle --json speed.json   # encoders exported without angle
     python bench/modelcheck.py --records a.json --audit --cache DIR --json a+.json   # + the labels' audit (below)
 
 ``--audit``: each label's footprint left after calibration (:mod:`tests.proving_ground.calibration`: the proving
@@ -96,20 +97,21 @@ def noise_free(case: Any) -> Any:
     return replace(case, columns=record(quiet, out, cmds, np.random.default_rng(case.seed)), logger=quiet)
 
 
-def case_log(case: Any) -> Any:
+def case_log(case: Any, angle: bool = True) -> Any:
     """The case's log as :func:`ocp.logs.log_from_arrays` reads it (a jittery logger's time stamps resampled to a
-    uniform grid, as the file readers do, and say)."""
+    uniform grid, as the file readers do, and say); ``angle=False``: without the encoder's angle column, as a logger
+    that exports only the speed it differenced writes it."""
     from ocp.logs import log_from_arrays
     from ocp.logs.timebase import uniform
 
     t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    return log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"),
-                           source=f"proving-ground-{case.seed}")
+    return log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"],
+                           theta=c.get("theta") if angle else None, source=f"proving-ground-{case.seed}")
 
 
-def one(seed: int, cache: str | None = None, quiet: bool = False) -> dict[str, Any]:
+def one(seed: int, cache: str | None = None, quiet: bool = False, angle: bool = True) -> dict[str, Any]:
     """Generate case ``seed`` (or read it from ``cache``) and diagnose it (``quiet``: its log recorded without
-    noise, :func:`noise_free`); a JSON-ready record."""
+    noise, :func:`noise_free`; ``angle=False``: without its angle column, :func:`case_log`); a JSON-ready record."""
     from ocp.identify import diagnose
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
@@ -119,7 +121,7 @@ def one(seed: int, cache: str | None = None, quiet: bool = False) -> dict[str, A
     if quiet:
         case = noise_free(case)
     t1 = time.perf_counter()
-    log = case_log(case)
+    log = case_log(case, angle)
     try:
         res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
         verdict, err = sorted(res.verdict), None
@@ -135,7 +137,8 @@ def one(seed: int, cache: str | None = None, quiet: bool = False) -> dict[str, A
             "excitations": list(case.excitations), "true_lag": lag, "alignment": align, "align_measured": measured,
             "armature": case.nominal["L"] / case.nominal["R"] / case.logger.dt,
             "current_filter": (1.0 - case.logger.alpha) / case.logger.alpha,
-            "constant_error": case.constant_error, "t_generate": t1 - t0, "t_diagnose": t2 - t1, "noise_free": quiet}
+            "constant_error": case.constant_error, "t_generate": t1 - t0, "t_diagnose": t2 - t1, "noise_free": quiet,
+            "angle": log.theta is not None}
 
 
 def audit_stamp() -> str:
@@ -261,7 +264,7 @@ def _run(seeds: list[int], args: argparse.Namespace) -> list[dict[str, Any]]:
     """Every seed's record (:func:`one`) in ``args.procs`` processes, by seed."""
     with multiprocessing.get_context("spawn").Pool(args.procs) as pool:
         rows = []
-        job = functools.partial(one, cache=args.cache, quiet=args.noise_free)
+        job = functools.partial(one, cache=args.cache, quiet=args.noise_free, angle=not args.no_angle)
         for k, r in enumerate(pool.imap_unordered(job, seeds), 1):
             rows.append(r)
             print(f"\r{k}/{len(seeds)}", end="", file=sys.stderr, flush=True)
@@ -290,6 +293,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--noise-free", action="store_true",
                     help="diagnose each log recorded again without sensor noise, quantisation or jitter (compare "
                          "with a run on the logs as generated: the misses that stay are the identifier's equations)")
+    ap.add_argument("--no-angle", action="store_true",
+                    help="diagnose each encoder log without its angle column (many loggers export only the speed "
+                         "they differenced; compare with a run on the logs as generated)")
     ap.add_argument("--records", nargs="+", metavar="JSON", help="print the table of these recorded runs (--json "
                     "files, merged by seed) instead of diagnosing")
     ap.add_argument("--audit", action="store_true", help="audit every label (module doc; slow: ~10 s a label, "

@@ -114,6 +114,23 @@ def test_noise_free_records_the_same_run_without_noise() -> None:
     assert np.all((ratio > 0.7) & (ratio < 1.3))  # (the stated levels, within sampling and rounding)
 
 
+def test_no_angle_drops_only_the_encoder_angle() -> None:
+    """``--no-angle``: an encoder log as a logger that exports only its differenced speed writes it. Oracle: the
+    same arrays as with the angle, the angle left out; the speed stays the backward difference of that angle."""
+    import numpy as np
+
+    from tests.proving_ground import make_case
+
+    case = next(c for c in map(make_case, range(10150, 10170)) if c.logger.speed == "encoder")
+    full, bare = _bench().case_log(case), _bench().case_log(case, angle=False)
+    assert full.theta is not None and bare.theta is None
+    for ch in ("t", "voltage", "current", "omega", "thrust"):
+        assert np.array_equal(getattr(full, ch), getattr(bare, ch))
+    d, col = case.logger.diff_span, case.columns  # (as logged, before a jittery clock is resampled)
+    diff = (col["theta"][d:] - col["theta"][:-d]) / (d * case.logger.dt)  # (the firmware divides by its period)
+    assert np.allclose(col["omega"][d:], diff, rtol=1e-6, atol=1e-9)
+
+
 def _bench_replay(case: Any) -> Any:
     from tests.proving_ground.cases import _replay
 
