@@ -244,16 +244,24 @@ def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
     replays at 200-500 Hz (L/R under half a sample) the column took 30-60 % of the torque error the other two
     nuisances leave (23174: 2.1 -> 0.8 mN m), the error that hid a ripple at reversals (cogging at 100 Hz: 12047).
     (The low-passed rows' current is smooth within the low-pass; there the column gave a tachometer log at 47 Hz a
-    false ripple beside Coulomb friction: ``tests/identify/test_emf_speed.py``, rig 3203.)"""
+    false ripple beside Coulomb friction: ``tests/identify/test_emf_speed.py``, rig 3203.)
+
+    ``speed_lag``, ``x`` samples: the logged speed is the rotor's ``x`` samples earlier, ``w_true = w + x dt w'``;
+    eq. dc_electrical keeps ``k_e x (w1 - w0)`` and the thrust map ``2 c_f |w| x (w1 - w0)``. An encoder's speed
+    differenced over ``d`` samples and logged without its angle is the mean over them, ``d / 2`` samples late, which
+    left ``k_e k_t d dt / (2 J)`` in the armature equation as a false ``R`` (session 33: proving-ground logs with the
+    angle column left out, 37 false ``R`` over 800; fitted 0.7-1.0 samples for a two-sample difference, about 0 for a
+    tachometer and where the angle is logged)."""
     z = np.zeros_like(s.w)
     if s.dt == 0:
-        return {name: np.vstack([z, z, z]) for name in ("current_lag", "switch_phase", "current_bend")}
+        return {name: np.vstack([z, z, z]) for name in ("current_lag", "switch_phase", "current_bend", "speed_lag")}
     step = s.i1 - s.i0
     d = 0.5 * (step + np.concatenate([step[:1], step[:-1]]))  # (M,): the first row has no previous step: its own
     q = step + p.k_e / p.R * (s.w1 - s.w0)  # [A] (M,)
     return {"current_lag": np.vstack([-p.k_t * d, z, z]),
             "switch_phase": np.vstack([-(2.0 * settle_weight(p, s.dt) - 1.0) * p.k_t * q, z, z]),
-            "current_bend": np.vstack([p.k_t * (z if s.bend is None else s.bend), z, z])}
+            "current_bend": np.vstack([p.k_t * (z if s.bend is None else s.bend), z, z]),
+            "speed_lag": np.vstack([z, p.k_e * (s.w1 - s.w0), 2.0 * p.c_f * np.abs(s.w0) * (s.w1 - s.w0)])}
 
 
 def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> np.ndarray:
