@@ -295,12 +295,9 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
 
     def judged(design: Design, f: Fitted) -> bool:  # a named L against the timing that mimics it, on free runs
         return inductance_wins(plant, plant_of(plant, design, f, delay), f.items, log,
-                               None if delay is not None else align.samples - own, tau, free_error, opt.min_improvement,
+                               None if delay is not None else align.samples - own, tau,
+                               functools.partial(_free_error, sp=sp, noise=noise, seg=seg), opt.min_improvement,
                                opt.max_logging_skew)
-
-    def free_error(p: DCMotorPlant, x: Log) -> float:  # speed and current, free run, noise units, about their means
-        e = score(p, x, sp.test, noise, seg, centred=True, sensor=False).rms
-        return math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"])
 
     design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align, held,
                            judged)
@@ -414,10 +411,16 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
     if align.bias and longer <= IMPLAUSIBLE_FACTOR:  # (a held slow armature: the same lag as a longer L/R)
         rivals.append((DCMotorPlant(plant.params.model_copy(update={"L": longer * plant.params.L}), plant.effects),
                        realign(log, edge, longer * tau)))
-    err = [score(p, x, sp.test, noise, seg, centred=True, sensor=False).rms for p, x in
-           ((DCMotorPlant(plant.params, (*plant.effects, lag)), log), *rivals)]
-    delayed, *conv = (math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"]) for e in err)
+    delayed, *conv = (_free_error(p, x, sp, noise, seg) for p, x in
+                      ((DCMotorPlant(plant.params, (*plant.effects, lag)), log), *rivals))
     return delayed <= (1.0 - opt.min_improvement) * min(conv)
+
+
+def _free_error(p: DCMotorPlant, x: Log, sp: Split, noise: dict[str, float], seg: float) -> float:
+    """Held-out free-run error of ``p`` on ``x`` in speed and current, noise units, about their held-out means (a
+    sensor's constant offset, which every timing shares, decides nothing): what a timing rival is judged by."""
+    e = score(p, x, sp.test, noise, seg, centred=True, sensor=False).rms
+    return math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"])
 
 
 def _allowed(opt: DiagnoseOptions) -> set[str]:
