@@ -73,6 +73,8 @@ class Signals:
     #: (M,) [A] by how much the raw row's current ``i`` overstates its triangle's mean of a current that bends
     #: smoothly between the samples (``current_bend``, :func:`nuisance_columns`); None on low-passed rows
     bend: np.ndarray | None = None
+    #: the speed is the identifier's own central derivative of a logged angle: no logger's lag (``speed_lag``)
+    from_angle: bool = False
 
 
 def raw_signals(log: Log, theta: np.ndarray) -> Signals:
@@ -90,7 +92,7 @@ def raw_signals(log: Log, theta: np.ndarray) -> Signals:
     # i_k + i''/12
     bend = (before - 2.0 * i[:-1] + i[1:]) / 6.0
     return Signals(w0, mean_w, i0, i1, 0.5 * (w0 + mean_w), 0.5 * (i0 + i1), log.voltage[:-1], log.thrust[:-1],
-                   theta[:-1], log.t[:-1], dt, triangle=True, bend=bend)
+                   theta[:-1], log.t[:-1], dt, triangle=True, bend=bend, from_angle=True)
 
 
 def signals(log: Log, p: MotorParams) -> Signals:
@@ -104,7 +106,7 @@ def signals(log: Log, p: MotorParams) -> Signals:
     theta = log.theta if log.theta is not None else np.concatenate(
         [[0.0], np.cumsum(0.5 * (log.omega[1:] + log.omega[:-1]) * dt)])
     return Signals(w[:-1], w[1:], i[:-1], i[1:], 0.5 * (w[:-1] + w[1:]), 0.5 * (i[:-1] + i[1:]), v[:-1], f[:-1],
-                   theta[:-1], log.t[:-1], dt)
+                   theta[:-1], log.t[:-1], dt, from_angle=log.theta is not None)
 
 
 #: the rotor is taken at rest over runs of at least REST_ROWS rows whose low-passed speed stays within REST_NOISE
@@ -247,21 +249,29 @@ def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
     false ripple beside Coulomb friction: ``tests/identify/test_emf_speed.py``, rig 3203.)
 
     ``speed_lag``, ``x`` samples: the logged speed is the rotor's ``x`` samples earlier, ``w_true = w + x dt w'``;
-    eq. dc_electrical keeps ``k_e x (w1 - w0)`` and the thrust map ``2 c_f |w| x (w1 - w0)``. An encoder's speed
-    differenced over ``d`` samples and logged without its angle is the mean over them, ``d / 2`` samples late, which
-    left ``k_e k_t d dt / (2 J)`` in the armature equation as a false ``R`` (session 33: proving-ground logs with the
-    angle column left out, 37 false ``R`` over 800; fitted 0.7-1.0 samples for a two-sample difference, about 0 for a
-    tachometer and where the angle is logged)."""
+    eq. dc_electrical keeps ``k_e x (w1 - w0)``, the thrust map ``2 c_f |w| x (w1 - w0)`` and eq. dc_mechanical
+    ``x dt (J w'' + (B + 2 c_tau |w|) w')``. An encoder's speed differenced over ``d`` samples and logged without its
+    angle is the mean over them, ``d / 2`` samples late, which left ``k_e k_t d dt / (2 J)`` in the armature equation
+    as a false ``R`` (session 33: proving-ground logs with the angle column left out, 37 false ``R`` over 800; fitted
+    0.7-1.0 samples for a two-sample difference, about 0 for a tachometer). Without its torque part the current's lag
+    took the speed's in eq. dc_mechanical, at its bound of -1 sample where the current was not filtered, and ``J``
+    was named beside right verdicts (without the angle, 6000..6199: 177 -> 182 exactly right with it). Where the
+    angle is logged the speed is this module's own central derivative of it: no column (fitted there, 1.8 samples
+    took the armature residual of a PRBS log, 14000, and a false ``thrust_lag`` undid it in the thrust map)."""
     z = np.zeros_like(s.w)
     if s.dt == 0:
         return {name: np.vstack([z, z, z]) for name in ("current_lag", "switch_phase", "current_bend", "speed_lag")}
     step = s.i1 - s.i0
     d = 0.5 * (step + np.concatenate([step[:1], step[:-1]]))  # (M,): the first row has no previous step: its own
-    q = step + p.k_e / p.R * (s.w1 - s.w0)  # [A] (M,)
+    dw = s.w1 - s.w0  # [rad/s] (M,): the row's speed step, dt w'
+    q = step + p.k_e / p.R * dw  # [A] (M,)
+    # eq. dc_mechanical at w + x dt w': x dt (J w'' + (B + 2 c_tau |w|) w') [N m] per unit x
+    torque = p.J * np.gradient(dw / s.dt) + (p.B + 2.0 * p.c_tau * np.abs(s.w)) * dw
     return {"current_lag": np.vstack([-p.k_t * d, z, z]),
             "switch_phase": np.vstack([-(2.0 * settle_weight(p, s.dt) - 1.0) * p.k_t * q, z, z]),
             "current_bend": np.vstack([p.k_t * (z if s.bend is None else s.bend), z, z]),
-            "speed_lag": np.vstack([z, p.k_e * (s.w1 - s.w0), 2.0 * p.c_f * np.abs(s.w0) * (s.w1 - s.w0)])}
+            "speed_lag": np.vstack([z, z, z]) if s.from_angle else
+            np.vstack([torque, p.k_e * dw, 2.0 * p.c_f * np.abs(s.w0) * dw])}
 
 
 def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> np.ndarray:
