@@ -133,6 +133,7 @@ class Design:
     #: (3,) per equation, the fraction of rows that are independent (low-passed rows are correlated; the
     #: torque rows' speed view remembers a rotor time constant)
     independence: np.ndarray = field(default_factory=lambda: np.ones(3))
+    dt: float = 0.0  # [s] the log's sample period (0: a steady-state sweep)
     #: per constant, the relative error a nuisance the log leaves open could mimic (``L`` under an unidentified
     #: command timing): its calibration box is ``tol`` wider by this, so it is named only beyond both
     slack: dict[str, float] = field(default_factory=dict)
@@ -321,7 +322,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     gb, hb, cb = grams(a_all, tw, [b for bs in per_fold for b in bs])
     design = Design([c_ for c_, _ in cols], g_tr, g_te, h_tr, h_te, c_tr, c_te, np.full(3, n_tr), np.full(3, n_te),
                     sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
-                    independence, g_blocks=gb, h_blocks=hb, c_blocks=cb,
+                    independence, dt=s.dt, g_blocks=gb, h_blocks=hb, c_blocks=cb,
                     footprint=Footprints(a_all, tw, tests, [j for j, (c_, _) in enumerate(cols) if c_.item in BANDED]))
     if not folds:
         return design
