@@ -266,7 +266,7 @@ def nuisance_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
     dw = s.w1 - s.w0  # [rad/s] (M,): the row's speed step, dt w'
     q = step + p.k_e / p.R * dw  # [A] (M,)
     # eq. dc_mechanical at w + x dt w': x dt (J w'' + (B + 2 c_tau |w|) w') [N m] per unit x
-    torque = p.J * np.gradient(dw / s.dt) + (p.B + 2.0 * p.c_tau * np.abs(s.w)) * dw
+    torque = p.J * (np.gradient(dw / s.dt) if dw.size > 1 else z) + (p.B + 2.0 * p.c_tau * np.abs(s.w)) * dw
     return {"current_lag": np.vstack([-p.k_t * d, z, z]),
             "switch_phase": np.vstack([-(2.0 * settle_weight(p, s.dt) - 1.0) * p.k_t * q, z, z]),
             "current_bend": np.vstack([p.k_t * (z if s.bend is None else s.bend), z, z]),
