@@ -19,6 +19,7 @@ import pytest
 from bench.modelcheck import case_log
 from ocp.identify import diagnose
 from ocp.identify.columns import Signals, nuisance_columns, targets
+from ocp.identify.regression import NUISANCE_BOUNDS
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import make_case
@@ -92,3 +93,16 @@ def test_the_columns_are_the_residuals_a_late_speed_leaves(lag: float) -> None:
     for e in range(3):
         err = resid[e][inner] - lag * col[e][inner]
         assert np.max(np.abs(err)) < 0.03 * np.ptp(resid[e][inner]), e
+
+
+@pytest.mark.parametrize("seed", [193, 6043])
+def test_a_speed_is_never_read_early(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """A sensor or a backward difference reads the speed late or on time, never before the rotor turns: the lag's box
+    starts at 0. 193 (an encoder differenced over one sample, 200 Hz, a delay) and 6043 (a tachometer, 500 Hz, a wake
+    lag and a dead band): with the box open to -2 samples the lag was fitted at -0.69 and -0.28, and took ``R`` and
+    ``J`` (193) or the dead band's place (6043, named a brush drop); the guard reopens it."""
+    case, verdict, lag, _ = _fitted_lag(seed, False, monkeypatch)
+    assert sorted(verdict) == sorted(case.expected) and lag >= 0.0
+    monkeypatch.setitem(NUISANCE_BOUNDS, "speed_lag", (-2.0, 2.0))
+    _, verdict, lag, _ = _fitted_lag(seed, False, monkeypatch)
+    assert sorted(verdict) != sorted(case.expected) and lag < -0.2
