@@ -10,36 +10,22 @@ diagnosed without their angle column: 195 (a clean 500 Hz log), 26 (a thrust asy
 
 from __future__ import annotations
 
-import sys
 from typing import Any
 
 import numpy as np
 import pytest
 
-from bench.modelcheck import case_log
-from ocp.identify import diagnose
 from ocp.identify.columns import Signals, nuisance_columns, targets
 from ocp.identify.regression import NUISANCE_BOUNDS
 from ocp.model.params import MotorParams
-from ocp.model.plant import DCMotorPlant
-from tests.proving_ground import make_case
+from tests.identify.diagnosed import diagnosed
 
 
 def _fitted_lag(seed: int, angle: bool, monkeypatch: pytest.MonkeyPatch) -> tuple[Any, list[str], float, float]:
     """The case, its verdict, and the speed and current lags [samples] the final model fitted."""
-    module = sys.modules["ocp.identify.diagnose"]
-    seen: dict[str, Any] = {}
-    explain = module._explain
-
-    def spy(*args: Any, **kwargs: Any) -> Any:
-        seen["design"], seen["sel"] = out = explain(*args, **kwargs)
-        return out
-
-    monkeypatch.setattr(module, "_explain", spy)
-    case = make_case(seed)
-    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), case_log(case, angle=angle))
-    (j,), (c,) = seen["design"].index("speed_lag"), seen["design"].index("current_lag")
-    return case, res.verdict, seen["sel"].final.coefficient(j), seen["sel"].final.coefficient(c)
+    case, res, design, final = diagnosed(seed, angle, monkeypatch)
+    (j,), (c,) = design.index("speed_lag"), design.index("current_lag")
+    return case, res.verdict, final.coefficient(j), final.coefficient(c)
 
 
 @pytest.mark.parametrize("seed", [195, 26, 6115, 6178])

@@ -15,27 +15,12 @@ from typing import Any
 
 import pytest
 
-from bench.modelcheck import case_log
-from ocp.identify import diagnose
-from ocp.model.params import MotorParams
-from ocp.model.plant import DCMotorPlant
-from tests.proving_ground import make_case
+from tests.identify.diagnosed import diagnosed
 
 
 def _diagnose(seed: int, angle: bool, monkeypatch: pytest.MonkeyPatch) -> tuple[Any, list[str], float]:
     """The case, its verdict and the final model's thrust lag in samples (sum of coefficient x tau over dt)."""
-    module = sys.modules["ocp.identify.diagnose"]
-    seen: dict[str, Any] = {}
-    explain = module._explain
-
-    def spy(*args: Any, **kwargs: Any) -> Any:
-        seen["design"], seen["sel"] = out = explain(*args, **kwargs)
-        return out
-
-    monkeypatch.setattr(module, "_explain", spy)
-    case = make_case(seed)
-    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), case_log(case, angle=angle))
-    design, final = seen["design"], seen["sel"].final
+    case, res, design, final = diagnosed(seed, angle, monkeypatch)
     lag = sum(design.columns[j].shape * final.coefficient(j) for j in design.index("thrust_lag"))
     return case, res.verdict, lag * case.logger.rate
 
