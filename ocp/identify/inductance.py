@@ -91,10 +91,11 @@ def inductance_wins(plant: DCMotorPlant, final: DCMotorPlant, named: Sequence[st
         return True
     keys = [key for c in named if c != "L" and c in KEYS for key in KEYS[c]]
     params = plant.params.model_copy(update={key: getattr(final.params, key) for key in keys})
-    moved = tuple(make_effect("input_delay", {"delay": max(float(getattr(e, "delay", 0.0)) + x * tau * log.dt, 0.0)})
-                  if e.name == "input_delay" else e for e in final.effects)
     try:
         if shift is None:
+            moved = tuple(make_effect("input_delay", {"delay": max(float(getattr(e, "delay", 0.0)) + x * tau * log.dt,
+                                                                   0.0)})
+                          if e.name == "input_delay" else e for e in final.effects)
             own, rival = heldout(final, log), heldout(DCMotorPlant(params, moved), log)
         else:
             own = heldout(final, realign(log, shift, tau))
