@@ -58,7 +58,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import signal
+from scipy import optimize, signal
 
 from ocp.logs import Log, LogKind
 
@@ -80,6 +80,9 @@ HELD_L_ERROR = 0.5
 DELAY_GAIN = 2.0
 #: the dead band's widths tried in the free search [fractions of the command's standard deviation] (module doc)
 DEAD_BAND_WIDTHS = (0.05, 0.1, 0.2, 0.3, 0.5)
+#: the armature time constants L/R tried by :func:`armature_error` [x nominal]: a factor four either way, wider than
+#: the factor-two prior, so that the conventions' lag has every longer L/R to mimic a delay with
+ARMATURE_TAUS = tuple(float(x) for x in np.geomspace(0.25, 4.0, 33))
 #: widest flat minimum [samples] taken as a measured lag (its midpoint): a level change of a two-level command
 #: pins the lag to within about a sample on either side; a wider one is a smooth excitation's (no lag measured)
 PLATEAU = 2.0
@@ -242,6 +245,37 @@ def _nominal_curve(log: Log, tau: float, k_e: float, k: np.ndarray) -> Callable[
         return float(np.sqrt(np.mean((i[rows] - a @ coef) ** 2)))
 
     return lambda lags: np.array([one(float(lag)) for lag in lags])
+
+
+def armature_error(log: Log, lag: float, tau: float, train: np.ndarray, test: np.ndarray) -> float:
+    """Held-out output error [A] of the armature (eq. dc_electrical) with the command ``lag`` samples late: the
+    current simulated from the logged command and speed through a first-order lag ``i[n+1] = p i[n] + (1 - p) x[n]``
+    (exact under a zero-order hold), its gains (command, back-EMF, dead band, brush drop, offset) and its ``L/R``
+    fitted on the ``train`` rows (N,) (the ``L/R`` within :data:`ARMATURE_TAUS` times the nominal ``tau`` [samples]:
+    that grid's best, refined between its neighbours), and its RMS on the ``test`` rows (N,); NaN for a log too short
+    for it. Only the logged speed and command enter, so a wrong inertia or a missing load effect, which swamp a free
+    run of the whole plant, bias it little, and a lag and a longer ``L/R`` each get their best fit: a delay wins over
+    the conventions' lag only where dead time, not a slower rise, is what the current shows
+    (:func:`.diagnose._delay_wins`)."""
+    v, i, w = log.voltage, log.current, log.omega
+    x = np.column_stack([shifted(v, lag), w, shifted(np.tanh(v / (0.05 * np.std(v) + 1e-12)), lag),
+                         np.tanh(i / (0.05 * np.std(i) + 1e-12)), np.ones(v.size)])
+    settled = np.arange(v.size) >= min(10.0 * ARMATURE_TAUS[-1] * tau, v.size / 2)  # (start-up transients left out)
+    tr, te = train & settled, test & settled
+    if tr.sum() < 10 * x.shape[1] or te.sum() < 10:
+        return math.nan
+
+    def fit(log_f: float) -> tuple[float, float]:  # (training mean square, held-out RMS) at L/R = e^log_f tau
+        p = math.exp(-1.0 / max(math.exp(log_f) * tau, 1e-3))
+        a = signal.lfilter([0.0, 1.0 - p], [1.0, -p], x, axis=0)
+        coef = np.linalg.lstsq(a[tr], i[tr], rcond=None)[0]
+        return float(np.mean((i[tr] - a[tr] @ coef) ** 2)), float(np.sqrt(np.mean((i[te] - a[te] @ coef) ** 2)))
+
+    grid = np.log(ARMATURE_TAUS)
+    k = int(np.argmin([fit(g)[0] for g in grid]))
+    best = optimize.minimize_scalar(lambda g: fit(g)[0], bounds=(grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]),
+                                    method="bounded", options={"xatol": 1e-3})
+    return fit(float(best.x))[1]
 
 
 def _pick(lags: np.ndarray, res: np.ndarray) -> tuple[float, bool]:
