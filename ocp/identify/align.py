@@ -233,18 +233,30 @@ def _nominal_curve(log: Log, tau: float, k_e: float, k: np.ndarray) -> Callable[
     ``tau`` is held, not fitted: with it free, lag and ``tau`` trade along a valley, and a longer ``tau`` wins by
     smoothing the speed's noise (a lag biased short by most of ``L/R``)."""
     v, i, w = log.voltage, log.current, log.omega
-    band = np.tanh(v / (0.05 * np.std(v) + 1e-12))
-    sign = np.tanh(i / (0.05 * np.std(i) + 1e-12))
-    p = math.exp(-1.0 / max(tau, 1e-3))
+    band, sign = _soft_sign(v), _soft_sign(i)
     rows = k[k >= min(k[-1], k[0] + int(10 * tau) + 1)]  # (the filters' start-up transient left out)
 
     def one(lag: float) -> float:
         x = np.column_stack([shifted(v, lag) - k_e * w, shifted(band, lag), sign, np.ones(v.size)])
-        a = signal.lfilter([0.0, 1.0 - p], [1.0, -p], x, axis=0)[rows]
+        a = _through_armature(x, tau)[rows]
         coef = np.linalg.lstsq(a, i[rows], rcond=None)[0]
         return float(np.sqrt(np.mean((i[rows] - a @ coef) ** 2)))
 
     return lambda lags: np.array([one(float(lag)) for lag in lags])
+
+
+def _soft_sign(y: np.ndarray) -> np.ndarray:
+    """``tanh(y / (5 % of y's spread))`` (N,): the sign of a command (a dead band's term) or of a current (a brush
+    drop's), smooth across zero."""
+    return np.tanh(y / (0.05 * np.std(y) + 1e-12))
+
+
+def _through_armature(x: np.ndarray, tau: float) -> np.ndarray:
+    """Each column of ``x`` (N, C) through the armature's first-order lag ``y[n+1] = p y[n] + (1 - p) x[n]``,
+    ``p = exp(-1/tau)``, ``tau`` [samples] its ``L/R``, from rest: exact under a zero-order hold (eq.
+    dc_electrical)."""
+    p = math.exp(-1.0 / max(tau, 1e-3))
+    return np.asarray(signal.lfilter([0.0, 1.0 - p], [1.0, -p], x, axis=0))
 
 
 def armature_error(log: Log, lag: float, tau: float, train: np.ndarray, test: np.ndarray) -> float:
@@ -256,18 +268,17 @@ def armature_error(log: Log, lag: float, tau: float, train: np.ndarray, test: np
     for it. Only the logged speed and command enter, so a wrong inertia or a missing load effect, which swamp a free
     run of the whole plant, bias it little, and a lag and a longer ``L/R`` each get their best fit: a delay wins over
     the conventions' lag only where dead time, not a slower rise, is what the current shows
-    (:func:`.diagnose._delay_wins`)."""
+    (:func:`.diagnose._delay_wins`). (A free ``L/R`` also smooths the noise of the speed it is driven by, and a longer
+    one more: :func:`_nominal_curve`'s reason to hold it. Here that favours the shorter lag, against a delay.)"""
     v, i, w = log.voltage, log.current, log.omega
-    x = np.column_stack([shifted(v, lag), w, shifted(np.tanh(v / (0.05 * np.std(v) + 1e-12)), lag),
-                         np.tanh(i / (0.05 * np.std(i) + 1e-12)), np.ones(v.size)])
+    x = np.column_stack([shifted(v, lag), w, shifted(_soft_sign(v), lag), _soft_sign(i), np.ones(v.size)])
     settled = np.arange(v.size) >= min(10.0 * ARMATURE_TAUS[-1] * tau, v.size / 2)  # (start-up transients left out)
     tr, te = train & settled, test & settled
     if tr.sum() < 10 * x.shape[1] or te.sum() < 10:
         return math.nan
 
     def fit(log_f: float) -> tuple[float, float]:  # (training mean square, held-out RMS) at L/R = e^log_f tau
-        p = math.exp(-1.0 / max(math.exp(log_f) * tau, 1e-3))
-        a = signal.lfilter([0.0, 1.0 - p], [1.0, -p], x, axis=0)
+        a = _through_armature(x, math.exp(log_f) * tau)
         coef = np.linalg.lstsq(a[tr], i[tr], rcond=None)[0]
         return float(np.mean((i[tr] - a[tr] @ coef) ** 2)), float(np.sqrt(np.mean((i[te] - a[te] @ coef) ** 2)))
 

@@ -66,6 +66,16 @@ def test_a_longer_lag_does_not_win_without_a_delay(tau: float) -> None:
     assert armature_error(log, 9.0, tau, train, test) > armature_error(log, 2.0, tau, train, test)
 
 
+def test_a_log_too_short_has_no_error() -> None:
+    """Under ten training rows per fitted gain after the filter's start-up, no error (NaN, which no comparison
+    passes)."""
+    log = _armature_log(2, 3.0, seed=1)
+    train, test = _masks()
+    short = np.arange(N) < 150
+    assert math.isnan(armature_error(log, 2.0, 3.0, train & short, test & short))
+    assert math.isfinite(armature_error(log, 2.0, 3.0, train, test))
+
+
 @pytest.mark.parametrize("seed", [6067, 23067])
 def test_a_delay_the_free_runs_miss_is_called(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
     """Proving-ground logs with a delay and a drag asymmetry (6067: 5.4 samples at 1 kHz on a ramp; 23067: 5.9
