@@ -64,7 +64,14 @@ from ocp.identify.explain import (
     units,
     with_band,
 )
-from ocp.identify.inductance import TIMING_MIMICS, filter_headroom, inductance_wins, open_timing, timed_inductance
+from ocp.identify.inductance import (
+    TIMING_MIMICS,
+    delay_rival,
+    filter_headroom,
+    inductance_wins,
+    open_timing,
+    timed_inductance,
+)
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels, read_current
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
 from ocp.identify.select import Selection, select
@@ -286,8 +293,9 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         else opt.segment_s  # short logs: shorter segments, so that some are held out
     sp = split(log, seg, opt.holdout_every, opt.cross_validate)
     noise = noise_levels(log)
+    unconfirmed = None  # (a lag beyond the conventions that predicts no better: not a delay)
     if align.delay and "input_delay" in _allowed(opt) and not _delay_wins(plant, log, align, own, opt, sp, noise, seg):
-        align = within(align, opt.max_logging_skew + own, log.dt)  # a longer lag predicts no better: not a delay
+        unconfirmed, align = align, within(align, opt.max_logging_skew + own, log.dt)
     delay = (align.samples - own) * log.dt if align.delay and "input_delay" in _allowed(opt) else None
     tau = armature[0] / log.dt  # the nominal L/R [samples]: how the armature shows a fraction of a sample
     aligned = realign(log, align.samples - own, tau)  # the equations always see the command when it acts
@@ -340,6 +348,9 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     final = plant_of(plant, design, sel.final, delay)
     ambiguous = [{**a, "adopted": item_name(str(a["adopted"])), "alternative": item_name(str(a["alternative"]))}
                  for a in sel.ambiguous]
+    rival = delay_rival(log, unconfirmed.samples, align.samples, tau, sp.train, sp.test, noise["current"],
+                        opt.ambiguity_margin) if unconfirmed is not None and "param:L" in verdict else None
+    ambiguous += [rival] if rival else []
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
                           spectrum_peak(design), opt.tolerance)
