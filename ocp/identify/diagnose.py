@@ -293,11 +293,13 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         else opt.segment_s  # short logs: shorter segments, so that some are held out
     sp = split(log, seg, opt.holdout_every, opt.cross_validate)
     noise = noise_levels(log)
+    tau = armature[0] / log.dt  # the nominal L/R [samples]: how the armature shows a fraction of a sample
+    current = functools.cache(lambda lag: armature_error(log, lag, tau, sp.train, sp.test))  # (per lag, once)
     unconfirmed = None  # (a lag beyond the conventions that predicts no better: not a delay)
-    if align.delay and "input_delay" in _allowed(opt) and not _delay_wins(plant, log, align, own, opt, sp, noise, seg):
+    if align.delay and "input_delay" in _allowed(opt) and not _delay_wins(plant, log, align, own, opt, sp, noise, seg,
+                                                                            current):
         unconfirmed, align = align, within(align, opt.max_logging_skew + own, log.dt)
     delay = (align.samples - own) * log.dt if align.delay and "input_delay" in _allowed(opt) else None
-    tau = armature[0] / log.dt  # the nominal L/R [samples]: how the armature shows a fraction of a sample
     aligned = realign(log, align.samples - own, tau)  # the equations always see the command when it acts
     work = log if delay is not None else aligned  # free runs: the delay, if called, is in the plant
     held = (log.voltage, switched(max(align.samples - own, 0.0), tau))  # (the drive's dead band acts before the shift)
@@ -348,8 +350,8 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     final = plant_of(plant, design, sel.final, delay)
     ambiguous = [{**a, "adopted": item_name(str(a["adopted"])), "alternative": item_name(str(a["alternative"]))}
                  for a in sel.ambiguous]
-    rival = delay_rival(log, unconfirmed.samples, align.samples, tau, sp.train, sp.test, noise["current"],
-                        opt.ambiguity_margin) if unconfirmed is not None and "param:L" in verdict else None
+    rival = delay_rival(current, unconfirmed.samples, align.samples, noise["current"], opt.ambiguity_margin) \
+        if unconfirmed is not None and "param:L" in verdict else None
     ambiguous += [rival] if rival else []
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
@@ -400,18 +402,19 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
 
 
 def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt: DiagnoseOptions, sp: Split,
-                noise: dict[str, float], seg: float) -> bool:
+                noise: dict[str, float], seg: float, current: Callable[[float], float] | None = None) -> bool:
     """Whether a lag beyond the logging conventions predicts the held-out speed and current (what the
     armature voltage drives first; free run, in noise units) better by the selection's ``min_improvement``
     than the best lag within them (its fraction of a sample taken as the equations take it, the drive switching
     within the row, :func:`.align.switched`; the longer lag's delay of the held command switches so too), or cuts
     the alignment search's residual by :data:`.align.DELAY_GAIN` (the armature equation with free coefficients,
     which other model errors do not swamp, :func:`.align.gain`), or predicts the held-out current of the armature
-    alone better by ``min_improvement`` (:func:`.align.armature_error`: driven by the logged speed, each lag with its
-    own best L/R, so a wrong inertia or a missing load does not swamp it, and a longer L/R gets its chance to mimic
-    the delay): only then is it an ``input_delay``. (Added in session 35: on 800 proving-ground logs, 15 lags beyond
-    the conventions failed the first two tests; the armature's held-out error fell 17-89 % for three of the five true
-    delays among them, 8 % and 0 % for the other two, and rose 9 % or more for the ten without one.) The free runs'
+    alone better by ``min_improvement`` (:func:`.align.armature_error`, or ``current``: that error per lag [samples]
+    of ``log``; driven by the logged speed, each lag with its own best L/R, so a wrong inertia or a missing load does
+    not swamp it, and a longer L/R gets its chance to mimic the delay): only then is it an ``input_delay``. (Added
+    in session 35: on 800 proving-ground logs, 15 lags beyond the conventions failed the first two tests; the
+    armature's held-out error fell 17-89 % for three of the five true delays among them, 8 % and 0 % for the other
+    two, and rose 9 % or more for the ten without one.) The free runs'
     errors are taken about their held-out means: a sensor's constant offset, which every timing shares, decides
     nothing (a current offset of 26 noise units hid a 6.4-sample delay, proving-ground seed 9392). A lag measured
     with a slow armature's nominal L/R held (:attr:`.align.Alignment.bias`) must also beat that L/R made as much
@@ -421,8 +424,8 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
         return True
     short = within(align, opt.max_logging_skew + own, log.dt).samples - own
     tau = timing(plant, log)[1][0] / log.dt
-    if armature_error(log, align.samples, tau, sp.train, sp.test) <= (1.0 - opt.min_improvement) * armature_error(
-            log, short + own, tau, sp.train, sp.test):
+    current = current or (lambda lag: armature_error(log, lag, tau, sp.train, sp.test))
+    if current(align.samples) <= (1.0 - opt.min_improvement) * current(short + own):
         return True
     lag = make_effect("input_delay", {"delay": (align.samples - own) * log.dt})
     rivals = [(plant, realign(log, short, tau))]

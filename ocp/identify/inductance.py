@@ -13,10 +13,8 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 
-import numpy as np
-
 from ocp.errors import SolverError
-from ocp.identify.align import SKEW_FRACTION, armature_error, realign
+from ocp.identify.align import SKEW_FRACTION, realign
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR
 from ocp.identify.explain import KEYS
 from ocp.identify.regression import Design
@@ -108,17 +106,17 @@ def inductance_wins(plant: DCMotorPlant, final: DCMotorPlant, named: Sequence[st
     return own <= (1.0 - min_improvement) * rival
 
 
-def delay_rival(log: Log, lag: float, short: float, tau: float, train: np.ndarray, test: np.ndarray, noise: float,
+def delay_rival(current: Callable[[float], float], lag: float, short: float, noise: float,
                 margin: float) -> dict[str, object] | None:
     """An ambiguity entry (as :func:`.diagnose.diagnose` reports them) for a named ``L`` beside a delay the alignment
     measured but did not confirm: where the command ``lag`` samples late predicts the armature's held-out current
-    (:func:`.align.armature_error`, each lag with its best L/R; ``noise`` [A] the current's noise level) within
-    ``margin`` of the lag ``short`` [samples] the conventions explain, or better (not by enough to be called); ``tau``
-    [samples] the nominal L/R. On a smooth command dead time and a slower armature look alike: the inductance error
-    may be the delay (proving ground 6168: a 9.5-sample delay at 10 kHz under a chirp, named an ``L`` error; 6180: an
-    11-sample delay beside an ``L`` 29 % high, fitted +108 %).
+    (``current``: its error [A] per lag [samples], :func:`.align.armature_error`, each lag with its best L/R; ``noise``
+    [A] the current's noise level) within ``margin`` of the lag ``short`` [samples] the conventions explain, or better
+    (not by enough to be called). On a smooth command dead time and a slower armature look alike: the inductance
+    error may be the delay (proving ground 6168: a 9.5-sample delay at 10 kHz under a chirp, named an ``L`` error;
+    6180: an 11-sample delay beside an ``L`` 29 % high, fitted +108 %).
     None where the delay predicts worse, or either error is undefined (a short log)."""
-    late, near = (armature_error(log, x, tau, train, test) for x in (lag, short))
+    late, near = current(lag), current(short)
     if not late <= (1.0 + margin) * near:
         return None
     return {"adopted": "param:L", "alternative": "input_delay", "score": near / noise,

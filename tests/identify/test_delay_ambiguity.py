@@ -4,14 +4,17 @@ with both, and the experiment designed to settle it does, played on the same pro
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 
 from bench.modelcheck import case_log
 from ocp.identify import diagnose
+from ocp.identify.align import armature_error
 from ocp.identify.design import design
 from ocp.identify.inductance import delay_rival
-from ocp.logs import log_from_arrays
+from ocp.logs import Log, log_from_arrays
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from ocp.optimize.mission import Mission
@@ -26,12 +29,16 @@ def test_the_rival_is_offered_only_where_the_delay_predicts_as_well() -> None:
     held-out current far better than the 2-sample lag (an entry, its scores in noise units); under a 2-sample skew
     and no delay a 9-sample lag predicts worse (none)."""
     train, test = _masks()
-    entry = delay_rival(_armature_log(9, 12.0, seed=3), 9.0, 2.0, 12.0, train, test, SIGMA, 0.02)
+
+    def current(log: Log) -> Callable[[float], float]:
+        return lambda lag: armature_error(log, lag, 12.0, train, test)
+
+    entry = delay_rival(current(_armature_log(9, 12.0, seed=3)), 9.0, 2.0, SIGMA, 0.02)
     assert entry is not None and (entry["adopted"], entry["alternative"]) == ("param:L", "input_delay")
     assert entry["alternative_score"] == pytest.approx(1.0, rel=0.1)  # (the true delay leaves the noise)
     assert float(entry["score"]) > 1.5 * float(entry["alternative_score"])  # type: ignore[arg-type]
     assert "9.00 samples" in str(entry["reason"])
-    assert delay_rival(_armature_log(2, 12.0, seed=4), 9.0, 2.0, 12.0, train, test, SIGMA, 0.02) is None
+    assert delay_rival(current(_armature_log(2, 12.0, seed=4)), 9.0, 2.0, SIGMA, 0.02) is None
 
 
 def test_an_unconfirmed_delay_named_as_an_inductance_is_ambiguous_and_the_experiment_settles_it() -> None:
