@@ -47,7 +47,7 @@ import numpy as np
 from scipy import signal
 
 from ocp.identify.align import cutoff_hz
-from ocp.identify.angle import angle_limits, ripple_independence
+from ocp.identify.angle import MAX_PERIODS, angle_limits, ripple_independence, speed_noise, tracked_periods
 from ocp.identify.columns import (
     DROPS,
     Column,
@@ -293,7 +293,9 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         if rest.any() and DRY.intersection(effects):  # the ripple beside dry friction that holds the rotor at rest
             cols += [(replace(c, at_rest=False), np.vstack([view(np.where(rest, 0.0, a[0])), a[1:]]))
                      for c, a in unviewed]
-        angle = {"amplitude": amplitude, **angle_limits(raw.theta, periods, log.theta is not None)}
+        tracked = MAX_PERIODS if log.theta is not None or raw.dt == 0 else \
+            tracked_periods(raw.t, speed_noise(log.omega), raw.dt)
+        angle = {"amplitude": amplitude, **angle_limits(raw.theta, periods, log.theta is not None, tracked)}
     # (the armature and thrust equations keep the motor constant: their measured side does not scale)
     k_col = [a for c, a in cols if c.item == "k"]
     fixed = [a for j, (c, a) in enumerate(cols) if j in keep and c.item in (*CONSTANTS, *NUISANCES)]

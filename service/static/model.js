@@ -153,6 +153,16 @@ function showCheck(res, reportHtml) {
   showReportFigures(reportHtml);
 }
 
+/** Ascending counts as runs: [3, 4, 5, 9] -> "3-5, 9" (a run of three or more joined). */
+export function runs(counts) {
+  const out = [];
+  for (const n of counts) {
+    const last = out[out.length - 1];
+    if (last && n === last[last.length - 1] + 1) last.push(n); else out.push([n]);
+  }
+  return out.map((r) => (r.length > 2 ? `${r[0]}-${r[r.length - 1]}` : r.join(", "))).join(", ");
+}
+
 export function showDiagnose(res) {
   $("#m-diag-results").hidden = false;
   showEquations("#m-diag-equations", res);
@@ -223,7 +233,7 @@ function showDiagnosisDetails(res, after) {
   if (ap) line(`Angle-periodic torque: best fit at ${ap.periods} periods/rev, ${fmt(ap.amplitude, 3)} N m` +
                ((res.verdict || []).includes("cogging") ? "" : ", not named (it does not win on held-out data)") +
                ((ap.rivals || []).length ? `; the count is not decided by this log: ${ap.rivals.length} other ` +
-                `count(s) explain the held-out torque as well (${ap.rivals.join(", ")})` : "") +
+                `count(s) explain the held-out torque as well (${runs(ap.rivals)})` : "") +
                (ap.note ? ` (${ap.note})` : ""), "m-angle");
 }
 
