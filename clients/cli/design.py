@@ -123,7 +123,9 @@ def _print_design(d: dict[str, Any], out: str | None) -> None:
     if not d["needed"]:
         print(d["message"])
         return
-    print("rivals: " + " | ".join(r["name"] for r in d["rivals"]))
+    errors = d.get("current_log_errors") or {}
+    print("rivals: " + " | ".join(r["name"] + (f" (misses this log by {_g(errors[r['name']], '.3g')} noise units)"
+                                              if errors.get(r["name"]) is not None else "") for r in d["rivals"]))
     print("candidates (smallest separation over rival pairs, z in noise standard deviations):")
     for c in d["candidates"]:
         z = c["separation"] or c["raw_separation"]

@@ -20,7 +20,13 @@ speed, current and thrust (in the log's noise units, refitting its own items fre
 within about the tolerance) is the separation ``z`` [noise standard deviations]. The proposal maximises the
 smallest ``z`` over the pairs (the :data:`SHORTLIST` best by the raw difference are scored with the refit);
 a likelihood-ratio test then confuses the closest pair with probability ``Phi(-z / 2)``. The same ``z`` on
-the given log (its own voltage) says how little it separated them.
+the given log (its own voltage) says how little it separated them, assuming one rival is the truth; how far each
+rival's free run misses the log itself (``current_log_errors``, noise units, as :func:`ocp.identify.fit` reports
+it) says whether either is: rivals that differ by a large ``z`` on the log yet miss it alike are both wrong there
+(proving ground 6180: ``L`` against a delay, z 2.6e3 on the log, both missing it by 16 noise units).
+Rivals are fitted to the log as :func:`ocp.identify.fit` fits, the free-run refinement included: the one-step
+start alone fitted ``J`` a sixth of the rig's on a 10 kHz log (6168; the rivals' free runs missed the log by
+150 noise units, the diagnosed plant by 1.4).
 """
 
 from __future__ import annotations
@@ -35,7 +41,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from ocp.errors import LogError, ParameterError, ThrustshapeError
 from ocp.identify.candidates import candidate
-from ocp.identify.diagnose import DiagnoseResult, dynamic
+from ocp.identify.diagnose import DiagnoseResult, aligned, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
 from ocp.identify.predict import CHANNELS, noise_levels
 from ocp.identify.separation import (
@@ -130,6 +136,7 @@ class DesignResult:
     mission: dict[str, Any] | None
     current_log: dict[str, float]
     verification: dict[str, Any]
+    log_errors: dict[str, float]
     noise: dict[str, float]
     duration_s: float
 
@@ -142,6 +149,7 @@ class DesignResult:
             "chosen": self.chosen.to_dict() if self.chosen is not None else None,
             "separation": _finite(worst), "misclassification": _finite(confusion(worst)) if worst is not None else None,
             "current_log_separation": {k: _finite(v) for k, v in self.current_log.items()},
+            "current_log_errors": {k: _finite(v) for k, v in self.log_errors.items()},
             "verification": self.verification, "noise": {k: _finite(v) for k, v in self.noise.items()},
             "duration_s": self.duration_s, "mission": self.mission, "message": self.message(),
         }
@@ -154,9 +162,11 @@ class DesignResult:
             return "no candidate experiment ran within the limits: " + "; ".join(c.note for c in self.candidates)
         z = self.chosen.worst
         before = min(self.current_log.values()) if self.current_log else math.nan
+        misses = " and ".join(f"{e:.3g}" for e in self.log_errors.values())
+        fits = f"; their free runs miss it by {misses} noise units" if misses else ""
         return (f"run '{self.chosen.name}' ({self.chosen.description}): the rivals differ by z = {z:.3g} noise "
-                f"standard deviations (this log: {before:.3g}); a likelihood-ratio test would confuse them with "
-                f"probability {confusion(z):.2g}")
+                f"standard deviations (this log: {before:.3g}{fits}); a likelihood-ratio test would confuse them "
+                f"with probability {confusion(z):.2g}")
 
 
 def _finite(x: float | None) -> float | None:
@@ -203,11 +213,11 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
                 scales: dict[str, float], cov: dict[str, Any]) -> tuple[list[Rival], list[str], bool]:
     """The rival explanations (module doc), the reasons an experiment is needed, and whether the rivals are
     probes (the diagnosed plant first: the experiment must *reveal* each probe, not tell probes apart)."""
-    from ocp.identify import FitOptions, fit
+    from ocp.identify import fit
 
     def fitted(items: Sequence[str]) -> Rival:
         name = " + ".join(items) or "nothing missing"
-        body = fit(plant, log, list(items), FitOptions(refine=False)).plant if items else res.plant
+        body = fit(plant, log, list(items)).plant if items else res.plant  # refined: see the module doc
         return Rival(name, tuple(items), body)
 
     if opt.rivals is not None:
@@ -261,8 +271,9 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
     noise = noise_levels(log)
     sigma = np.array([noise[ch] for ch in CHANNELS])
     rate = 1.0 / log.dt
+    errors = {} if detect else {r.name: _log_error(r.plant, log, noise) for r in rivals}
     base: dict[str, Any] = dict(needed=len(rivals) > 1, reasons=reasons, coverage=cov, rivals=rivals, noise=noise,
-                duration_s=duration)
+                duration_s=duration, log_errors=errors)
     if len(rivals) < 2:
         return DesignResult(**base, candidates=[], chosen=None, mission=None, current_log={}, verification={})
     tl, vl = held_on_grid(log.t, log.voltage, log.dt)
@@ -295,6 +306,16 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
            "tracking_rms_error": res.verification.get("tracking_rms_error"), "duration_s": float(res.arrays["t"][-1]),
            "limits": {"voltage": voltage, "current": current}}
     return DesignResult(**base, candidates=cands, chosen=best, mission=mission, current_log=before, verification=ver)
+
+
+def _log_error(plant: DCMotorPlant, log: Log, noise: dict[str, float]) -> float:
+    """How far ``plant``'s free run misses ``log`` [noise units]: the RMS over the channels of
+    :func:`ocp.identify.fit.channel_rms` (the log aligned as :func:`ocp.identify.fit` aligns it) over ``noise``."""
+    from ocp.identify.fit import FitOptions, channel_rms
+
+    opt = FitOptions()
+    rms = channel_rms(plant, aligned(plant, log, opt.max_logging_skew)[1], opt.segment_s)
+    return math.sqrt(sum((rms[ch] / noise[ch]) ** 2 for ch in CHANNELS) / len(CHANNELS))
 
 
 def _score(exc_: Excitation, params: dict[str, Any], c_f: float, voltage: float, current: float, opt: DesignOptions,

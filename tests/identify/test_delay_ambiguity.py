@@ -45,17 +45,27 @@ def test_an_unconfirmed_delay_named_as_an_inductance_is_ambiguous_and_the_experi
     """Proving-ground 6168 (10 kHz chirp, L/R 10 samples, a 9.6-sample delay and an inertia 47 % off): the smooth
     command cannot tell the delay from a slower armature, ``L`` is named, and now the delay is offered beside it.
     The designed experiment, optimised within the limits and played on the same rig (the proving ground's own
-    simulation), gives the drawn verdict with nothing ambiguous."""
+    simulation), gives the drawn verdict with nothing ambiguous. The rivals are fitted as ``fit`` fits (the
+    free-run refinement included): both hold the rig's inertia, and the drawn one misses the log least."""
     case = make_case(6168)
     plant, log = DCMotorPlant(MotorParams(**case.nominal)), case_log(case)
     first = diagnose(plant, log)
     assert first.verdict == ["param:J", "param:L"]
     assert [(a["adopted"], a["alternative"]) for a in first.ambiguous] == [("param:L", "input_delay")]
-    proposal = design(plant, log, first).to_dict()
+    designed = design(plant, log, first)
+    proposal = designed.to_dict()
     assert proposal["needed"] and {"input_delay", "param:L"} <= {i for r in proposal["rivals"] for i in r["items"]}
+    t = case.truth
+    rivals = designed.rivals
+    assert [r.items for r in rivals] == [("param:J", "param:L"), ("input_delay", "param:J")]
+    assert all(r.plant.params.J == pytest.approx(t.J, rel=0.05) for r in rivals)  # the rig's inertia, as drawn
+    errors = proposal["current_log_errors"]
+    assert list(errors) == [r.name for r in rivals]
+    assert errors["input_delay + param:J"] < 2.0 < errors["param:J + param:L"]  # the drawn rival misses it least
+    assert f"miss it by {errors['param:J + param:L']:.3g} and {errors['input_delay + param:J']:.3g}" \
+        in proposal["message"]
     res = optimize(Mission.model_validate(proposal["mission"]))
     assert res.source == "optimized" and res.path_ok
-    t = case.truth
     rig = Rig(t, case.logger, t.J * t.R / (t.k * t.k), case.nominal)
     cols = run_command(rig, res.arrays["t"], res.arrays["voltage"], 6168 + 7)
     new = log_from_arrays(cols["t"], cols["voltage"], cols["current"], cols["thrust"], omega=cols["omega"],
@@ -64,3 +74,4 @@ def test_an_unconfirmed_delay_named_as_an_inductance_is_ambiguous_and_the_experi
     second = diagnose(plant, new)
     assert sorted(second.verdict) == sorted(case.expected) == ["input_delay", "param:J"]
     assert not second.ambiguous
+
