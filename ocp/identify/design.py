@@ -164,6 +164,11 @@ class DesignResult:
         before = min(self.current_log.values()) if self.current_log else math.nan
         misses = " and ".join(f"{e:.3g}" for e in self.log_errors.values())
         fits = f"; their free runs miss it by {misses} noise units" if misses else ""
+        if misses and before > z:  # no run separates them better than the log: its misses decide, not a run
+            return (f"this log already separates the rivals by z = {before:.3g} noise standard deviations, more "
+                    f"than the best experiment the optimiser runs within the limits ('{self.chosen.name}', z = "
+                    f"{z:.3g}){fits}: a rival that explains the log misses it by about one; where none does, "
+                    "something none of them holds is missing")
         return (f"run '{self.chosen.name}' ({self.chosen.description}): the rivals differ by z = {z:.3g} noise "
                 f"standard deviations (this log: {before:.3g}{fits}); a likelihood-ratio test would confuse them "
                 f"with probability {confusion(z):.2g}")

@@ -75,3 +75,19 @@ def test_an_unconfirmed_delay_named_as_an_inductance_is_ambiguous_and_the_experi
     assert sorted(second.verdict) == sorted(case.expected) == ["input_delay", "param:J"]
     assert not second.ambiguous
 
+
+
+def test_a_log_that_separates_its_rivals_better_than_any_run_says_so() -> None:
+    """Proving-ground 6180 (10 kHz tachometer, PRBS: an 11-sample delay beside an ``L`` 29 % high): ``L`` is named,
+    the delay offered beside it. Neither rival holds the rig (it has both), and the log tells them apart better
+    than any experiment the optimiser can run: the design says so, with how far each misses the log, rather than
+    proposing a run that separates less."""
+    case = make_case(6180)
+    assert sorted(case.expected) == ["input_delay", "param:L"]
+    plant, log = DCMotorPlant(MotorParams(**case.nominal)), case_log(case)
+    first = diagnose(plant, log)
+    assert [(a["adopted"], a["alternative"]) for a in first.ambiguous] == [("param:L", "input_delay")]
+    d = design(plant, log, first)
+    assert d.chosen is not None and min(d.current_log.values()) > d.chosen.worst
+    assert sorted(d.log_errors) == ["input_delay", "param:L"] and min(d.log_errors.values()) > 5.0
+    assert d.message().startswith("this log already separates the rivals")
