@@ -374,9 +374,9 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
               f"held-out torque residual (median over 1..64: {_g(100 * ap['median_share'], '.0f')} %)"
               + ("" if "cogging" in d["verdict"] else "; not named: it does not win on held-out data"))
         if ap.get("rivals"):
-            tracked = ap.get("max_tracked_periods", 64)
+            tracked = ap.get("max_tracked_periods")
             why = (f"beyond {tracked} periods/rev the integrated angle drifts faster than a ripple's phase can be "
-                   "followed" if ap["periods"] > tracked else
+                   "followed" if tracked is not None and ap["periods"] > tracked else
                    "a rotor resting at a few angles shows the torque there, not its period")
             print(f"  the count is not decided by this log: {_rivals(ap['rivals'])} explain the held-out torque "
                   f"as well ({why})")

@@ -67,7 +67,7 @@ def drift_windows(t: np.ndarray, periods: int, sigma_w: float, dt: float) -> np.
     amplitude linear between knots. K = 1 (ones: one phase) where the whole log is within that variance."""
     span = _span(t)
     rate = periods * periods * sigma_w * sigma_w * dt
-    pieces = min(MAX_PIECES, math.ceil(rate * span / DRIFT_VAR), int(span / DRIFT_SPAN))
+    pieces = min(_most_pieces(span), math.ceil(rate * span / DRIFT_VAR))
     if rate * span <= DRIFT_VAR or pieces < 1:
         return np.ones((t.size, 1))
     knots = np.linspace(t[0], t[-1], pieces + 1)
@@ -76,6 +76,12 @@ def drift_windows(t: np.ndarray, periods: int, sigma_w: float, dt: float) -> np.
 
 def _span(t: np.ndarray) -> float:
     return float(t[-1] - t[0]) if t.size > 1 else 0.0
+
+
+def _most_pieces(span: float) -> int:
+    """Most pieces :func:`drift_windows` cuts ``span`` [s] into: knots at least :data:`DRIFT_SPAN` apart, at most
+    :data:`MAX_PIECES` pieces (0: shorter than one span, one phase over the log)."""
+    return min(MAX_PIECES, int(span / DRIFT_SPAN))
 
 
 def tracked_periods(t: np.ndarray, sigma_w: float, dt: float) -> int:
@@ -88,7 +94,7 @@ def tracked_periods(t: np.ndarray, sigma_w: float, dt: float) -> int:
     at 1 kHz: 10 periods found at 34, the true count's held-out share 0.18 against 0.83; with the rig's own angle,
     0.999 at 10)."""
     span = _span(t)
-    spacing = span / max(1, min(MAX_PIECES, int(span / DRIFT_SPAN)))
+    spacing = span / max(1, _most_pieces(span))
     per_count = sigma_w * sigma_w * dt * spacing
     return MAX_PERIODS if per_count <= 0 else int(min(MAX_PERIODS, math.sqrt(DRIFT_VAR / per_count)))
 

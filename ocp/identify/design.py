@@ -162,7 +162,8 @@ class DesignResult:
             return "no candidate experiment ran within the limits: " + "; ".join(c.note for c in self.candidates)
         z = self.chosen.worst
         before = min(self.current_log.values()) if self.current_log else math.nan
-        misses = " and ".join(f"{e:.3g}" for e in self.log_errors.values())
+        each = [f"{e:.3g}" for e in self.log_errors.values()]
+        misses = ", ".join(each[:-1]) + " and " + each[-1] if len(each) > 1 else "".join(each)
         fits = f"; their free runs miss it by {misses} noise units" if misses else ""
         if misses and before > z:  # no run separates them better than the log: its misses decide, not a run
             return (f"this log already separates the rivals by z = {before:.3g} noise standard deviations, more "

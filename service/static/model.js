@@ -154,7 +154,7 @@ function showCheck(res, reportHtml) {
 }
 
 /** Ascending counts as runs: [3, 4, 5, 9] -> "3-5, 9" (a run of three or more joined). */
-export function runs(counts) {
+function runs(counts) {
   const out = [];
   for (const n of counts) {
     const last = out[out.length - 1];
