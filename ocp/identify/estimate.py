@@ -2,7 +2,11 @@
 
 * :func:`equation_error_fit` -- minimise the one-step equation residuals (``ocp.identify.predict``),
   each equation scaled by its residual RMS under the starting plant; cheap (vectorised over samples),
-  and for amplitude-type parameters (friction, offsets, drops) the problem is linear in them.
+  and for amplitude-type parameters (friction, offsets, drops) the problem is linear in them. The torque
+  equation is seen as the speed error it causes (:func:`.regression.speed_view` at the starting plant's rotor
+  time constant, as :func:`ocp.identify.diagnose` sees it): its residual is ``J`` times the differentiated speed,
+  whose noise, taken as signal, biased ``J`` low (a fifth to a half of the rig's on proving-ground logs at
+  2-10 kHz) before the refinement repaired it.
 * :func:`free_run_fit` -- minimise the free-run errors (speed, current, thrust, each scaled by its
   sensor-noise level); the refinement step, robust to noise in the regressors.
 
@@ -22,7 +26,8 @@ from scipy.optimize import least_squares, lsq_linear
 from ocp.errors import SolverError
 from ocp.identify.candidates import Candidate
 from ocp.identify.predict import CHANNELS, EQUATIONS, free_run, one_step, run_rows
-from ocp.logs import Log
+from ocp.identify.regression import rotor_tau, speed_view
+from ocp.logs import Log, LogKind
 from ocp.model.plant import DCMotorPlant
 
 
@@ -172,20 +177,40 @@ def _solve(fun: Callable[[np.ndarray], np.ndarray], base: DCMotorPlant, cands: S
     return Estimate(assemble(base, cands, x), names, x, sd, corr, 0.5 * float(np.einsum("i,i", r, r)))
 
 
-def equation_scales(plant: DCMotorPlant, log: Log, rows: np.ndarray) -> dict[str, float]:
-    """RMS of each one-step equation residual of ``plant`` on ``rows`` (boolean mask over residual index)."""
+def _residuals(plant: DCMotorPlant, log: Log, view: Callable[[np.ndarray], np.ndarray]
+               ) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+    """One-step residuals of ``plant`` per equation (N-1,) and their row index, the torque equation's through
+    ``view`` (:func:`_torque_view`)."""
     r = one_step(plant, log)
-    return {eq: max(float(np.sqrt(np.mean(r.equation(eq)[rows[r.idx]] ** 2))), 1e-12) for eq in EQUATIONS}
+    return r.idx, {eq: view(r.equation(eq)) if eq == "mechanical" else r.equation(eq) for eq in EQUATIONS}
+
+
+def _torque_view(plant: DCMotorPlant, log: Log) -> Callable[[np.ndarray], np.ndarray]:
+    """The torque residual seen as the speed error it causes (module doc), at ``plant``'s rotor time constant over
+    the logged speeds; a steady-state sweep's as it is."""
+    if log.kind is not LogKind.TIME_SERIES:
+        return lambda y: y
+    tau = rotor_tau(plant.params, log.omega)
+    return lambda y: speed_view(y, log.dt, tau)
+
+
+def equation_scales(plant: DCMotorPlant, log: Log, rows: np.ndarray) -> dict[str, float]:
+    """RMS of each one-step equation residual of ``plant`` on ``rows`` (boolean mask over residual index), the torque
+    equation's as :func:`equation_error_fit` sees it."""
+    idx, res = _residuals(plant, log, _torque_view(plant, log))
+    return {eq: max(float(np.sqrt(np.mean(res[eq][rows[idx]] ** 2))), 1e-12) for eq in EQUATIONS}
 
 
 def equation_error_fit(base: DCMotorPlant, cands: Sequence[Candidate], log: Log, rows: np.ndarray,
                        scales: dict[str, float]) -> Estimate:
-    """Fit ``cands`` on the one-step residuals at ``rows`` (bool mask (N,)), equations scaled by ``scales``."""
+    """Fit ``cands`` on the one-step residuals at ``rows`` (bool mask (N,)), equations scaled by ``scales``, the
+    torque equation seen through the base plant's view (module doc: one filter for every trial)."""
+    view = _torque_view(base, log)
 
     def fun(theta: np.ndarray) -> np.ndarray:
-        r = one_step(assemble(base, cands, theta), log)
-        keep = rows[r.idx]
-        out = np.concatenate([r.equation(eq)[keep] / scales[eq] for eq in EQUATIONS])
+        idx, res = _residuals(assemble(base, cands, theta), log, view)
+        keep = rows[idx]
+        out = np.concatenate([res[eq][keep] / scales[eq] for eq in EQUATIONS])
         return np.where(np.isfinite(out), out, 1e6)
 
     return _solve(fun, base, cands, _starts(base, cands), max_nfev=60, linear=all(c.linear for c in cands))

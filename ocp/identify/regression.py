@@ -218,9 +218,10 @@ def speed_view(y: np.ndarray, dt: float, tau: float) -> np.ndarray:
     return np.asarray(signal.filtfilt([1.0 - a], [1.0, -a], y, axis=0, padlen=0), float)
 
 
-def rotor_tau(p: MotorParams, s: Signals) -> float:
-    """Rotor time constant [s] at the logged speeds: ``J / (k_t k_e / R + B + 2 c_tau rms(w))`` (nominal)."""
-    rms = float(np.sqrt(np.mean(s.w * s.w))) if s.w.size else 0.0
+def rotor_tau(p: MotorParams, w: np.ndarray) -> float:
+    """Rotor time constant [s] at the logged speeds ``w`` (N,) [rad/s]: ``J / (k_t k_e / R + B + 2 c_tau rms(w))``
+    (nominal)."""
+    rms = float(np.sqrt(np.mean(w * w))) if w.size else 0.0
     return p.J / (p.k_t * p.k_e / p.R + p.B + 2.0 * p.c_tau * rms)
 
 
@@ -254,7 +255,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     t[0] = targets(p, raw)[0]
     rows = s.w.size
     edge = np.zeros(rows, dtype=bool)
-    tau = rotor_tau(p, s) if log.kind is LogKind.TIME_SERIES else 0.0
+    tau = rotor_tau(p, s.w) if log.kind is LogKind.TIME_SERIES else 0.0
     if log.kind is LogKind.TIME_SERIES:  # the low-passes' start-up and run-out transients
         m = min(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt)), rows // 6)
         edge[:m] = edge[rows - m:] = True
