@@ -391,14 +391,19 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
 
 def _rivals(counts: list[int]) -> str:
     """``[3, 4, 5, 9]`` -> "3-5 and 9 periods/rev" (runs of consecutive counts joined)."""
-    runs: list[list[int]] = []
-    for n in counts:
-        if runs and n == runs[-1][-1] + 1:
-            runs[-1].append(n)
-        else:
-            runs.append([n])
-    parts = [f"{r[0]}-{r[-1]}" if len(r) > 2 else ", ".join(map(str, r)) for r in runs]
+    parts = runs(counts)
     return (", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else parts[0]) + " periods/rev"
+
+
+def runs(counts: list[int]) -> list[str]:
+    """Ascending counts as runs: ``[3, 4, 5, 9, 11, 12]`` -> ``["3-5", "9", "11, 12"]`` (three or more joined)."""
+    out: list[list[int]] = []
+    for n in counts:
+        if out and n == out[-1][-1] + 1:
+            out[-1].append(n)
+        else:
+            out.append([n])
+    return [f"{r[0]}-{r[-1]}" if len(r) > 2 else ", ".join(map(str, r)) for r in out]
 
 
 def cmd_fit(args: argparse.Namespace) -> int:

@@ -9,6 +9,7 @@ from typing import Any
 
 import pytest
 
+from clients.cli.model import runs
 from ocp.identify import diagnose
 from ocp.logs import write_log_csv
 from ocp.model.params import load_params
@@ -34,15 +35,5 @@ def test_an_undecided_count_is_said_on_the_page(page: Any, server: Server, tmp_p
     page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
     text = page.inner_text("#m-angle")
     assert "best fit at 48 periods/rev" in text and "the count is not decided by this log" in text
-    assert f"({_runs(rivals)})" in text
+    assert f"({', '.join(runs(rivals))})" in text  # the page's runs (model.js) as the CLI forms them
 
-
-def _runs(counts: list[int]) -> str:
-    """The page's runs of counts (``runs`` in model.js): [3, 4, 5, 9] -> "3-5, 9"."""
-    out: list[list[int]] = []
-    for n in counts:
-        if out and n == out[-1][-1] + 1:
-            out[-1].append(n)
-        else:
-            out.append([n])
-    return ", ".join(f"{r[0]}-{r[-1]}" if len(r) > 2 else ", ".join(map(str, r)) for r in out)
