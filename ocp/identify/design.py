@@ -57,6 +57,9 @@ from ocp.model.effects import plant_to_mapping
 from ocp.model.equilibrium import equilibrium
 from ocp.model.plant import DCMotorPlant
 
+#: at most this many rivals (the verdict and its closest alternatives, or the user's): the fits (each refined) and
+#: the pairs a design separates stay bounded (a 50 Hz log with 16 ambiguities took 228 s with them all)
+MAX_RIVALS = 6
 #: probe sizes of effects a log cannot show: fraction of the load torque tau_top, thrust F_top, voltage limit
 #: V, top speed w_top, c_tau, c_f (the smallest a user of a thruster would want to know about)
 PROBES: dict[str, Callable[[dict[str, float]], dict[str, float]]] = {
@@ -84,7 +87,7 @@ class DesignOptions(BaseModel):
     voltage: float | None = Field(default=None, gt=0, le=1e4)
     current: float | None = Field(default=None, gt=0, le=1e4)
     duration_s: float | None = Field(default=None, ge=0.2, le=60.0)
-    rivals: tuple[tuple[str, ...], ...] | None = Field(default=None, min_length=2, max_length=6)
+    rivals: tuple[tuple[str, ...], ...] | None = Field(default=None, min_length=2, max_length=MAX_RIVALS)
     time_limit_s: float = Field(default=10.0, gt=0, le=600)  # per candidate optimisation [s]
 
     @field_validator("rivals")
@@ -165,11 +168,16 @@ class DesignResult:
         each = [f"{e:.3g}" for e in self.log_errors.values()]
         misses = ", ".join(each[:-1]) + " and " + each[-1] if len(each) > 1 else "".join(each)
         fits = f"; their free runs miss it by {misses} noise units" if misses else ""
-        if misses and before > z:  # no run separates them better than the log: its misses decide, not a run
+        if misses and before > z and confusion(before) <= 0.05:  # no run separates them better than the log
             return (f"this log already separates the rivals by z = {before:.3g} noise standard deviations, more "
                     f"than the best experiment the optimiser runs within the limits ('{self.chosen.name}', z = "
                     f"{z:.3g}){fits}: a rival that explains the log misses it by about one; where none does, "
                     "something none of them holds is missing")
+        if before > z:  # neither the log nor any run tells them apart
+            return (f"no experiment the optimiser runs within the limits separates the rivals better than this log "
+                    f"(z = {before:.3g} noise standard deviations{fits}; best run '{self.chosen.name}', z = {z:.3g}): "
+                    f"a likelihood-ratio test would confuse them with probability {confusion(before):.2g}; wider "
+                    "limits (--voltage, --current) or a longer run (--duration) may")
         return (f"run '{self.chosen.name}' ({self.chosen.description}): the rivals differ by z = {z:.3g} noise "
                 f"standard deviations (this log: {before:.3g}{fits}); a likelihood-ratio test would confuse them "
                 f"with probability {confusion(z):.2g}")
@@ -231,13 +239,18 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
     reasons, sets = [], []
     gaps = [GAP_TEXT[g] for g in GAPS if not cov[g]]
     if res.ambiguous:
-        sets.append(tuple(res.verdict))
-        for a in res.ambiguous:
+        sets.append(tuple(sorted(res.verdict)))
+        closest = sorted(res.ambiguous, key=lambda a: float(a["alternative_score"]))  # best-fitting first
+        for k, a in enumerate(closest):
+            if len(sets) == MAX_RIVALS:
+                reasons.append(f"{len(closest) - k} further ambiguities not taken as rivals (at most {MAX_RIVALS}: "
+                               "the alternatives that fit the log best)")
+                break
+            swapped = tuple(sorted(str(a["alternative"]) if v == a["adopted"] else v for v in res.verdict))
             reasons.append(str(a["reason"]))
-            sets.append(tuple(str(a["alternative"]) if v == a["adopted"] else v for v in res.verdict))
+            sets += [] if swapped in sets else [swapped]
         reasons += [f"{g} (an effect may hide there)" for g in gaps]
-        unique = list(dict.fromkeys(tuple(sorted(s)) for s in sets))
-        return [fitted(s) for s in unique], reasons, False
+        return [fitted(s) for s in sets], reasons, False
     out = [Rival("diagnosed plant", tuple(res.verdict), res.plant)]
     present = {e.name for e in res.plant.effects} | set(res.verdict)
     for gap, probes in GAPS.items():

@@ -91,3 +91,22 @@ def test_a_log_that_separates_its_rivals_better_than_any_run_says_so() -> None:
     assert d.chosen is not None and min(d.current_log.values()) > d.chosen.worst
     assert sorted(d.log_errors) == ["input_delay", "param:L"] and min(d.log_errors.values()) > 5.0
     assert d.message().startswith("this log already separates the rivals")
+
+
+def test_a_verdict_ambiguous_many_ways_is_designed_against_its_closest_rivals() -> None:
+    """Proving-ground 14193 without its angle column (10 kHz tachometer, PRBS; a brush drop and Coulomb friction drawn,
+    ``k`` and a wake lag named): 26 ambiguity entries. The design takes the verdict and the alternatives that fit the
+    log best, at most :data:`.design.MAX_RIVALS` in all (each fitted with the refinement; with all 27 the design
+    took 127 s), and says how many it left."""
+    from ocp.identify.design import MAX_RIVALS
+
+    case = make_case(14193)
+    plant, log = DCMotorPlant(MotorParams(**case.nominal)), case_log(case, angle=False)
+    first = diagnose(plant, log)
+    assert len(first.ambiguous) > MAX_RIVALS
+    d = design(plant, log, first)
+    assert len(d.rivals) == MAX_RIVALS and d.rivals[0].items == tuple(sorted(first.verdict))
+    best = sorted(first.ambiguous, key=lambda a: float(a["alternative_score"]))[0]
+    assert tuple(sorted(str(best["alternative"]) if v == best["adopted"] else v for v in first.verdict)) \
+        == d.rivals[1].items
+    assert any("further ambiguities not taken as rivals" in r for r in d.reasons)
