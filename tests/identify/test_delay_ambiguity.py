@@ -90,6 +90,8 @@ def test_a_log_that_separates_its_rivals_better_than_any_run_says_so() -> None:
     d = design(plant, log, first)
     assert d.chosen is not None and min(d.current_log.values()) > d.chosen.worst
     assert sorted(d.log_errors) == ["input_delay", "param:L"] and min(d.log_errors.values()) > 5.0
+    # neither is the rig and each, refined, misses it alike (fitted by the one-step stage alone, L's missed by 25)
+    assert max(d.log_errors.values()) < 1.25 * min(d.log_errors.values())
     assert d.message().startswith("this log already separates the rivals")
 
 
