@@ -134,7 +134,9 @@ def angle_limits(theta: np.ndarray | None, periods: int, logged: bool, tracked: 
     sample, :func:`interval_ripple`), the largest count resolved on half the moving rows, the largest count
     whose phase an integrated angle's drift lets the tracking follow (``tracked``, :func:`tracked_periods`), and a
     note when the log cannot show it (too few resolving rows, or an angle integrated from a speed column, whose
-    drift blurs high counts)."""
+    drift blurs high counts) and when it checks fewer counts than :data:`MAX_PERIODS` (the largest resolved one,
+    and how much faster a logger must sample to check them all: over the proving ground's 800 logs, a drawn ripple
+    beyond that count was named in about half the logs, within it in nearly all, ``bench/cogging_reach.py``)."""
     step = np.abs(np.diff(theta)) if theta is not None and theta.size > 1 else np.zeros(1)
     moving = step[step > 0]
     resolved = float(np.mean(periods * step < math.pi)) if step.size else 0.0
@@ -143,6 +145,11 @@ def angle_limits(theta: np.ndarray | None, periods: int, logged: bool, tracked: 
     if resolved < 0.05:
         notes.append(f"at {periods} periods/rev the ripple is faster than half the sampling on "
                      f"{100 * (1 - resolved):.0f} % of the rows: this log cannot show it (a faster logger would)")
+    if top < MAX_PERIODS:
+        faster = MAX_PERIODS * float(np.median(moving)) / math.pi
+        notes.append(f"a ripple of more than {top} periods/rev averages out within a sample on over half the moving "
+                     f"rows and shows only where the rotor turns slowly, so it may go unseen (logging {faster:.2g} "
+                     f"times faster, or a slower run, would resolve up to {MAX_PERIODS} on half the rows)")
     if not logged:
         notes.append("no angle column: the angle is integrated from the speed, whose noise makes it drift; "
                      + (f"its phase is followed up to {tracked} periods/rev only" if tracked < MAX_PERIODS else
