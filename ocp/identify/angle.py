@@ -134,8 +134,8 @@ def angle_limits(theta: np.ndarray | None, periods: int, logged: bool, tracked: 
     sample, :func:`interval_ripple`), the largest count resolved on half the moving rows, the largest count
     whose phase an integrated angle's drift lets the tracking follow (``tracked``, :func:`tracked_periods`), and a
     note when the log cannot show it (too few resolving rows, or an angle integrated from a speed column, whose
-    drift blurs high counts) and when it checks fewer counts than :data:`MAX_PERIODS` (the largest resolved one,
-    and how much faster a logger must sample to check them all: over the proving ground's 800 logs, a drawn ripple
+    drift blurs high counts) and when it resolves fewer counts than :data:`MAX_PERIODS` (the largest resolved one,
+    and how much faster a logger must sample to resolve them all: over the proving ground's 800 logs, a drawn ripple
     beyond that count was named in about half the logs, within it in nearly all, ``bench/cogging_reach.py``)."""
     step = np.abs(np.diff(theta)) if theta is not None and theta.size > 1 else np.zeros(1)
     moving = step[step > 0]

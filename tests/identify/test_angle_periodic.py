@@ -28,8 +28,8 @@ def test_a_ripple_beyond_the_low_pass_of_a_slow_logger_is_found(rig: MotorParams
     assert res.angle_periodic["angle"] == "logged" and "cannot show it" not in res.angle_periodic["note"]
     # found on the slow rows, though beyond the count this log resolves on half its moving rows (said, with how
     # much faster a logger would resolve them all)
-    top = res.angle_periodic["max_resolved_periods"]
-    assert top < 48 and f"more than {top} periods/rev" in res.angle_periodic["note"]
+    reach = res.angle_periodic["max_resolved_periods"]
+    assert reach < 48 and f"more than {reach} periods/rev" in res.angle_periodic["note"]
     top = res.ranking[0]
     assert top.name == "cogging" and top.parameters["periods"] == 48
     amp = math.hypot(top.parameters["tau_sin"], top.parameters["tau_cos"])
