@@ -218,7 +218,9 @@ class ExperimentDesignPublic(_Open):
 
     needed: bool = Field(description="false: not ambiguous and the log covers reversals, low speed and a speed range")
     reasons: list[str]
-    coverage: dict[str, Any] = Field(description="reversal, low_speed, speed_range (bool) and the fractions behind")
+    coverage: dict[str, Any] = Field(description="reversal, low_speed, speed_range, ripple_reach (bool) and the "
+                                     "fractions behind; ripple_periods: the largest angle ripple count resolved "
+                                     "on half the moving rows")
     rivals: list[dict[str, Any]] = Field(description="[{name, items}] the explanations to separate")
     candidates: list[dict[str, Any]] = Field(description="every excitation: runnable, separation per rival pair")
     separation: float | None = Field(description="the chosen experiment's smallest pairwise separation z "

@@ -9,7 +9,8 @@ them.
 **Rivals.** Ambiguity: the verdict, and the verdict with each ambiguous item swapped for its alternative,
 each fitted to the log (:func:`ocp.identify.fit`). Coverage gaps: the diagnosed plant, and the same plant with
 each effect the log cannot show at a *probe* size (:data:`PROBES`, relative to the plant's torque, thrust
-and voltage at the top speed): "would this experiment reveal a 5 % Coulomb friction?". ``rivals`` in
+and voltage at the top speed): "would this experiment reveal a 5 % Coulomb friction?"; where the log resolves fewer
+angle ripple counts than 64 (:func:`coverage`), a ripple at 64 periods/rev. ``rivals`` in
 :class:`DesignOptions` names the candidate sets instead.
 
 **Criterion** (:mod:`.separation`: T-optimal discrimination, Atkinson & Fedorov 1975, linearised). Every
@@ -40,6 +41,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from ocp.errors import LogError, ParameterError, ThrustshapeError
+from ocp.identify.angle import MAX_PERIODS, angle_limits
 from ocp.identify.candidates import candidate
 from ocp.identify.diagnose import DiagnoseResult, aligned, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
@@ -69,12 +71,16 @@ PROBES: dict[str, Callable[[dict[str, float]], dict[str, float]]] = {
     "thrust_asymmetry": lambda s: {"dc_f": 0.2 * s["c_f"]},
     "voltage_deadband": lambda s: {"v_db": 0.05 * s["V"]},
     "brush_drop": lambda s: {"v_b": 0.03 * s["V"]},
+    # the highest count offered (an angle ripple beyond the log's reach, :func:`.angle.angle_limits`)
+    "cogging": lambda s: {"tau_sin": 0.05 * s["tau_top"], "tau_cos": 0.0, "periods": float(MAX_PERIODS)},
 }
 #: which probes each coverage gap calls for
 GAPS = {"reversal": ("drag_asymmetry", "thrust_asymmetry", "coulomb_friction", "voltage_deadband", "brush_drop"),
-        "low_speed": ("coulomb_friction", "stribeck"), "speed_range": ("param:B",)}
+        "low_speed": ("coulomb_friction", "stribeck"), "speed_range": ("param:B",), "ripple_reach": ("cogging",)}
 GAP_TEXT = {"reversal": "the log never reverses", "low_speed": "the log spends no time at low speed",
-            "speed_range": "the log holds one speed only"}
+            "speed_range": "the log holds one speed only",
+            "ripple_reach": "the log resolves angle ripples of at most {ripple_periods} periods/rev on half its "
+                            "moving rows"}
 SHORTLIST = 3  # candidates whose separation is computed with the refit (best raw separations)
 
 
@@ -189,14 +195,19 @@ def _finite(x: float | None) -> float | None:
 
 def coverage(log: Log) -> dict[str, Any]:
     """What the log exercises: both directions (a reversal), time at low speed (< 10 % of its top speed),
-    a range of speeds (10th over 90th percentile of |w| below one half)."""
+    a range of speeds (10th over 90th percentile of |w| below one half), and every angle ripple count up to
+    :data:`.angle.MAX_PERIODS` resolved on half its moving rows (``ripple_periods``, the largest resolved; an angle
+    integrated from the speed where none is logged)."""
+    theta = log.theta if log.theta is not None else np.concatenate([[0.0], np.cumsum(log.omega[1:]) * log.dt])
+    reach = int(str(angle_limits(theta, MAX_PERIODS, log.theta is not None)["max_resolved_periods"]))
     w = np.abs(log.omega)
     top = float(np.percentile(w, 99)) or 1.0
     pos, neg = float(np.mean(log.omega > 0.05 * top)), float(np.mean(log.omega < -0.05 * top))
     low = float(np.mean(w < 0.1 * top))
     spread = float(np.percentile(w, 10) / max(float(np.percentile(w, 90)), 1e-300))
     return {"reversal": min(pos, neg) > 0.05, "low_speed": low > 0.05, "speed_range": spread < 0.5,
-            "forward_fraction": pos, "reverse_fraction": neg, "low_speed_fraction": low, "speed_spread": spread}
+            "ripple_reach": reach >= MAX_PERIODS, "forward_fraction": pos, "reverse_fraction": neg,
+            "low_speed_fraction": low, "speed_spread": spread, "ripple_periods": reach}
 
 
 def _scales(plant: DCMotorPlant, voltage: float, current: float) -> dict[str, float]:
@@ -237,7 +248,7 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
     if opt.rivals is not None:
         return [fitted(r) for r in opt.rivals], ["rivals given by the user"], False
     reasons, sets = [], []
-    gaps = [GAP_TEXT[g] for g in GAPS if not cov[g]]
+    gaps = [GAP_TEXT[g].format(**cov) for g in GAPS if not cov[g]]
     if res.ambiguous:
         sets.append(tuple(sorted(res.verdict)))
         closest = sorted(res.ambiguous, key=lambda a: float(a["alternative_score"]))  # best-fitting first
@@ -256,7 +267,7 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
     for gap, probes in GAPS.items():
         if cov[gap]:
             continue
-        reasons.append(GAP_TEXT[gap])
+        reasons.append(GAP_TEXT[gap].format(**cov))
         for name in probes:
             if name in present or any(r.name.startswith(name) for r in out):
                 continue

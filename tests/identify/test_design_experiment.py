@@ -12,7 +12,7 @@ import pytest
 
 from clients.cli import main
 from ocp.identify import diagnose
-from ocp.identify.design import confusion, coverage
+from ocp.identify.design import DesignOptions, confusion, coverage, design
 from ocp.logs import log_from_arrays, write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -82,3 +82,34 @@ def test_design_refuses_what_it_cannot_use(tmp_path: Path, capsys: pytest.Captur
     assert "no_such_effect" in json.loads(capsys.readouterr().err)["reason"]
     assert main(["design-experiment", str(csv), "--params", "paper-rig", "--voltage", "-3", "--json"]) == 1
     assert json.loads(capsys.readouterr().err)["field"] == "--voltage"
+
+
+#: a rig with an angle ripple of 20 periods/rev logged at 200 Hz (any rig whose single-speed log resolves fewer counts
+#: than its ripple's; the assertions hold whatever it is)
+RIPPLE_SEED = 0
+
+
+def test_a_ripple_beyond_the_logs_reach_is_probed_and_the_proposal_reveals_it() -> None:
+    """Near one speed the log resolves a few counts per revolution: the ripple averages out within a sample and the
+    check names nothing. The design takes the ripple's reach as a coverage gap (an angle ripple probed at the highest
+    count), and the proposed command, played on the same rig, shows the ripple with the rig's count."""
+    rig = draw(RIPPLE_SEED, "cogging")
+    count = rig.truth.effects["cogging"]["periods"]
+    log = _log(single_speed(rig, RIPPLE_SEED))
+    plant = DCMotorPlant(MotorParams(**rig.nominal))
+    first = diagnose(plant, log)
+    cov = coverage(log)
+    # the reach against the closed form pi / median step of the logged angle
+    step = np.abs(np.diff(log.theta if log.theta is not None else np.cumsum(log.omega) * log.dt))
+    assert cov["ripple_periods"] == int(np.pi / np.median(step[step > 0])) < count and not cov["ripple_reach"]
+    assert "cogging" not in first.verdict
+    d = design(plant, log, first, DesignOptions(voltage=rig.truth.v_max,
+                                                current=3.0 * float(np.max(np.abs(log.current))))).to_dict()
+    probe = "diagnosed plant vs cogging (probe)"
+    assert f"angle ripples of at most {cov['ripple_periods']} periods/rev" in " ".join(d["reasons"])
+    assert d["chosen"]["separation"][probe] > d["current_log_separation"][probe]
+    res = optimize(Mission.model_validate(d["mission"]))
+    new = _log(run_command(rig, res.arrays["t"], res.arrays["voltage"], RIPPLE_SEED + 7))
+    second = diagnose(plant, new)
+    assert "cogging" in second.verdict and second.angle_periodic is not None
+    assert second.angle_periodic["periods"] == count
