@@ -9,8 +9,8 @@ them.
 **Rivals.** Ambiguity: the verdict, and the verdict with each ambiguous item swapped for its alternative,
 each fitted to the log (:func:`ocp.identify.fit`). Coverage gaps: the diagnosed plant, and the same plant with
 each effect the log cannot show at a *probe* size (:data:`PROBES`, relative to the plant's torque, thrust
-and voltage at the top speed): "would this experiment reveal a 5 % Coulomb friction?"; where the log resolves fewer
-angle ripple counts than 64 (:func:`coverage`), a ripple at 64 periods/rev. ``rivals`` in
+and voltage at the top speed): "would this experiment reveal a 5 % Coulomb friction?"; where hardly a moving row is slow
+enough to show an angle ripple of 64 periods/rev (:func:`coverage`), such a ripple. ``rivals`` in
 :class:`DesignOptions` names the candidate sets instead.
 
 **Criterion** (:mod:`.separation`: T-optimal discrimination, Atkinson & Fedorov 1975, linearised). Every
@@ -77,10 +77,15 @@ PROBES: dict[str, Callable[[dict[str, float]], dict[str, float]]] = {
 #: which probes each coverage gap calls for
 GAPS = {"reversal": ("drag_asymmetry", "thrust_asymmetry", "coulomb_friction", "voltage_deadband", "brush_drop"),
         "low_speed": ("coulomb_friction", "stribeck"), "speed_range": ("param:B",), "ripple_reach": ("cogging",)}
+#: the share of the moving rows that must resolve a 64-period ripple (:func:`coverage`): a log near one speed has
+#: none; the proposals that revealed a hidden ripple on the proving ground had 3.7-14 % (seeds 0, 2, 6, 9 of
+#: :mod:`tests.proving_ground.experiment`), so the gap closes once such an experiment is logged
+RIPPLE_ROWS = 0.01
 GAP_TEXT = {"reversal": "the log never reverses", "low_speed": "the log spends no time at low speed",
             "speed_range": "the log holds one speed only",
-            "ripple_reach": "the log resolves angle ripples of at most {ripple_periods} periods/rev on half its "
-                            "moving rows"}
+            "ripple_reach": f"under {100 * RIPPLE_ROWS:g} % of the moving rows are slow enough to show an angle "
+                            "ripple of 64 periods/rev (the log resolves at most {ripple_periods} periods/rev on half "
+                            "of them)"}
 SHORTLIST = 3  # candidates whose separation is computed with the refit (best raw separations)
 
 
@@ -195,10 +200,14 @@ def _finite(x: float | None) -> float | None:
 
 def coverage(log: Log) -> dict[str, Any]:
     """What the log exercises: both directions (a reversal), time at low speed (< 10 % of its top speed),
-    a range of speeds (10th over 90th percentile of |w| below one half), and every angle ripple count up to
-    :data:`.angle.MAX_PERIODS` resolved on half its moving rows (``ripple_periods``, the largest resolved; an angle
-    integrated from the speed where none is logged)."""
+    a range of speeds (10th over 90th percentile of |w| below one half), and rows slow enough to show an angle
+    ripple of :data:`.angle.MAX_PERIODS` periods/rev (sampled twice a period, ``64 |d theta| < pi``) on at least
+    :data:`RIPPLE_ROWS` of the moving rows (``ripple_rows``; ``ripple_periods``: the largest count resolved on half
+    of them; an angle integrated from the speed where none is logged)."""
     theta = log.theta if log.theta is not None else np.concatenate([[0.0], np.cumsum(log.omega[1:]) * log.dt])
+    step = np.abs(np.diff(theta))
+    moving = step[step > 0]
+    slow = float(np.mean(MAX_PERIODS * moving < math.pi)) if moving.size else 1.0
     reach = int(str(angle_limits(theta, MAX_PERIODS, log.theta is not None)["max_resolved_periods"]))
     w = np.abs(log.omega)
     top = float(np.percentile(w, 99)) or 1.0
@@ -206,8 +215,8 @@ def coverage(log: Log) -> dict[str, Any]:
     low = float(np.mean(w < 0.1 * top))
     spread = float(np.percentile(w, 10) / max(float(np.percentile(w, 90)), 1e-300))
     return {"reversal": min(pos, neg) > 0.05, "low_speed": low > 0.05, "speed_range": spread < 0.5,
-            "ripple_reach": reach >= MAX_PERIODS, "forward_fraction": pos, "reverse_fraction": neg,
-            "low_speed_fraction": low, "speed_spread": spread, "ripple_periods": reach}
+            "ripple_reach": slow >= RIPPLE_ROWS, "forward_fraction": pos, "reverse_fraction": neg,
+            "low_speed_fraction": low, "speed_spread": spread, "ripple_rows": slow, "ripple_periods": reach}
 
 
 def _scales(plant: DCMotorPlant, voltage: float, current: float) -> dict[str, float]:

@@ -12,7 +12,7 @@ import pytest
 
 from clients.cli import main
 from ocp.identify import diagnose
-from ocp.identify.design import DesignOptions, confusion, coverage, design
+from ocp.identify.design import RIPPLE_ROWS, DesignOptions, confusion, coverage, design
 from ocp.logs import log_from_arrays, write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -99,17 +99,21 @@ def test_a_ripple_beyond_the_logs_reach_is_probed_and_the_proposal_reveals_it() 
     plant = DCMotorPlant(MotorParams(**rig.nominal))
     first = diagnose(plant, log)
     cov = coverage(log)
-    # the reach against the closed form pi / median step of the logged angle
+    # the reach and the slow rows against the closed forms on the logged angle: pi / median step, 64 step < pi
     step = np.abs(np.diff(log.theta if log.theta is not None else np.cumsum(log.omega) * log.dt))
-    assert cov["ripple_periods"] == int(np.pi / np.median(step[step > 0])) < count and not cov["ripple_reach"]
+    moving = step[step > 0]
+    assert cov["ripple_periods"] == int(np.pi / np.median(moving)) < count
+    assert cov["ripple_rows"] == pytest.approx(np.mean(64 * moving < np.pi))
+    assert cov["ripple_rows"] < RIPPLE_ROWS and not cov["ripple_reach"]
     assert "cogging" not in first.verdict
     d = design(plant, log, first, DesignOptions(voltage=rig.truth.v_max,
                                                 current=3.0 * float(np.max(np.abs(log.current))))).to_dict()
     probe = "diagnosed plant vs cogging (probe)"
-    assert f"angle ripples of at most {cov['ripple_periods']} periods/rev" in " ".join(d["reasons"])
+    assert f"at most {cov['ripple_periods']} periods/rev" in " ".join(d["reasons"])
     assert d["chosen"]["separation"][probe] > d["current_log_separation"][probe]
     res = optimize(Mission.model_validate(d["mission"]))
     new = _log(run_command(rig, res.arrays["t"], res.arrays["voltage"], RIPPLE_SEED + 7))
+    assert coverage(new)["ripple_reach"]  # the gap closes once the experiment is logged
     second = diagnose(plant, new)
     assert "cogging" in second.verdict and second.angle_periodic is not None
     assert second.angle_periodic["periods"] == count
