@@ -216,7 +216,8 @@ class ExperimentDesignPublic(_Open):
     """:meth:`ocp.identify.design.DesignResult.to_dict` plus ``diagnosis`` (the diagnosis it settles): why an
     experiment is needed, the rival explanations, every candidate excitation's separation, the chosen mission."""
 
-    needed: bool = Field(description="false: not ambiguous and the log covers reversals, low speed and a speed range")
+    needed: bool = Field(description="false: not ambiguous and the log covers reversals, low speed, a speed range "
+                                     "and rows slow enough for a 64-period angle ripple")
     reasons: list[str]
     coverage: dict[str, Any] = Field(description="reversal, low_speed, speed_range, ripple_reach (bool) and the "
                                      "fractions behind; ripple_periods: the largest angle ripple count resolved "

@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
@@ -71,7 +71,7 @@ PROBES: dict[str, Callable[[dict[str, float]], dict[str, float]]] = {
     "thrust_asymmetry": lambda s: {"dc_f": 0.2 * s["c_f"]},
     "voltage_deadband": lambda s: {"v_db": 0.05 * s["V"]},
     "brush_drop": lambda s: {"v_b": 0.03 * s["V"]},
-    # the highest count offered (an angle ripple beyond the log's reach, :func:`.angle.angle_limits`)
+    # the highest count offered (for a log almost without rows slow enough to show it, :func:`coverage`)
     "cogging": lambda s: {"tau_sin": 0.05 * s["tau_top"], "tau_cos": 0.0, "periods": float(MAX_PERIODS)},
 }
 #: which probes each coverage gap calls for
@@ -84,8 +84,8 @@ RIPPLE_ROWS = 0.01
 GAP_TEXT = {"reversal": "the log never reverses", "low_speed": "the log spends no time at low speed",
             "speed_range": "the log holds one speed only",
             "ripple_reach": f"under {100 * RIPPLE_ROWS:g} % of the moving rows are slow enough to show an angle "
-                            "ripple of 64 periods/rev (the log resolves at most {ripple_periods} periods/rev on half "
-                            "of them)"}
+                            f"ripple of {MAX_PERIODS} periods/rev (the log resolves at most {{ripple_periods}} "
+                            "periods/rev on half of them)"}
 SHORTLIST = 3  # candidates whose separation is computed with the refit (best raw separations)
 
 
@@ -208,7 +208,7 @@ def coverage(log: Log) -> dict[str, Any]:
     step = np.abs(np.diff(theta))
     moving = step[step > 0]
     slow = float(np.mean(MAX_PERIODS * moving < math.pi)) if moving.size else 1.0
-    reach = int(str(angle_limits(theta, MAX_PERIODS, log.theta is not None)["max_resolved_periods"]))
+    reach = cast(int, angle_limits(theta, MAX_PERIODS, log.theta is not None)["max_resolved_periods"])
     w = np.abs(log.omega)
     top = float(np.percentile(w, 99)) or 1.0
     pos, neg = float(np.mean(log.omega > 0.05 * top)), float(np.mean(log.omega < -0.05 * top))

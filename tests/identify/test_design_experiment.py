@@ -91,8 +91,9 @@ RIPPLE_SEED = 0
 
 def test_a_ripple_beyond_the_logs_reach_is_probed_and_the_proposal_reveals_it() -> None:
     """Near one speed the log resolves a few counts per revolution: the ripple averages out within a sample and the
-    check names nothing. The design takes the ripple's reach as a coverage gap (an angle ripple probed at the highest
-    count), and the proposed command, played on the same rig, shows the ripple with the rig's count."""
+    check names nothing. The design takes the lack of rows slow enough for a 64-period ripple as a coverage gap (a
+    ripple probed at that count), and the proposed command, played on the same rig, shows the ripple with the rig's
+    count."""
     rig = draw(RIPPLE_SEED, "cogging")
     count = rig.truth.effects["cogging"]["periods"]
     log = _log(single_speed(rig, RIPPLE_SEED))
