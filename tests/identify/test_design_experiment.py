@@ -11,8 +11,10 @@ import numpy as np
 import pytest
 
 from clients.cli import main
+from ocp.errors import SolverError
 from ocp.identify import diagnose
 from ocp.identify.design import RIPPLE_ROWS, DesignOptions, confusion, coverage, design
+from ocp.identify.separation import simulate, with_effect
 from ocp.logs import log_from_arrays, write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -118,3 +120,22 @@ def test_a_ripple_beyond_the_logs_reach_is_probed_and_the_proposal_reveals_it() 
     second = diagnose(plant, new)
     assert "cogging" in second.verdict and second.angle_periodic is not None
     assert second.angle_periodic["periods"] == count
+
+
+def test_a_probe_the_free_run_cannot_simulate_is_left_out_with_its_reason() -> None:
+    """Proving-ground rig 17 logged near one speed at 200 Hz: the 3 % brush-drop probe's contact (``tanh(i / i_eps)``
+    at zero current) needs more RK4 steps a sample than the free run takes, from rest, where every proposal starts.
+    The design used to fail on it as a whole; it leaves that probe out, says why, and proposes a run for the rest."""
+    rig = draw(17, "cogging")
+    log = _log(single_speed(rig, 17))
+    plant = DCMotorPlant(MotorParams(**rig.nominal))
+    res = design(plant, log, diagnose(plant, log),
+                 DesignOptions(voltage=rig.truth.v_max, current=3.0 * float(np.max(np.abs(log.current)))))
+    d = res.to_dict()
+    left = [r for r in d["reasons"] if "left out" in r]
+    assert len(left) == 1 and left[0].startswith("brush_drop (probe) left out")
+    assert "brush_drop (probe)" not in [r["name"] for r in d["rivals"]] and d["mission"] is not None
+    # the reason is the free run's own: the probe plant, simulated from rest at the log's rate, is refused
+    brush = with_effect(res.rivals[0].plant, "brush_drop", {"v_b": 0.03 * rig.truth.v_max})
+    with pytest.raises(SolverError, match="too stiff"):
+        simulate(brush, log.t[:50], np.full(50, 1.0))
