@@ -15,8 +15,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from ocp.logs import Log
 
 MAX_PERIODS = 64
 #: an angle integrated from a speed column drifts as a random walk; its ripple's phase is taken as known within
@@ -25,6 +29,13 @@ DRIFT_VAR = 0.5
 #: ... knots never closer than this [s] (the held-out segments must lie between knots fitted on training rows)
 DRIFT_SPAN = 1.0
 MAX_PIECES = 12
+
+
+def rotor_angle(log: Log) -> np.ndarray:
+    """The rotor angle (N,) [rad]: the logged one, else the speed column integrated by the trapezoid rule from 0."""
+    if log.theta is not None:
+        return log.theta
+    return np.concatenate([[0.0], np.cumsum(0.5 * (log.omega[1:] + log.omega[:-1]) * log.dt)])
 
 
 def _means(ea: np.ndarray, ed: np.ndarray, d: np.ndarray, triangle: bool) -> np.ndarray:

@@ -33,6 +33,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.identify.align import Alignment
+from ocp.identify.angle import rotor_angle
 from ocp.identify.diagnose import aligned, dynamic, finite
 from ocp.identify.predict import (
     CHANNEL_UNITS,
@@ -88,8 +89,7 @@ def groups(log: Log, opt: CheckOptions) -> dict[str, dict[str, np.ndarray]]:
     out["reversal"] = {"near reversal": near, "away": ~near}
     acc = np.gradient(w, log.t)
     out["acceleration"] = {"accelerating": w * acc > 0, "decelerating": w * acc <= 0}
-    theta = log.theta if log.theta is not None else np.concatenate(
-        [[0.0], np.cumsum(0.5 * (w[1:] + w[:-1]) * np.diff(log.t))])
+    theta = rotor_angle(log)
     b = np.floor(np.mod(theta, 2 * math.pi) / (2 * math.pi) * opt.bins_angle).astype(int)
     step = 360 // opt.bins_angle
     out["rotor angle"] = {f"{k * step}-{(k + 1) * step} deg": b == k for k in range(opt.bins_angle)}

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ocp.identify.align import cutoff_hz, shifted, smooth
-from ocp.identify.angle import drift_windows, interval_ripple, speed_noise, track_phase
+from ocp.identify.angle import drift_windows, interval_ripple, rotor_angle, speed_noise, track_phase
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE, ThrustLag, make_effect
 from ocp.model.params import MotorParams
@@ -103,8 +103,7 @@ def signals(log: Log, p: MotorParams) -> Signals:
     i, v, f = (smooth(getattr(log, ch), dt, fc) for ch in ("current", "voltage", "thrust"))
     # a logged angle gives the speed without the lag of a backward-differenced or filtered speed column
     w = smooth(np.gradient(log.theta, dt) if log.theta is not None else log.omega, dt, fc)
-    theta = log.theta if log.theta is not None else np.concatenate(
-        [[0.0], np.cumsum(0.5 * (log.omega[1:] + log.omega[:-1]) * dt)])
+    theta = rotor_angle(log)
     return Signals(w[:-1], w[1:], i[:-1], i[1:], 0.5 * (w[:-1] + w[1:]), 0.5 * (i[:-1] + i[1:]), v[:-1], f[:-1],
                    theta[:-1], log.t[:-1], dt, from_angle=log.theta is not None)
 

@@ -41,7 +41,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from ocp.errors import LogError, ParameterError, ThrustshapeError
-from ocp.identify.angle import MAX_PERIODS, angle_limits
+from ocp.identify.angle import MAX_PERIODS, angle_limits, rotor_angle
 from ocp.identify.candidates import candidate
 from ocp.identify.diagnose import DiagnoseResult, aligned, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
@@ -204,7 +204,7 @@ def coverage(log: Log) -> dict[str, Any]:
     ripple of :data:`.angle.MAX_PERIODS` periods/rev (sampled twice a period, ``64 |d theta| < pi``) on at least
     :data:`RIPPLE_ROWS` of the moving rows (``ripple_rows``; ``ripple_periods``: the largest count resolved on half
     of them; an angle integrated from the speed where none is logged)."""
-    theta = log.theta if log.theta is not None else np.concatenate([[0.0], np.cumsum(log.omega[1:]) * log.dt])
+    theta = rotor_angle(log)
     step = np.abs(np.diff(theta))
     moving = step[step > 0]
     slow = float(np.mean(MAX_PERIODS * moving < math.pi)) if moving.size else 1.0
