@@ -94,6 +94,19 @@ def draw_effect(name: str, t: Truth, dt: float, rng: np.random.Generator) -> dic
     }[name]()
 
 
+def draw_shape(name: str, p: dict[str, float], rng: np.random.Generator) -> dict[str, float]:
+    """Effect ``name``'s parameters ``p`` with a shape the identifier's catalogue does not have (``shapes=True``
+    cases): Stribeck friction decaying as ``exp(-|w / omega_s|^delta)``, ``delta`` 0.5-2 (the catalogue: 2), and
+    a ripple with harmonics at two and three times its count (0.1-0.5 and 0-0.25 of its amplitude; the catalogue:
+    a pure sine). Other effects unchanged."""
+    if name == "stribeck":
+        return {**p, "delta": rng.uniform(0.5, 2.0)}
+    if name == "cogging":
+        return {**p, "h2": rng.uniform(0.1, 0.5), "phase2": rng.uniform(0, 2 * math.pi),
+                "h3": rng.uniform(0.0, 0.25), "phase3": rng.uniform(0, 2 * math.pi)}
+    return p
+
+
 def _scale(name: str, p: dict[str, float], f: float) -> dict[str, float]:
     keys = {"stribeck": ("tau_s",), "cogging": ("amplitude",), "input_delay": ("delay",), "thrust_lag": ("tau",)}
     return {k: v * f if k in keys.get(name, (next(iter(p)),)) else v for k, v in p.items()}
@@ -113,7 +126,8 @@ def _lag(t: Truth, lg: Logger) -> float:
 def _substeps(t: Truth, lg: Logger, tau_m: float) -> int:
     h = min(tau_m / 150.0, 5e-4, t.e("thrust_lag", "tau", 1.0) / 20.0)
     if "cogging" in t.effects:
-        h = min(h, max(0.25 / (t.e("cogging", "periods") * 0.3 * t.v_max / t.k), 2e-5))
+        top = t.e("cogging", "periods") * (3 if t.e("cogging", "h3") else 2 if t.e("cogging", "h2") else 1)
+        h = min(h, max(0.25 / (top * 0.3 * t.v_max / t.k), 2e-5))
     return max(4, math.ceil(lg.dt / h))
 
 
@@ -133,15 +147,18 @@ def _kind(rng: np.random.Generator) -> str:
     return str(rng.choice(["clean", "one", "one", "one", "two", "two", "constant", "constant+one"]))
 
 
-def make_case(seed: int, kind: str | None = None) -> Case:
+def make_case(seed: int, kind: str | None = None, shapes: bool = False) -> Case:
     """Case number ``seed`` (deterministic). ``kind``: clean, one, two, constant, constant+one (random if None).
+    ``shapes``: Stribeck friction and ripples shaped unlike the catalogue's (:func:`draw_shape`, from a stream of
+    their own: the rig, logger and excitation are drawn as without, unless a visibility redraw intervenes).
 
     A draw whose discrepancy cannot be made visible is replaced by the next draw of the same seed, with the
     same kind, effects and wrong constant (rig, logger, excitation and sizes drawn anew)."""
     labels: tuple[list[str], str | None] | None = None
     for attempt in range(MAX_ATTEMPTS):
         rng = np.random.default_rng(seed if attempt == 0 else [seed, attempt])
-        case, kind, labels = _attempt(seed, rng, kind, labels)
+        shape = np.random.default_rng([seed, attempt, 1299709]) if shapes else None
+        case, kind, labels = _attempt(seed, rng, kind, labels, shape)
         if case is not None:
             return case
     raise RuntimeError(f"proving-ground seed {seed}: no visible draw in {MAX_ATTEMPTS} attempts")
@@ -150,10 +167,11 @@ def make_case(seed: int, kind: str | None = None) -> Case:
 Labels = tuple[list[str], str | None]  # the hidden effects, the wrong constant
 
 
-def _attempt(seed: int, rng: np.random.Generator, kind: str | None,
-             labels: Labels | None) -> tuple[Case | None, str, Labels]:
+def _attempt(seed: int, rng: np.random.Generator, kind: str | None, labels: Labels | None,
+             shape: np.random.Generator | None = None) -> tuple[Case | None, str, Labels]:
     """One draw of case ``seed`` from ``rng`` (its kind and labels when not given), with its kind and labels;
-    no case when a drawn discrepancy stays invisible (module doc)."""
+    no case when a drawn discrepancy stays invisible (module doc). ``shape``: effects reshaped (:func:`draw_shape`)
+    from this stream."""
     truth, tau_m = draw_motor(rng)
     sc = _scales(truth)
     lg = draw_logger(rng, tau_m, sc["w0"], sc["i"], sc["F"], truth.v_max)
@@ -166,6 +184,8 @@ def _attempt(seed: int, rng: np.random.Generator, kind: str | None,
     if const is not None:
         errors[const] = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.05, 0.5))
     truth.effects = {nm: draw_effect(nm, truth, lg.dt, rng) for nm in names}
+    if shape is not None:
+        truth.effects = {nm: draw_shape(nm, p, shape) for nm, p in truth.effects.items()}
     nominal = _nominal(truth, errors)
     exc = _excitations(rng)
     seconds = min(max(80 * tau_m, 3.0), 15.0) * len(exc)

@@ -54,20 +54,27 @@ def load_torque(t: Truth) -> Callable[[float, float], float]:
     # identifier's smoothing)
     tau_c = t.e("coulomb_friction", "tau_c") if "coulomb_friction" in fx else None
     tau_s, ws = (t.e("stribeck", "tau_s"), t.e("stribeck", "omega_s")) if "stribeck" in fx else (None, 1.0)
+    delta = t.e("stribeck", "delta", 2.0)  # the film's decay exponent (2: Gaussian, the catalogue's; 1: Tustin's)
     dc_tau = t.e("drag_asymmetry", "dc_tau") if "drag_asymmetry" in fx else None
     ripple = (t.e("cogging", "amplitude"), t.e("cogging", "periods"), t.e("cogging", "phase")) \
         if "cogging" in fx else None
+    # harmonics of the ripple (relative amplitudes at 2 and 3 times its count, their phases): a slotted motor's
+    # cogging is periodic in the angle, not a pure sine
+    overtones = [(t.e("cogging", f"h{m}"), m, t.e("cogging", f"phase{m}")) for m in (2, 3) if t.e("cogging", f"h{m}")]
 
     def tau(w: float, theta: float) -> float:
         x = b * w + c_tau * w * abs(w)
         if tau_c is not None:
             x += tau_c * math.tanh(w / eps)
         if tau_s is not None:
-            x += tau_s * math.exp(-(w / ws) ** 2) * math.tanh(w / eps)
+            r = w / ws
+            x += tau_s * math.exp(-(r ** 2 if delta == 2.0 else abs(r) ** delta)) * math.tanh(w / eps)
         if dc_tau is not None and w < 0:
             x += dc_tau * w * abs(w)
         if ripple is not None:
             x += ripple[0] * math.sin(ripple[1] * theta + ripple[2])
+            for h, m, ph in overtones:
+                x += ripple[0] * h * math.sin(m * ripple[1] * theta + ph)
         return x
 
     return tau
