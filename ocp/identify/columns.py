@@ -24,6 +24,10 @@ GRID = 12  # shape values per shaped effect (geometric grid)
 DROPS = ("brush_drop", "voltage_deadband")
 #: a Stribeck band is offered only where some row shows at least this share of its level (:func:`effect_columns`)
 STRIBECK_REACH = 0.5
+#: Stribeck friction's decay exponents offered (``exp(-|w / omega_s|^delta)``): Gaussian (the catalogue's
+#: default), Tustin's exponential, and a slower one. With the Gaussian alone, a friction decaying as
+#: ``exp(-|r|^0.5..0.9)`` (proving ground ``--shapes``) was named with a Coulomb friction or a ``B`` beside it.
+STRIBECK_DECAYS = (2.0, 1.0)
 #: a command whose magnitude spreads by more than this (relative standard deviation) holds several levels
 #: (:func:`_levels`); a PRBS's quantised two levels spread by 0
 LEVEL_SPREAD = 0.05
@@ -45,6 +49,14 @@ class Column:
     item: str
     key: str
     shape: float = math.nan
+    #: a second shape, fixed per column: Stribeck friction's decay exponent (:data:`STRIBECK_DECAYS`); grid
+    #: neighbours (:func:`.select.fit_model`) share it
+    decay: float = math.nan
+
+    @property
+    def plain(self) -> bool:
+        """Whether the column has no second shape, or the catalogue's default one (the first offered)."""
+        return math.isnan(self.decay) or self.decay == STRIBECK_DECAYS[0]
     #: False: zero at the rows where the rotor is at rest (:func:`at_rest`), for a model whose dry friction holds it
     at_rest: bool = True
 
@@ -310,14 +322,15 @@ def _peak_speed(log: Log) -> float:
     return float(np.max(np.abs(log.omega))) or 1.0
 
 
-def stribeck_bands(log: Log) -> list[float]:
-    """Stribeck speeds [rad/s] offered: the grid over 0.3-15 % of the logged peak speed, less the bands no logged
+def stribeck_bands(log: Log) -> list[tuple[float, float]]:
+    """Stribeck bands offered, (speed [rad/s], decay exponent) each: the speeds on a grid over 0.3-15 % of the
+    logged peak speed, for each decay of :data:`STRIBECK_DECAYS` (by decay, then speed), less the bands no logged
     row shows at :data:`STRIBECK_REACH` of their level or more (the friction's level would be extrapolated from
     its tail: a 4.5 rad/s band fitted at 178 N m for 3.7 mN m of Stribeck friction at 15 rad/s, on a log whose
     rotor either stood still or ran above 15 rad/s, and the free run of that plant took two minutes)."""
     w_peak = _peak_speed(log)
-    return [float(ws) for ws in _grid(0.003 * w_peak, 0.15 * w_peak)
-            if np.max(np.abs(make_effect("stribeck", {"tau_s": 1.0, "omega_s": ws}).load_torque(
+    return [(float(ws), d) for d in STRIBECK_DECAYS for ws in _grid(0.003 * w_peak, 0.15 * w_peak)
+            if np.max(np.abs(make_effect("stribeck", {"tau_s": 1.0, "omega_s": ws, "delta": d}).load_torque(
                 log.omega, NUMPY, None))) >= STRIBECK_REACH]
 
 
@@ -396,8 +409,8 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
     """Columns of one effect (one per shape value for shaped effects; cogging's at ``periods``/rev, turned along a
     drifting angle by :func:`turn_ripple`)."""
     if name == "stribeck":  # on the logged speed's range, the same for the low-passed and the raw rows
-        return [(Column(name, "tau_s", ws), _effect(name, {"tau_s": 1.0, "omega_s": ws}, p, s))
-                for ws in stribeck_bands(log)]
+        return [(Column(name, "tau_s", ws, decay=d), _effect(name, {"tau_s": 1.0, "omega_s": ws, "delta": d}, p, s))
+                for ws, d in stribeck_bands(log)]
     if name == "coulomb_friction":  # the sign's sharpness on a grid (COULOMB_EDGES)
         w_peak = _peak_speed(log)
         return [(Column(name, "tau_c", eps), _effect(name, {"tau_c": 1.0, "omega_eps": eps}, p, s))

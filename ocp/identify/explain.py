@@ -10,6 +10,7 @@ import numpy as np
 
 from ocp.errors import ParameterError
 from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
+from ocp.identify.columns import STRIBECK_DECAYS
 from ocp.identify.evidence import Fitted, band_fall, ripple_rows
 from ocp.identify.regression import CONSTANTS, NUISANCE_BOUNDS, Design
 from ocp.model.effects import CATALOGUE, BrushDrop, EffectBase, make_effect
@@ -55,7 +56,7 @@ def effect_values(design: Design, f: Fitted, item: str) -> dict[str, float]:
         return {**out, "periods": col.shape}
     shape, x = _blend([(c.shape, x_) for c, x_ in picked])
     if item == "stribeck":
-        return {"tau_s": max(x, 0.0), "omega_s": shape}
+        return {"tau_s": max(x, 0.0), "omega_s": shape, "delta": col.decay}
     if item == "coulomb_friction":
         return {"tau_c": x, "omega_eps": shape}
     if item == "voltage_deadband":
@@ -172,6 +173,9 @@ def explain(item: str, values: dict[str, float], p: MotorParams, design: Design,
     if item == "cogging":
         amp = math.hypot(values.get("tau_sin", 0.0), values.get("tau_cos", 0.0))
         text += f" {int(values['periods'])} periods per revolution, amplitude {amp:.3g} N m."
+    if item == "stribeck":
+        offered = ", ".join(f"{d:g}" for d in STRIBECK_DECAYS)
+        text += f" It decays as exp(-|w / omega_s|^{values.get('delta', 2.0):g}) (exponents tried: {offered})."
     return text
 
 

@@ -264,7 +264,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     # noise level per equation: what the richest fit (one shape per effect) leaves on training rows
     # (the motor constant is left out: with it, J, B and c_tau the torque balance scales to zero)
     keep = [j for j, (c, _) in enumerate(cols)
-            if c.item != "k" and (math.isnan(c.shape) or c.shape == _mid(cols, c.item))]
+            if c.item != "k" and (math.isnan(c.shape) or (c.shape == _mid(cols, c.item) and c.plain))]
     periods, spectrum, angle = 0, np.zeros(0), {}
     ripple = "cogging" in effects and s.theta is not None and raw.theta is not None \
         and log.kind is LogKind.TIME_SERIES
@@ -430,5 +430,6 @@ def unresolved(p: MotorParams, log: Log) -> dict[str, str]:
 
 
 def _mid(cols: list[tuple[Column, np.ndarray]], item: str) -> float:
-    shapes = sorted(c.shape for c, _ in cols if c.item == item and not math.isnan(c.shape))
+    """The middle shape of ``item``'s plain columns (:func:`_plain`; NaN if none)."""
+    shapes = sorted(c.shape for c, _ in cols if c.item == item and not math.isnan(c.shape) and c.plain)
     return shapes[len(shapes) // 2] if shapes else math.nan

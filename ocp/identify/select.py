@@ -3,7 +3,8 @@
 A *model* is a set of items: catalogue effects and named constants. Fitting it is a bounded linear
 least-squares problem on the training rows: every constant is always refined (that is calibration),
 within ``+-tolerance`` of nominal unless the model *names* it (then within -80 % .. +300 %); effects
-in the model get their columns (the best shape on a grid by training cost, mixed with a grid neighbour),
+in the model get their columns (the best shape on a grid by training cost, mixed with a grid neighbour:
+:mod:`.shape_choice`),
 sign-bounded as the catalogue's lower bounds say; effects outside it are zero. A constant the log cannot resolve
 (:attr:`.regression.Design.unresolved`, e.g. ``L`` under a current filter) is a free nuisance (-80 % .. any):
 boxed in, what it stands for would be explained by a wrong item (brush drop, dead band, ``R``).
@@ -70,6 +71,7 @@ from ocp.identify.evidence import (
     worst,
 )
 from ocp.identify.regression import CONSTANTS, DRY, NUISANCE_BOUNDS, NUISANCES, Design
+from ocp.identify.shape_choice import neighbours, preferred
 from ocp.model.effects import CATALOGUE
 
 NAMED_BOUNDS = (-0.8, 3.0)
@@ -206,8 +208,9 @@ def _shape_columns(design: Design, chosen: list[int], js: list[int], named: set[
     points, and the residual of one grid column mis-shaped by half a grid step (e.g. a wake lag 30 % off) would be
     explained by a wrong constant instead. (A saturating effect's amplitude is bounded by its width instead.)"""
     costs = [solve(design, [*chosen, j], named, tol).train_cost for j in js]
-    k = int(np.argmin(costs))
-    pairs = [[js[k], js[m]] for m in (k - 1, k + 1) if mix and 0 <= m < len(js)]
+    cols = [design.columns[j] for j in js]
+    k = preferred(costs, cols)
+    pairs = [[js[k], js[m]] for m in neighbours(k, cols) if mix]
     fits = [(solve(design, [*chosen, *pr], named, tol).train_cost, pr) for pr in pairs]
     return min(fits, key=lambda e: e[0])[1] if fits else [js[k]]
 

@@ -65,6 +65,7 @@ class EffectBase:
 RANGES: dict[str, tuple[float, float]] = {
     "omega_eps": (1e-3, 1e3),  # rad/s
     "stribeck.omega_s": (1e-2, 1e4),  # rad/s
+    "stribeck.delta": (0.25, 4.0),  # 1 (the decay's exponent)
     "input_delay.delay": (1e-5, 1.0),  # s
     "thrust_lag.tau": (1e-5, 100.0),  # s
     "cogging.periods": (1e-2, 1e3),  # 1/rev

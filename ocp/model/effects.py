@@ -57,15 +57,20 @@ class CoulombFriction(EffectBase):
 class Stribeck(EffectBase):
     """Stribeck breakaway friction: extra torque near zero speed that vanishes as the film builds.
 
-    ``tau = tau_s exp(-(w/omega_s)^2) tanh(w/omega_eps)`` [N m].
+    ``tau = tau_s exp(-|w/omega_s|^delta) tanh(w/omega_eps)`` [N m]; ``delta`` (a shape, not fitted) 2 by default
+    (Gaussian, Armstrong's), 1 is Tustin's exponential decay, smaller ones decay more slowly. For ``delta`` other
+    than 2, ``|r|^delta`` (``r = w / omega_s``) is written ``(r^2 + e^2)^(delta/2)`` with ``e = omega_eps /
+    omega_s``: smooth at zero speed for the optimiser, where the sign's smoothing holds the torque near zero anyway;
+    beyond ``omega_eps`` the exponent is off by under ``delta e^2 / (2 |r|^(2 - delta))``.
     """
 
     tau_s: float = 0.0
     omega_s: float = 2.0
     omega_eps: float = 0.5
+    delta: float = 2.0
     name: ClassVar[str] = "stribeck"
     channel: ClassVar[Channel] = "mechanical"
-    units: ClassVar[dict[str, str]] = {"tau_s": "N m", "omega_s": "rad/s", "omega_eps": "rad/s"}
+    units: ClassVar[dict[str, str]] = {"tau_s": "N m", "omega_s": "rad/s", "omega_eps": "rad/s", "delta": "1"}
     fitted: ClassVar[tuple[str, ...]] = ("tau_s", "omega_s")
     bounds: ClassVar[dict[str, tuple[float, float]]] = {"tau_s": (0.0, 0.1), "omega_s": (0.3, 30.0)}
     guess: ClassVar[dict[str, float]] = {"tau_s": 1e-3, "omega_s": 3.0}
@@ -74,10 +79,16 @@ class Stribeck(EffectBase):
 
     def __post_init__(self) -> None:
         require_positive("stribeck.omega_s", self.omega_s)
+        require_positive("stribeck.delta", self.delta)
 
     def load_torque(self, omega: Expr, ops: Ops, sign: float | None) -> Expr:
         r = omega / self.omega_s
-        return self.tau_s * ops.exp(-r * r) * smooth_sign(omega, self.omega_eps, ops, sign)
+        if self.delta == 2.0:
+            decay = r * r
+        else:
+            e = self.omega_eps / self.omega_s
+            decay = (r * r + e * e) ** (0.5 * self.delta)
+        return self.tau_s * ops.exp(-decay) * smooth_sign(omega, self.omega_eps, ops, sign)
 
 
 @dataclass(frozen=True)

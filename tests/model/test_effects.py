@@ -53,6 +53,35 @@ def test_phase_sign_form_matches_smooth_form_away_from_zero(name: str, w: float)
     assert eff.thrust(0.1, w, NUMPY, sgn) == pytest.approx(eff.thrust(0.1, w, NUMPY, None), rel=1e-9)
 
 
+@pytest.mark.parametrize("delta", [1.0, 0.5])
+@pytest.mark.parametrize("w", [-30.0, -5.0, 2.0, 12.0])
+def test_stribeck_decay_exponent_follows_its_closed_form_beyond_the_smoothing(delta: float, w: float) -> None:
+    """Oracle, closed form: ``tau_s exp(-|w / omega_s|^delta) tanh(w / omega_eps)``, to the stated bound: the
+    smoothed power's exponent is too large by under ``delta e^2 / (2 |r|^(2 - delta))`` (``e = omega_eps /
+    omega_s``, ``r = w / omega_s``; here 0.02 at 2 rad/s, 0.0003 at 30)."""
+    eff = make_effect("stribeck", {"tau_s": 0.006, "omega_s": 3.0, "delta": delta})
+    r, e = abs(w) / 3.0, 0.5 / 3.0
+    exact = 0.006 * math.exp(-(r**delta)) * math.tanh(w / 0.5)
+    ratio = float(eff.load_torque(w, NUMPY, None)) / exact
+    assert math.exp(-delta * e * e / (2 * r ** (2 - delta))) <= ratio < 1.0
+    gauss = make_effect("stribeck", {"tau_s": 0.006, "omega_s": 3.0})  # the default: the Gaussian, unsmoothed
+    assert float(gauss.load_torque(w, NUMPY, None)) == 0.006 * math.exp(-((w / 3.0) ** 2)) * math.tanh(w / 0.5)
+
+
+@pytest.mark.parametrize("delta", [1.0, 0.5, 0.25])
+def test_stribeck_decay_is_differentiable_through_zero_speed(delta: float) -> None:
+    """The optimiser differentiates the torque at reversals: CasADi's derivative at and around w = 0 is finite and
+    matches central finite differences of the numpy torque (an unsmoothed ``|w|^0.5`` has an infinite one)."""
+    eff = make_effect("stribeck", {"tau_s": 0.006, "omega_s": 3.0, "delta": delta})
+    w = ca.SX.sym("w")
+    d = ca.Function("d", [w], [ca.jacobian(eff.load_torque(w, CASADI, None), w)])
+    for w0 in (0.0, 1e-3, -0.3, 2.0):
+        h = 1e-6
+        fd = (float(eff.load_torque(w0 + h, NUMPY, None)) - float(eff.load_torque(w0 - h, NUMPY, None))) / (2 * h)
+        assert math.isfinite(float(d(w0)))
+        assert float(d(w0)) == pytest.approx(fd, rel=1e-5, abs=1e-9)
+
+
 def test_input_delay_delays_a_slow_sine(rig: MotorParams) -> None:
     """Pade(2) of a 5 ms delay: a 2 Hz voltage reaches the armature 5 ms late (to 1 % of its amplitude)."""
     eff = InputDelay(delay=0.005)
@@ -88,6 +117,7 @@ def test_parameter_file_round_trip(tmp_path: Path, rig: MotorParams) -> None:
     ({"coulomb_friction": {"tauc": 0.1}}, "effects.coulomb_friction.tauc"),
     ({"coulomb_friction": {"tau_c": "big"}}, "effects.coulomb_friction.tau_c"),
     ({"thrust_lag": {"tau": -1.0}}, "thrust_lag.tau"),
+    ({"stribeck": {"tau_s": 0.006, "omega_s": 3.0, "delta": 9.0}}, "effects.stribeck.delta"),
     ([1, 2], "effects"),
     ({"coulomb_friction": 3}, "effects.coulomb_friction"),
     ({"coulomb_friction": "ab"}, "effects.coulomb_friction"),
