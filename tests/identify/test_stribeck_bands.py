@@ -54,10 +54,10 @@ def test_a_quantised_speed_gives_a_plausible_stribeck_level() -> None:
 
 def test_a_stribeck_friction_decaying_slower_than_a_gaussian_is_named_alone(monkeypatch: pytest.MonkeyPatch) -> None:
     """Proving-ground draw ``make_case(41073, kind="one", shapes=True)`` (session 38's search among fresh seeds for
-    off-catalogue shapes: 3 of the 9 single Stribeck frictions decaying as ``exp(-|r|^0.6-1.1)`` were misnamed with
-    the Gaussian alone, none with the exponential offered): the rig's friction decays as ``exp(-|w/ws|^0.66)``. With
-    the Gaussian band alone its tail took a Coulomb friction and a ``B`` change beside it; with the exponential one
-    offered it is Stribeck friction alone, reported with that decay."""
+    off-catalogue shapes: of the 9 single Stribeck frictions decaying as ``exp(-|r|^0.6-1.1)``, 3 misnamed with the
+    Gaussian alone are right with the exponential offered, and none broke): the rig's friction decays as
+    ``exp(-|w/ws|^0.66)``. With the Gaussian band alone its tail took a Coulomb friction and a ``B`` change beside it;
+    with the exponential one offered it is Stribeck friction alone, reported with that decay."""
     import ocp.identify.columns as columns
 
     case = make_case(41073, kind="one", shapes=True)
