@@ -24,9 +24,10 @@ GRID = 12  # shape values per shaped effect (geometric grid)
 DROPS = ("brush_drop", "voltage_deadband")
 #: a Stribeck band is offered only where some row shows at least this share of its level (:func:`effect_columns`)
 STRIBECK_REACH = 0.5
-#: Stribeck friction's decay exponents offered (``exp(-|w / omega_s|^delta)``): Gaussian (the catalogue's
-#: default), Tustin's exponential, and a slower one. With the Gaussian alone, a friction decaying as
-#: ``exp(-|r|^0.5..0.9)`` (proving ground ``--shapes``) was named with a Coulomb friction or a ``B`` beside it.
+#: Stribeck friction's decay exponents offered (``exp(-|w / omega_s|^delta)``): the Gaussian (the catalogue's
+#: default) and Tustin's exponential (:mod:`.shape_choice` prefers the first). With the Gaussian alone, a friction
+#: decaying as ``exp(-|r|^0.5..0.9)`` (proving ground ``--shapes``) was named with a Coulomb friction or a ``B``
+#: beside it; 0.5 offered too took Coulomb frictions (seeds 107, 126)
 STRIBECK_DECAYS = (2.0, 1.0)
 #: a command whose magnitude spreads by more than this (relative standard deviation) holds several levels
 #: (:func:`_levels`); a PRBS's quantised two levels spread by 0
@@ -52,13 +53,13 @@ class Column:
     #: a second shape, fixed per column: Stribeck friction's decay exponent (:data:`STRIBECK_DECAYS`); grid
     #: neighbours (:func:`.select.fit_model`) share it
     decay: float = math.nan
+    #: False: zero at the rows where the rotor is at rest (:func:`at_rest`), for a model whose dry friction holds it
+    at_rest: bool = True
 
     @property
     def plain(self) -> bool:
         """Whether the column has no second shape, or the catalogue's default one (the first offered)."""
         return math.isnan(self.decay) or self.decay == STRIBECK_DECAYS[0]
-    #: False: zero at the rows where the rotor is at rest (:func:`at_rest`), for a model whose dry friction holds it
-    at_rest: bool = True
 
 
 

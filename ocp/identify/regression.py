@@ -430,6 +430,6 @@ def unresolved(p: MotorParams, log: Log) -> dict[str, str]:
 
 
 def _mid(cols: list[tuple[Column, np.ndarray]], item: str) -> float:
-    """The middle shape of ``item``'s plain columns (:func:`_plain`; NaN if none)."""
+    """The middle shape of ``item``'s plain columns (:attr:`.columns.Column.plain`; NaN if none)."""
     shapes = sorted(c.shape for c, _ in cols if c.item == item and not math.isnan(c.shape) and c.plain)
     return shapes[len(shapes) // 2] if shapes else math.nan
