@@ -68,5 +68,8 @@ def test_a_stribeck_friction_decaying_slower_than_a_gaussian_is_named_alone(monk
     res = diagnose(plant, log)
     assert res.verdict == ["stribeck"]
     assert next(e for e in res.plant.effects if isinstance(e, Stribeck)).delta == 1.0
+    said = next(e for e in res.ranking if e.name == "stribeck")  # the JSON's parameters and the text's sentence
+    assert said.parameters["delta"] == 1.0 and said.units["delta"] == "1"
+    assert "exp(-|w / omega_s|^1)" in said.explanation
     monkeypatch.setattr(columns, "STRIBECK_DECAYS", (2.0,))
     assert "coulomb_friction" in diagnose(plant, log).verdict
