@@ -175,7 +175,7 @@ def explain(item: str, values: dict[str, float], p: MotorParams, design: Design,
         text += f" {int(values['periods'])} periods per revolution, amplitude {amp:.3g} N m."
     if item == "stribeck":
         offered = ", ".join(f"{d:g}" for d in STRIBECK_DECAYS)
-        text += f" It decays as exp(-|w / omega_s|^{values.get('delta', 2.0):g}) (exponents tried: {offered})."
+        text += f"; it decays as exp(-|w / omega_s|^{values.get('delta', 2.0):g}) (exponents tried: {offered})."
     return text
 
 
