@@ -154,7 +154,7 @@ def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
     base = [j for c in (*CONSTANTS, *NUISANCES) for j in design.index(c)]
     named = {i for i in items if i in CONSTANTS}
     chosen: list[int] = list(base)
-    for item in items:
+    for item in sorted(items, key=lambda i: i == "stribeck"):  # (Stribeck's band and decay beside a Coulomb level)
         if item in CONSTANTS:
             continue
         js = design.index(item)

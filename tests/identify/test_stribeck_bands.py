@@ -73,3 +73,17 @@ def test_a_stribeck_friction_decaying_slower_than_a_gaussian_is_named_alone(monk
     assert "exp(-|w / omega_s|^1)" in said.explanation
     monkeypatch.setattr(columns, "STRIBECK_DECAYS", (2.0,))
     assert "coulomb_friction" in diagnose(plant, log).verdict
+
+
+def test_coulomb_and_stribeck_friction_together_keep_both_names() -> None:
+    """Proving-ground draw ``make_case(23070)`` (a validation seed): Coulomb and Gaussian Stribeck friction on a 10 kHz
+    encoder log. With the exponential decay offered, a Stribeck friction whose decay was chosen before the Coulomb
+    level was in its model took that level's share (an exponential decay, with ``B`` and ``c_tau`` corrections named
+    beside it); chosen beside the Coulomb level, it is the Gaussian and both frictions are named."""
+    case = make_case(23070)
+    assert case.expected == {"coulomb_friction", "stribeck"}
+    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
+    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
+    assert sorted(res.verdict) == ["coulomb_friction", "stribeck"]
+    assert next(e for e in res.plant.effects if isinstance(e, Stribeck)).delta == 2.0
