@@ -14,10 +14,10 @@ import math
 import numpy as np
 import pytest
 
+from bench.modelcheck import case_log
 from ocp.identify import diagnose
 from ocp.identify.columns import STRIBECK_REACH, stribeck_bands
 from ocp.logs import log_from_arrays
-from ocp.logs.timebase import uniform
 from ocp.model.effects import Stribeck
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -43,8 +43,7 @@ def test_bands_below_the_slowest_moving_row_are_not_offered() -> None:
 def test_a_quantised_speed_gives_a_plausible_stribeck_level() -> None:
     case = make_case(9194)
     truth = case.truth.effects["stribeck"]
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    log = case_log(case)
     assert np.min(np.abs(log.omega[log.omega != 0])) > 15.0  # (the class: nothing logged between 0 and 15 rad/s)
     res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
     assert res.verdict == ["stribeck"]
@@ -62,8 +61,7 @@ def test_a_stribeck_friction_decaying_slower_than_a_gaussian_is_named_alone(monk
 
     case = make_case(41073, kind="one", shapes=True)
     assert 0.6 < case.truth.effects["stribeck"]["delta"] < 0.7
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    log = case_log(case)
     plant = DCMotorPlant(MotorParams(**case.nominal))
     res = diagnose(plant, log)
     assert res.verdict == ["stribeck"]
@@ -82,8 +80,7 @@ def test_coulomb_and_stribeck_friction_together_keep_both_names() -> None:
     beside it); chosen beside the Coulomb level, it is the Gaussian and both frictions are named."""
     case = make_case(23070)
     assert case.expected == {"coulomb_friction", "stribeck"}
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    log = case_log(case)
     res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
     assert sorted(res.verdict) == ["coulomb_friction", "stribeck"]
     assert next(e for e in res.plant.effects if isinstance(e, Stribeck)).delta == 2.0
