@@ -187,22 +187,30 @@ class ThrustLag(StatefulBase):
 class Cogging(StatefulBase):
     """Cogging / angle-periodic torque ripple (magnet-slot attraction, commutator, shaft eccentricity).
 
-    ``tau = tau_sin sin(n theta) + tau_cos cos(n theta)`` [N m], ``n`` periods per revolution; the
-    rotor angle ``theta`` [rad] becomes a state (``theta' = w``).
+    ``tau = sum_h tau_sin_h sin(h n theta) + tau_cos_h cos(h n theta)`` [N m] over the harmonics h = 1, 2, 3
+    (``tau_sin``/``tau_cos``, ``tau_sin2``/``tau_cos2``, ``tau_sin3``/``tau_cos3``), ``n`` periods per revolution; the
+    rotor angle ``theta`` [rad] becomes a state (``theta' = w``). A detent torque is periodic, not a sine: its
+    shape (peaked or flat-topped where a magnet edge passes a slot) puts power at multiples of its count, and its first
+    two multiples carry most of what the fundamental does not.
     """
 
     tau_sin: float = 0.0
     tau_cos: float = 0.0
     periods: float = 2.0
+    tau_sin2: float = 0.0
+    tau_cos2: float = 0.0
+    tau_sin3: float = 0.0
+    tau_cos3: float = 0.0
     name: ClassVar[str] = "cogging"
     states: ClassVar[tuple[str, ...]] = ("theta",)
     channel: ClassVar[Channel] = "mechanical"
-    units: ClassVar[dict[str, str]] = {"tau_sin": "N m", "tau_cos": "N m", "periods": "1/rev"}
-    fitted: ClassVar[tuple[str, ...]] = ("tau_sin", "tau_cos")
-    bounds: ClassVar[dict[str, tuple[float, float]]] = {"tau_sin": (-0.1, 0.1), "tau_cos": (-0.1, 0.1)}
-    guess: ClassVar[dict[str, float]] = {"tau_sin": 0.0, "tau_cos": 0.0}
+    fitted: ClassVar[tuple[str, ...]] = ("tau_sin", "tau_cos", "tau_sin2", "tau_cos2", "tau_sin3", "tau_cos3")
+    units: ClassVar[dict[str, str]] = {**{k: "N m" for k in fitted}, "periods": "1/rev"}
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {k: (-0.1, 0.1) for k in fitted}
+    guess: ClassVar[dict[str, float]] = {k: 0.0 for k in fitted}
     signature: ClassVar[str] = ("torque residual periodic in the rotor angle (n per revolution), "
-                                "largest at low speed; binned against angle it draws a sine")
+                                "largest at low speed; binned against angle it draws a sine, or a periodic shape "
+                                "with harmonics")
 
     def __post_init__(self) -> None:
         require_positive("cogging.periods", self.periods)
@@ -211,7 +219,13 @@ class Cogging(StatefulBase):
         return [omega]
 
     def bound_load_torque(self, z: Sequence[Expr], omega: Expr, ops: Ops) -> Expr:
-        return self.tau_sin * ops.sin(self.periods * z[0]) + self.tau_cos * ops.cos(self.periods * z[0])
+        n = self.periods * z[0]
+        return sum((s * ops.sin(h * n) + c * ops.cos(h * n) for h, s, c in self.harmonics()), 0.0 * z[0])
+
+    def harmonics(self) -> list[tuple[int, float, float]]:
+        """The harmonics h with a non-zero amplitude: (h, sine [N m], cosine [N m]), fundamental first."""
+        out = [(1, self.tau_sin, self.tau_cos), (2, self.tau_sin2, self.tau_cos2), (3, self.tau_sin3, self.tau_cos3)]
+        return [x for x in out if x[0] == 1 or x[1] or x[2]]
 
     def observe(self, t: np.ndarray, omega: np.ndarray, voltage: np.ndarray, thrust: np.ndarray,
                 theta: np.ndarray | None) -> np.ndarray:

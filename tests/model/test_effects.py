@@ -22,7 +22,8 @@ VALUES = {
     "coulomb_friction": {"tau_c": 0.003}, "stribeck": {"tau_s": 0.006, "omega_s": 3.0},
     "drag_asymmetry": {"dc_tau": 0.8e-6}, "thrust_asymmetry": {"dc_f": 0.3e-4}, "force_offset": {"f0": 0.03},
     "voltage_deadband": {"v_db": 0.4}, "brush_drop": {"v_b": 0.3}, "current_offset": {"i0": 0.03},
-    "input_delay": {"delay": 0.004}, "thrust_lag": {"tau": 0.03}, "cogging": {"tau_sin": 0.003, "periods": 2.0},
+    "input_delay": {"delay": 0.004}, "thrust_lag": {"tau": 0.03},
+    "cogging": {"tau_sin": 0.003, "periods": 2.0, "tau_cos2": -0.001, "tau_sin3": 0.0005},
 }
 
 
@@ -80,6 +81,22 @@ def test_stribeck_decay_is_differentiable_through_zero_speed(delta: float) -> No
         fd = (float(eff.load_torque(w0 + h, NUMPY, None)) - float(eff.load_torque(w0 - h, NUMPY, None))) / (2 * h)
         assert math.isfinite(float(d(w0)))
         assert float(d(w0)) == pytest.approx(fd, rel=1e-5, abs=1e-9)
+
+
+def test_cogging_harmonics_follow_their_fourier_series() -> None:
+    """The ripple at h = 1, 2, 3 times its count against the series written out, at angles over a revolution; the
+    fundamental alone (harmonics at their default 0) is the plain sine, and only non-zero harmonics are listed."""
+    c = make_effect("cogging", {"tau_sin": 0.004, "tau_cos": -0.002, "periods": 7.0, "tau_sin2": 0.0015,
+                                "tau_cos2": 0.0005, "tau_cos3": -0.0008})
+    theta = np.linspace(0.0, 2 * np.pi, 97)
+    want = (0.004 * np.sin(7 * theta) - 0.002 * np.cos(7 * theta) + 0.0015 * np.sin(14 * theta)
+            + 0.0005 * np.cos(14 * theta) - 0.0008 * np.cos(21 * theta))
+    got = np.array([c.bind([th]).load_torque(3.0, NUMPY, None) for th in theta])
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-15)
+    plain = make_effect("cogging", {"tau_sin": 0.004, "periods": 7.0})
+    assert [h for h, *_ in plain.harmonics()] == [1] and [h for h, *_ in c.harmonics()] == [1, 2, 3]
+    np.testing.assert_array_equal([plain.bind([th]).load_torque(3.0, NUMPY, None) for th in theta],
+                                  0.004 * np.sin(7 * theta))
 
 
 def test_input_delay_delays_a_slow_sine(rig: MotorParams) -> None:

@@ -49,6 +49,7 @@ def test_calibrated_plant_is_reproduced_by_the_true_plant():
 
 
 @pytest.mark.parametrize("effect", [{"cogging": {"tau_sin": 0.003, "tau_cos": 0.0, "periods": 2}},
+                                    {"cogging": {"tau_sin": 0.003, "periods": 2, "tau_cos2": 0.0015, "tau_sin3": 1e-3}},
                                     {"input_delay": {"delay": 0.004}}, {"voltage_deadband": {"v_db": 0.4}},
                                     {"stribeck": {"tau_s": 0.004, "omega_s": 20.0, "delta": 1.0}}])
 def test_stateful_and_nonsmooth_effects_solve_and_verify(effect):
