@@ -11,10 +11,14 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from bench.modelcheck import case_log
 from ocp.identify import diagnose
+from ocp.identify.columns import raw_signals
+from ocp.identify.ripple import HARMONICS, harmonic_columns
+from ocp.logs import log_from_arrays
 from ocp.model.effects import Cogging
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -23,6 +27,39 @@ from tests.proving_ground import make_case
 
 def _ripple(res: object) -> Cogging:
     return next(e for e in res.plant.effects if isinstance(e, Cogging))  # type: ignore[attr-defined]
+
+
+def test_harmonic_columns_are_the_row_means_at_multiples_of_the_count(rig: MotorParams) -> None:
+    """Oracle: a 2000-point midpoint rule for the means of ``sin/cos(h n theta)`` under each row's triangle over
+    k-1 -> k+1 of the linearly interpolated logged angle (the first row: its own interval), for h = 2, 3 at n = 7;
+    the keys name the harmonic, the count stays the fundamental's; along a tracked angle the complex column
+    ``cos + i sin`` is turned by the fundamental's phasors to the power h."""
+    rng = np.random.default_rng(5)
+    dt, n = 1e-3, 7
+    theta = np.cumsum(np.concatenate([[0.0], rng.uniform(-0.05, 0.3, 60)]))
+    ones = np.ones(theta.size)
+    log = log_from_arrays(np.arange(theta.size) * dt, ones, ones, ones, theta=theta)
+    raw = raw_signals(log, theta)
+    cols = harmonic_columns(rig, raw, log, n, None)
+    assert [c.key for c, _ in cols] == ["tau_sin2", "tau_cos2", "tau_sin3", "tau_cos3"]
+    assert HARMONICS == (2, 3) and all(c.item == "cogging" and c.shape == n for c, _ in cols)
+    u = (np.arange(2000) + 0.5) / 2000
+
+    def mean_over(k: int, weight: np.ndarray, h: int) -> complex:
+        th = theta[k] + (theta[k + 1] - theta[k]) * u
+        return complex(np.mean(weight * np.exp(1j * h * n * th)))
+
+    for j, h in enumerate(HARMONICS):
+        want = np.array([mean_over(max(k - 1, 0), u, h) + mean_over(k, 1.0 - u, h) for k in range(theta.size - 1)])
+        np.testing.assert_allclose(cols[2 * j][1][0], want.imag, atol=1e-6)
+        np.testing.assert_allclose(cols[2 * j + 1][1][0], want.real, atol=1e-6)
+        assert not np.any(cols[2 * j][1][1:])  # the torque equation's only
+    phase = np.exp(1j * rng.uniform(0, 2 * np.pi, theta.size - 1))
+    turned = harmonic_columns(rig, raw, log, n, phase)
+    for j, h in enumerate(HARMONICS):
+        plain = cols[2 * j + 1][1][0] + 1j * cols[2 * j][1][0]
+        z = turned[2 * j + 1][1][0] + 1j * turned[2 * j][1][0]
+        np.testing.assert_allclose(z, plain * phase ** h, atol=1e-12)
 
 
 def test_harmonics_along_a_logged_angle_are_measured() -> None:
