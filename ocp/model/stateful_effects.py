@@ -43,6 +43,9 @@ class StatefulBase(EffectBase):
     """Defaults of a stateful effect: bound hooks pass everything through."""
 
     states: ClassVar[tuple[str, ...]]
+    #: whether a log measures the states (the rotor angle, logged or integrated from the speed): a free run reads
+    #: them from the log at every sample instead of simulating them (:func:`ocp.identify.predict.free_run`)
+    measured: ClassVar[bool] = False
 
     def bind(self, z: Sequence[Expr]) -> Effect:
         return _Bound(owner=self, z=tuple(z))
@@ -203,6 +206,7 @@ class Cogging(StatefulBase):
     tau_cos3: float = 0.0
     name: ClassVar[str] = "cogging"
     states: ClassVar[tuple[str, ...]] = ("theta",)
+    measured: ClassVar[bool] = True
     channel: ClassVar[Channel] = "mechanical"
     fitted: ClassVar[tuple[str, ...]] = ("tau_sin", "tau_cos", "tau_sin2", "tau_cos2", "tau_sin3", "tau_cos3")
     units: ClassVar[dict[str, str]] = {**{k: "N m" for k in fitted}, "periods": "1/rev"}
