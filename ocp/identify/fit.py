@@ -7,7 +7,8 @@ RMS per channel (free run) and per equation (one step) are reported on the whole
 parameters' standard errors and correlations from the last stage's Jacobian. Both stages see the log realigned by
 the command-to-sensor lag logging conventions explain, reported as ``alignment``
 (:func:`ocp.identify.diagnose.aligned`, as ``check`` and ``diagnose`` do): unaligned, the armature's constants
-would be fitted to a logging convention.
+would be fitted to a logging convention. An angle ripple added to a plant without one takes the count ``diagnose``
+finds (:func:`with_ripple_count`); the free runs read the rotor angle from the log (:mod:`.predict`).
 
 The calibrated file is the parameter-file format of :mod:`ocp.model.effects` (``MotorParams`` keys +
 ``effects``), readable by :func:`ocp.model.effects.load_plant` and, for the constants, by
@@ -19,7 +20,7 @@ from __future__ import annotations
 import json
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -28,7 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.identify.align import Alignment
 from ocp.identify.candidates import candidate
-from ocp.identify.diagnose import aligned, dynamic, finite
+from ocp.identify.diagnose import aligned, diagnose, dynamic, finite
 from ocp.identify.estimate import Estimate, equation_error_fit, equation_scales, free_run_errors, free_run_fit
 from ocp.identify.predict import (
     CHANNEL_UNITS,
@@ -41,7 +42,7 @@ from ocp.identify.predict import (
     read_current,
 )
 from ocp.logs import Log, LogKind
-from ocp.model.effects import plant_to_mapping
+from ocp.model.effects import Cogging, plant_to_mapping
 from ocp.model.plant import DCMotorPlant
 
 
@@ -127,6 +128,18 @@ def _combined(errors: np.ndarray) -> float:
     return float(np.sqrt(np.mean(errors**2))) if errors.size else math.inf
 
 
+def with_ripple_count(plant: DCMotorPlant, log: Log, effects: Sequence[str]) -> DCMotorPlant:
+    """``plant`` with an angle ripple at the count ``diagnose`` finds in ``log`` (its ``angle_periodic``), where
+    ``effects`` adds a ripple the plant has none of; else ``plant``. Without, the catalogue's default count (2/rev)
+    was fitted to a ripple of any count. A ripple the plant has keeps its count (a parameter file or a diagnosis
+    gave it)."""
+    if "cogging" not in effects or any(isinstance(e, Cogging) for e in plant.effects):
+        return plant
+    found = diagnose(plant, log).angle_periodic
+    n = int(found["periods"]) if found else 0
+    return replace(plant, effects=(*plant.effects, Cogging(periods=float(n)))) if n > 0 else plant
+
+
 def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptions | None = None) -> FitResult:
     """Add ``effects`` (catalogue names or ``"param:<key>"``) to ``plant`` and fit them to ``log``."""
     opt = options or FitOptions()
@@ -134,6 +147,7 @@ def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptio
         from ocp.identify.steady import fit_points
 
         return fit_points(plant, log, effects)
+    plant = with_ripple_count(plant, log, effects)
     align, log = aligned(plant, log, opt.max_logging_skew)
     cands = [candidate(n) for n in dict.fromkeys(effects)]
     every = np.ones(log.n, dtype=bool)
