@@ -85,11 +85,11 @@ def pick_periods(p: MotorParams, raw: Signals, log: Log, target: np.ndarray, ric
 def harmonics_hold(without: float, with_: float) -> bool:
     """Whether a ripple's harmonics, fitted beside its fundamental on the training rows, cut the held-out squared
     residual the fundamental leaves (``without`` -> ``with_``) by :data:`HARMONIC_FALL`. Offered freely, four more
-    columns fitted what the tracking of a drifting integrated angle let through: on the 8 proving-ground logs of
-    0..199 and 30000..30199 whose verdict they changed, all with an integrated angle, they raised that residual by
-    6-486 % (seeds 6, 148, 30039, 30086: ripples lost or Stribeck friction taken for one), while along a logged angle
-    the true harmonics of 27 (shaped: 0.37 and 0.12 of the fundamental) cut it by 96 %. The margin lies between the
-    two and was set on those 9 logs, not measured as a risk level."""
+    columns fitted what the tracking of a drifting integrated angle let through: on 8 of the proving-ground logs whose
+    verdict they changed (plain and shaped, 0..199 and 30000..30199), all with an integrated angle, they raised that
+    residual by 6-486 % (seeds 6, 148, 30039, 30086: ripples lost or Stribeck friction taken for one), while along a
+    logged angle the true harmonics of 27 (shaped: 0.37 and 0.12 of the fundamental) cut it by 96 %. The margin lies
+    between the two and was set on those 9 logs, not measured as a risk level."""
     return with_ <= (1.0 - HARMONIC_FALL) * without
 
 

@@ -192,9 +192,9 @@ class Cogging(StatefulBase):
 
     ``tau = sum_h tau_sin_h sin(h n theta) + tau_cos_h cos(h n theta)`` [N m] over the harmonics h = 1, 2, 3
     (``tau_sin``/``tau_cos``, ``tau_sin2``/``tau_cos2``, ``tau_sin3``/``tau_cos3``), ``n`` periods per revolution; the
-    rotor angle ``theta`` [rad] becomes a state (``theta' = w``). A detent torque is periodic, not a sine: its
-    shape (peaked or flat-topped where a magnet edge passes a slot) puts power at multiples of its count, and its first
-    two multiples carry most of what the fundamental does not.
+    rotor angle ``theta`` [rad] becomes a state (``theta' = w``; a free run reads it from the log, :attr:`measured`).
+    A detent torque is periodic, not a sine: its shape (peaked or flat-topped where a magnet edge passes a slot) puts
+    power at multiples of its count; the first two are modelled, higher ones are left in the residual.
     """
 
     tau_sin: float = 0.0
@@ -227,7 +227,7 @@ class Cogging(StatefulBase):
         return sum((s * ops.sin(h * n) + c * ops.cos(h * n) for h, s, c in self.harmonics()), 0.0 * z[0])
 
     def harmonics(self) -> list[tuple[int, float, float]]:
-        """The harmonics h with a non-zero amplitude: (h, sine [N m], cosine [N m]), fundamental first."""
+        """The fundamental (h = 1) and the harmonics with a non-zero amplitude: (h, sine [N m], cosine [N m])."""
         out = [(1, self.tau_sin, self.tau_cos), (2, self.tau_sin2, self.tau_cos2), (3, self.tau_sin3, self.tau_cos3)]
         return [x for x in out if x[0] == 1 or x[1] or x[2]]
 
