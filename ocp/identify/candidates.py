@@ -76,12 +76,18 @@ class Candidate:
     def units(self) -> dict[str, str]:
         return {self.param_key: PARAM_UNITS[self.param_key]} if self.is_param else dict(CATALOGUE[self.name].units)
 
-    def bounds(self, plant: DCMotorPlant) -> tuple[np.ndarray, np.ndarray]:
+    def bounds(self, plant: DCMotorPlant, torque: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+        """Boxes of the fitted values (SI). ``torque`` [N m], the motor's peak torque in the log
+        (:func:`ocp.identify.estimate.peak_torque`): a torque-valued parameter's box reaches it where the catalogue's
+        is narrower (the catalogue's 0.1 N m is a small motor's: ``fit`` held a 500 W drive's 0.3-1.5 N m ripples at
+        0.1 on the proving ground, ``bench/ripple_fit.py``)."""
         if self.is_param:
             v = _param(plant, self.param_key)
             return np.array([0.25 * v]), np.array([4.0 * v])
-        b = CATALOGUE[self.name].bounds
-        return np.array([b[k][0] for k in self.keys]), np.array([b[k][1] for k in self.keys])
+        eff = CATALOGUE[self.name]
+        lo, hi = (np.array([eff.bounds[k][j] for k in self.keys]) for j in (0, 1))
+        wide = np.array([eff.units.get(k) == "N m" for k in self.keys]) & (torque > 0)
+        return np.where(wide & (lo < 0), np.minimum(lo, -torque), lo), np.where(wide, np.maximum(hi, torque), hi)
 
     def starts(self, plant: DCMotorPlant) -> list[np.ndarray]:
         """Starting points (one, or several when a parameter enters nonlinearly)."""

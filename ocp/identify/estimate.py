@@ -61,8 +61,13 @@ def assemble(base: DCMotorPlant, cands: Sequence[Candidate], theta: np.ndarray) 
     return plant
 
 
-def _bounds(base: DCMotorPlant, cands: Sequence[Candidate]) -> tuple[np.ndarray, np.ndarray]:
-    lo, hi = zip(*(c.bounds(base) for c in cands), strict=True)
+def peak_torque(base: DCMotorPlant, log: Log) -> float:
+    """The motor's peak torque in ``log`` [N m]: ``k_t`` times the largest logged current [A]."""
+    return float(base.params.k_t * np.max(np.abs(log.current)))
+
+
+def _bounds(base: DCMotorPlant, cands: Sequence[Candidate], torque: float) -> tuple[np.ndarray, np.ndarray]:
+    lo, hi = zip(*(c.bounds(base, torque) for c in cands), strict=True)
     return np.concatenate(lo), np.concatenate(hi)
 
 
@@ -151,10 +156,11 @@ def _levenberg_marquardt(fun: Callable[[np.ndarray], np.ndarray], x: np.ndarray,
 
 
 def _solve(fun: Callable[[np.ndarray], np.ndarray], base: DCMotorPlant, cands: Sequence[Candidate],
-           starts: list[np.ndarray], max_nfev: int | None, linear: bool = False, lm: bool = True) -> Estimate:
+           starts: list[np.ndarray], max_nfev: int | None, torque: float, linear: bool = False, lm: bool = True
+           ) -> Estimate:
     """Linear: Gauss-Newton; else the best of the starts by projected Levenberg-Marquardt (``lm``) or
-    scipy ``least_squares`` (trust-region reflective)."""
-    lo, hi = _bounds(base, cands)
+    scipy ``least_squares`` (trust-region reflective); ``torque`` [N m]: :func:`peak_torque` (the boxes)."""
+    lo, hi = _bounds(base, cands, torque)
     names = tuple(f"{c.name}.{k}" for c in cands for k in c.keys)
     if linear and starts:
         x, r, jac = _gauss_newton(fun, np.clip(starts[0], lo, hi), lo, hi)
@@ -213,7 +219,8 @@ def equation_error_fit(base: DCMotorPlant, cands: Sequence[Candidate], log: Log,
         out = np.concatenate([res[eq][keep] / scales[eq] for eq in EQUATIONS])
         return np.where(np.isfinite(out), out, 1e6)
 
-    return _solve(fun, base, cands, _starts(base, cands), max_nfev=60, linear=all(c.linear for c in cands))
+    return _solve(fun, base, cands, _starts(base, cands), max_nfev=60, torque=peak_torque(base, log),
+                  linear=all(c.linear for c in cands))
 
 
 def free_run_errors(plant: DCMotorPlant, log: Log, samples: np.ndarray, noise: dict[str, float],
@@ -235,4 +242,4 @@ def free_run_fit(start: Estimate, cands: Sequence[Candidate], base: DCMotorPlant
     def fun(theta: np.ndarray) -> np.ndarray:
         return free_run_errors(assemble(base, cands, theta), log, samples, noise, segment_s)
 
-    return _solve(fun, base, cands, [start.values], max_nfev=max_nfev, lm=False)
+    return _solve(fun, base, cands, [start.values], max_nfev=max_nfev, torque=peak_torque(base, log), lm=False)

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from bench.modelcheck import case_log
+from ocp.identify.candidates import candidate
 from ocp.identify.fit import FitOptions, fit
 from ocp.identify.predict import measured_states
 from ocp.model.effects import Cogging, InputDelay
@@ -66,3 +67,29 @@ def test_a_ripple_the_plant_has_keeps_its_count() -> None:
     plant = DCMotorPlant(MotorParams(**case.nominal), (Cogging(periods=7.0),))
     res = fit(plant, case_log(case), ["cogging"], FitOptions(refine=False))
     assert next(e for e in res.plant.effects if isinstance(e, Cogging)).periods == 7.0
+
+
+def test_a_large_motors_ripple_is_fitted_beyond_the_catalogues_box() -> None:
+    """Proving-ground draw ``make_case(42416, "one")``: a 240 mN m ripple of 20 periods/rev on a 500 Hz encoder log.
+    The catalogue's box (0.1 N m, a small motor's) held ``fit`` at 0.1 on each coefficient; reaching the motor's
+    peak torque in the log, the amplitude is found within 20 % and the speed error more than halves."""
+    case = make_case(42416, "one")
+    truth = case.truth.effects["cogging"]
+    assert truth["periods"] == 20.0 and truth["amplitude"] > 0.2
+    res = fit(DCMotorPlant(MotorParams(**case.nominal)), case_log(case), ["cogging"])
+    ripple = next(e for e in res.plant.effects if isinstance(e, Cogging))
+    assert math.hypot(ripple.tau_sin, ripple.tau_cos) == pytest.approx(truth["amplitude"], rel=0.2)
+    assert res.after["omega"] < 0.5 * res.before["omega"]
+
+
+def test_only_torque_valued_boxes_reach_the_peak_torque(rig: MotorParams) -> None:
+    """Oracle, the catalogue's boxes: widened to +-0.7 N m for the ripple's coefficients and Stribeck's level (units
+    N m), not for its band (rad/s); a box wider than the peak torque, or none given, is the catalogue's."""
+    plant = DCMotorPlant(rig)
+    lo, hi = candidate("cogging").bounds(plant, 0.7)
+    assert np.all(lo == -0.7) and np.all(hi == 0.7)
+    lo, hi = candidate("stribeck").bounds(plant, 0.7)
+    assert list(candidate("stribeck").keys) == ["tau_s", "omega_s"]
+    assert lo.tolist() == [0.0, 0.3] and hi.tolist() == [0.7, 30.0]
+    assert candidate("cogging").bounds(plant, 0.01)[1].tolist() == candidate("cogging").bounds(plant)[1].tolist() \
+        == [0.1] * 6
