@@ -79,7 +79,7 @@ class Candidate:
     def bounds(self, plant: DCMotorPlant, torque: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
         """Boxes of the fitted values (SI). ``torque`` [N m], the motor's peak torque in the log
         (:func:`ocp.identify.estimate.peak_torque`): a torque-valued parameter's box reaches it where the catalogue's
-        is narrower (the catalogue's 0.1 N m is a small motor's: ``fit`` held a 500 W drive's 0.3-1.5 N m ripples at
+        is narrower (the catalogue's 0.1 N m is a small motor's: ``fit`` held large motors' 0.24-1.5 N m ripples at
         0.1 on the proving ground, ``bench/ripple_fit.py``)."""
         if self.is_param:
             v = _param(plant, self.param_key)
