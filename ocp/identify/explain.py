@@ -13,7 +13,7 @@ from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
 from ocp.identify.columns import STRIBECK_DECAYS
 from ocp.identify.evidence import Fitted, band_fall, ripple_rows
 from ocp.identify.regression import CONSTANTS, NUISANCE_BOUNDS, Design
-from ocp.model.effects import CATALOGUE, BrushDrop, Cogging, EffectBase, make_effect
+from ocp.model.effects import CATALOGUE, BrushDrop, EffectBase, make_effect
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 
@@ -170,10 +170,6 @@ def explain(item: str, values: dict[str, float], p: MotorParams, design: Design,
     except ParameterError as exc:  # a candidate fitted outside the physical range (e.g. Stribeck far from zero speed)
         return f"{item}: fitted outside its physical range ({exc.field}: {exc.reason})"
     text = eff.describe() if isinstance(eff, EffectBase) else item
-    if isinstance(eff, Cogging):
-        amp = [(h, math.hypot(s, c)) for h, s, c in eff.harmonics()]
-        text += f"; {int(values['periods'])} periods per revolution, amplitude {amp[0][1]:.3g} N m" + "".join(
-            f"; its {h}x harmonic {a:.3g} N m" for h, a in amp[1:]) + "."
     if item == "stribeck":
         offered = ", ".join(f"{d:g}" for d in STRIBECK_DECAYS)
         text += f"; it decays as exp(-|w / omega_s|^{values.get('delta', 2.0):g}) (exponents tried: {offered})."

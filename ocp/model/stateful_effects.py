@@ -226,6 +226,12 @@ class Cogging(StatefulBase):
         n = self.periods * z[0]
         return sum((s * ops.sin(h * n) + c * ops.cos(h * n) for h, s, c in self.harmonics()), 0.0 * z[0])
 
+    def describe(self) -> str:
+        """The effect's sentence (:meth:`EffectBase.describe`) with its count and the amplitude of each harmonic."""
+        amp = [(h, math.hypot(s, c)) for h, s, c in self.harmonics()]
+        return (super().describe() + f"; {self.periods:g} periods per revolution, amplitude {amp[0][1]:.3g} N m"
+                + "".join(f"; its {h}x harmonic {a:.3g} N m" for h, a in amp[1:]) + ".")
+
     def harmonics(self) -> list[tuple[int, float, float]]:
         """The fundamental (h = 1) and the harmonics with a non-zero amplitude: (h, sine [N m], cosine [N m])."""
         out = [(1, self.tau_sin, self.tau_cos), (2, self.tau_sin2, self.tau_cos2), (3, self.tau_sin3, self.tau_cos3)]
