@@ -23,20 +23,14 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tests.proving_ground import cases
 
 
 def draws_ripple(seed: int) -> bool:
-    """Whether ``make_case(seed, "one")`` hides a ripple: its effect is drawn after the rig and the logger."""
-    rng = np.random.default_rng(seed)
-    truth, tau_m = cases.draw_motor(rng)
-    sc = cases._scales(truth)
-    cases.draw_logger(rng, tau_m, sc["w0"], sc["i"], sc["F"], truth.v_max)
-    return str(rng.choice(cases.EFFECTS, size=1, replace=False)[0]) == "cogging"
+    """Whether ``make_case(seed, "one")`` hides a ripple (:func:`tests.proving_ground.cases.hidden`)."""
+    return cases.hidden(seed, "one")[0] == ["cogging"]
 
 
 def run(args: tuple[int, bool]) -> dict[str, Any]:

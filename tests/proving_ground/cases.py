@@ -167,11 +167,15 @@ def make_case(seed: int, kind: str | None = None, shapes: bool = False) -> Case:
 Labels = tuple[list[str], str | None]  # the hidden effects, the wrong constant
 
 
-def _attempt(seed: int, rng: np.random.Generator, kind: str | None, labels: Labels | None,
-             shape: np.random.Generator | None = None) -> tuple[Case | None, str, Labels]:
-    """One draw of case ``seed`` from ``rng`` (its kind and labels when not given), with its kind and labels;
-    no case when a drawn discrepancy stays invisible (module doc). ``shape``: effects reshaped (:func:`draw_shape`)
-    from this stream."""
+def hidden(seed: int, kind: str | None = None) -> Labels:
+    """The hidden effects and the wrong constant of ``make_case(seed, kind)`` (of its first draw, which a redraw
+    keeps), without generating the log."""
+    return _head(np.random.default_rng(seed), kind)[5:]
+
+
+def _head(rng: np.random.Generator, kind: str | None
+          ) -> tuple[Truth, float, dict[str, float], Logger, str, list[str], str | None]:
+    """The first draws of an attempt: rig (and its time constant, scales), logger, kind, effects, wrong constant."""
     truth, tau_m = draw_motor(rng)
     sc = _scales(truth)
     lg = draw_logger(rng, tau_m, sc["w0"], sc["i"], sc["F"], truth.v_max)
@@ -179,6 +183,15 @@ def _attempt(seed: int, rng: np.random.Generator, kind: str | None, labels: Labe
     n_eff = {"clean": 0, "one": 1, "two": 2, "constant": 0, "constant+one": 1}[kind]
     drawn = [str(x) for x in rng.choice(EFFECTS, size=n_eff, replace=False)]
     const = str(rng.choice(CONSTANTS)) if kind.startswith("constant") else None
+    return truth, tau_m, sc, lg, kind, drawn, const
+
+
+def _attempt(seed: int, rng: np.random.Generator, kind: str | None, labels: Labels | None,
+             shape: np.random.Generator | None = None) -> tuple[Case | None, str, Labels]:
+    """One draw of case ``seed`` from ``rng`` (its kind and labels when not given), with its kind and labels;
+    no case when a drawn discrepancy stays invisible (module doc). ``shape``: effects reshaped (:func:`draw_shape`)
+    from this stream."""
+    truth, tau_m, sc, lg, kind, drawn, const = _head(rng, kind)
     names, const = (drawn, const) if labels is None else labels
     errors: dict[str, float] = {}
     if const is not None:
