@@ -201,6 +201,9 @@ class FitPublic(_Open):
 
     effects: list[str]
     stage: Literal["equation-error", "free-run"]
+    adopted: bool = Field(default=True, description="False: the fit predicted the log's free run worse than the "
+                          "starting plant; calibrated_params is then the starting plant (why in note)")
+    note: str | None = None
     parameters: dict[str, dict[str, float | None]] = Field(description="name -> {value, stderr}")
     rms_before: dict[str, float | None]
     rms_after: dict[str, float | None]

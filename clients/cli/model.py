@@ -442,4 +442,6 @@ def cmd_fit(args: argparse.Namespace) -> int:
     for ch in d["rms_before"]:
         print(f"  {ch:8s} {_g(d['rms_before'][ch], '.4g')} -> {_g(d['rms_after'][ch], '.4g')}")
     _print_equations(d)
+    if d.get("adopted") is False:  # (the file written, if any, is the starting plant)
+        print(f"NOT ADOPTED -- {d['note']}")
     return 0

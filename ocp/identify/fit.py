@@ -2,7 +2,9 @@
 
 Two stages: an equation-error fit (one-step residuals; fast, linear in most effect amplitudes)
 gives the start; a free-run refinement (plant simulated under the measured voltage, restarted
-every ``segment_s``) polishes it and is kept only if it lowers the free-run error. Before/after
+every ``segment_s``) polishes it and is kept only if it lowers the free-run error. The fit is adopted only where
+it predicts the log's free run better than the plant it started from (:func:`_adopted`); else the calibrated plant is
+the starting one, and the result says so beside the fitted values and the error they gave. Before/after
 RMS per channel (free run) and per equation (one step) are reported on the whole log, with the
 parameters' standard errors and correlations from the last stage's Jacobian. Both stages see the log realigned by
 the command-to-sensor lag logging conventions explain, reported as ``alignment``
@@ -41,7 +43,7 @@ from ocp.identify.predict import (
     one_step,
     read_current,
 )
-from ocp.logs import Log, LogKind
+from ocp.logs import Log
 from ocp.model.effects import Cogging, plant_to_mapping
 from ocp.model.plant import DCMotorPlant
 
@@ -93,12 +95,19 @@ class FitResult:
     after_equations: dict[str, float]
     alignment: Alignment | None = None  # time series only (a sweep's rows have no command timing)
     current_sensor_lag: tuple[float, float] = (0.0, 0.0)  # [samples] before, after: :func:`channel_rms`'s read
+    #: False: the fitted plant predicted the free run worse than the starting one; :attr:`plant` is the starting
+    #: plant, ``values`` and ``after`` the fit's (why in ``note``)
+    adopted: bool = True
+    note: str | None = None
 
     def calibrated(self, name: str | None = None) -> dict[str, Any]:
         """The calibrated parameter file as a mapping (JSON-ready)."""
-        notes = {"fitted_by": "thrustshape fit", "effects_added": list(self.effects), "stage": self.stage,
-                 "free_run_rms_before": {k: finite(v) for k, v in self.before.items()},
-                 "free_run_rms_after": {k: finite(v) for k, v in self.after.items()}}
+        notes: dict[str, Any] = {
+            "fitted_by": "thrustshape fit", "effects_added": list(self.effects), "stage": self.stage,
+            "free_run_rms_before": {k: finite(v) for k, v in self.before.items()},
+            "free_run_rms_after": {k: finite(v) for k, v in self.after.items()}}
+        if not self.adopted:
+            notes |= {"adopted": False, "note": self.note}
         return plant_to_mapping(self.plant, name=name, notes=notes)
 
     def write(self, path: str | Path, name: str | None = None) -> None:
@@ -109,6 +118,8 @@ class FitResult:
         return {
             "effects": list(self.effects),
             "stage": self.stage,
+            "adopted": self.adopted,
+            "note": self.note,
             "alignment": self.alignment.to_dict() if self.alignment else None,
             "parameters": {n: {"value": finite(v), "stderr": finite(s)}
                            for n, v, s in zip(self.names, self.values, self.stderr, strict=True)},
@@ -147,6 +158,7 @@ def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptio
         from ocp.identify.steady import fit_points
 
         return fit_points(plant, log, effects)
+    start = plant
     plant = with_ripple_count(plant, log, effects)
     align, log = aligned(plant, log, opt.max_logging_skew)
     cands = [candidate(n) for n in dict.fromkeys(effects)]
@@ -154,17 +166,30 @@ def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptio
     scales = equation_scales(plant, log, every)
     est: Estimate = equation_error_fit(plant, cands, log, every, scales)
     stage = "equation-error"
-    if opt.refine and log.kind is LogKind.TIME_SERIES and cands:
-        noise = noise_levels(log)
+    noise = noise_levels(log)
+    e_est = _combined(free_run_errors(est.plant, log, every, noise, opt.segment_s))
+    if opt.refine and cands:
         refined = free_run_fit(est, cands, plant, log, every, noise, opt.segment_s, opt.max_nfev)
-        e_start = _combined(free_run_errors(est.plant, log, every, noise, opt.segment_s))
         e_ref = _combined(free_run_errors(refined.plant, log, every, noise, opt.segment_s))
-        if e_ref < e_start:
-            est, stage = refined, "free-run"
-    (before, lag_before), (after, lag_after) = (_read_rms(p, log, opt.segment_s) for p in (plant, est.plant))
+        if e_ref < e_est:
+            est, stage, e_est = refined, "free-run", e_ref
+    e_start = _combined(free_run_errors(start, log, every, noise, opt.segment_s))
+    note = _adopted(e_start, e_est)
+    (before, lag_before), (after, lag_after) = (_read_rms(p, log, opt.segment_s) for p in (start, est.plant))
     return FitResult(
-        plant=est.plant, effects=tuple(c.name for c in cands), stage=stage, names=est.names, values=est.values,
-        stderr=est.stderr, correlation=est.correlation, before=before, after=after,
-        before_equations=equation_rms(plant, log), after_equations=equation_rms(est.plant, log), alignment=align,
-        current_sensor_lag=(lag_before, lag_after),
+        plant=est.plant if note is None else start, effects=tuple(c.name for c in cands), stage=stage,
+        names=est.names, values=est.values, stderr=est.stderr, correlation=est.correlation, before=before,
+        after=after, before_equations=equation_rms(start, log), after_equations=equation_rms(est.plant, log),
+        alignment=align, current_sensor_lag=(lag_before, lag_after), adopted=note is None, note=note,
     )
+
+
+def _adopted(e_start: float, e_fit: float) -> str | None:
+    """None where the fitted plant's free-run error over the log (``e_fit``, combined over the channels in noise
+    units) is below the starting plant's (``e_start``); else why the fit is not adopted. Fitted to this very log,
+    added parameters can only lower the error at the optimum: a rise means the fit did not reach it (an effect the
+    log cannot show, a ripple's count beyond its sampling) and the starting plant is the better one."""
+    if e_fit < e_start:
+        return None
+    return (f"not adopted: the fitted plant predicts this log's free run worse than the starting plant (combined "
+            f"error {e_start:.4g} -> {e_fit:.4g} noise levels); the calibrated plant is the starting one")

@@ -240,6 +240,9 @@ function showDiagnosisDetails(res, after) {
 function showFit(res) {
   state.fit = res;
   $("#m-fit-results").hidden = false;
+  const note = $("#m-fit-note");  // a fit that predicts worse than the starting plant is not adopted
+  note.hidden = res.adopted !== false;
+  note.textContent = res.adopted === false ? res.note : "";
   const before = res.rms_before || {}, after = res.rms_after || {};
   const units = res.units || CHANNEL_UNITS;
   const tb = emptied("#m-beforeafter tbody");

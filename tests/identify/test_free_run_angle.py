@@ -52,6 +52,7 @@ def test_refitting_a_ripple_makes_the_free_run_error_fall(monkeypatch: pytest.Mo
     assert truth["periods"] == 10.0 and "theta" in case.columns
     plant, log = DCMotorPlant(MotorParams(**case.nominal)), case_log(case)
     res = fit(plant, log, ["cogging"])
+    assert res.adopted and res.note is None
     ripple = next(e for e in res.plant.effects if isinstance(e, Cogging))
     assert ripple.periods == 10.0
     assert res.after["omega"] < 0.6 * res.before["omega"]
