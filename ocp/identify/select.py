@@ -135,11 +135,21 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float,
     y = np.linalg.solve(gs, h / d)  # unconstrained first; bounded only when a bound binds
     if not np.all(np.isfinite(y)) or np.any(y < lo * d) or np.any(y > hi * d):  # (near-singular: bounded too)
         y = box_qp(gs, h / d, lo * d, hi * d, y)
-    x = np.where(d > 1e-9 * d.max(), y / d, 0.0)  # a column the log leaves empty (L far under a sample): 0
+    x = np.where(d > 1e-9 * _reference(design, idx), y / d, 0.0)  # a column the log leaves empty: 0
     cost = float(design.c_train.sum() - 2 * h @ x + x @ g @ x)
     ms = np.array([(design.c_test[e] - 2 * design.h_test[e][idx] @ x + x @ design.g_test[e][np.ix_(idx, idx)] @ x)
                    / max(design.n_test[e], 1) for e in range(3)])
     return Fitted((), tuple(int(j) for j in idx), x, cost, _score(design, ms), np.sqrt(np.maximum(ms, 0.0)))
+
+
+def _reference(design: Design, idx: np.ndarray) -> np.ndarray:
+    """(P,) for each column of ``idx`` the largest training norm among the columns of ``idx`` in the equations it
+    enters: a column is empty (``L`` far under a sample) only against its own equations' columns. Against every
+    column, an absolute one of another equation (a thrust asymmetry's ``dc_f`` in N s^2/rad^2: norm 2e9) emptied
+    a relative ``L`` the current filter's lag had widened (proving ground 23144: the armature equation's held-out
+    error rose 34-fold, the other coefficients fitted beside the ``L`` that was then zeroed)."""
+    per_eq = np.sqrt(np.maximum(np.einsum("ejj->ej", design.g_train[:, idx][:, :, idx]), 0.0))  # (3, P)
+    return np.max(np.where(per_eq > 0, per_eq.max(axis=1, keepdims=True), 0.0), axis=0)
 
 
 def _score(design: Design, ms: np.ndarray) -> float:
