@@ -62,8 +62,13 @@ def assemble(base: DCMotorPlant, cands: Sequence[Candidate], theta: np.ndarray) 
 
 
 def peak_torque(base: DCMotorPlant, log: Log) -> float:
-    """The motor's peak torque in ``log`` [N m]: ``k_t`` times the largest logged current [A]."""
-    return float(base.params.k_t * np.max(np.abs(log.current)))
+    """The motor's torque scale in ``log`` [N m]: the largest of ``k_t`` times the largest logged current [A], the
+    largest logged reaction torque, and the plant's drag ``B |w| + c_tau w^2`` at the log's peak speed (a sweep may
+    log no current, or the supply's, which understates the armature's at part throttle); absent columns count 0."""
+    p, w = base.params, float(np.nanmax(np.abs(log.omega), initial=0.0))
+    return max(p.k_t * float(np.nanmax(np.abs(log.current), initial=0.0)),
+               float(np.nanmax(np.abs(log.torque), initial=0.0)) if log.torque is not None else 0.0,
+               p.B * w + p.c_tau * w * w)
 
 
 def _bounds(base: DCMotorPlant, cands: Sequence[Candidate], torque: float) -> tuple[np.ndarray, np.ndarray]:

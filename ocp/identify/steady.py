@@ -43,7 +43,7 @@ from ocp.identify.equations import (
     residuals,
     statuses,
 )
-from ocp.identify.estimate import assemble
+from ocp.identify.estimate import assemble, peak_torque
 from ocp.logs import Log, LogKind
 from ocp.model.plant import DCMotorPlant
 
@@ -116,10 +116,13 @@ class Fitted:
 
 def fit_candidates(base: DCMotorPlant, cands: Sequence[Candidate], log: Log, rows: np.ndarray,
                    scale: dict[str, float]) -> Fitted:
-    """Bounded least squares of the candidates' parameters on the stacked scaled residuals at ``rows``."""
+    """Bounded least squares of the candidates' parameters on the stacked scaled residuals at ``rows``; torque-valued
+    boxes reach the motor's torque in the log (:func:`.estimate.peak_torque`: the catalogue's 0.1 N m held a 500 W
+    sweep's 0.4 N m Coulomb friction at the box, and its diagnosis named ``k_t``, ``c_tau`` and Stribeck instead)."""
     eqs = tuple(scale)
-    lo = np.concatenate([c.bounds(base)[0] for c in cands])
-    hi = np.concatenate([c.bounds(base)[1] for c in cands])
+    torque = peak_torque(base, log)
+    lo = np.concatenate([c.bounds(base, torque)[0] for c in cands])
+    hi = np.concatenate([c.bounds(base, torque)[1] for c in cands])
 
     def fun(theta: np.ndarray) -> np.ndarray:
         r = residuals(assemble(base, cands, theta), log, eqs)

@@ -11,6 +11,7 @@ import pytest
 from ocp.errors import LogError
 from ocp.identify import check, diagnose, fit
 from ocp.identify.equations import TIME_EFFECTS
+from ocp.identify.estimate import peak_torque
 from ocp.identify.steady import PointCheck, PointDiagnosis
 from ocp.logs import ReadOptions, read_log
 from ocp.model.effects import load_plant
@@ -140,6 +141,38 @@ def test_armature_sweep_checks_all_three_equations_and_finds_friction(tmp_path: 
 
     page = html_report(check(load_plant(p), log), log, plant=load_plant(p))
     assert "not checked" in page and "power" in page and page.count("data:image/png;base64,") == 1
+
+
+def test_a_large_motors_friction_is_fitted_beyond_the_catalogues_box(tmp_path: Path) -> None:
+    """The armature sweep above on a 500 W drive (k 0.5 N m/A) with 0.4 N m of Coulomb friction, four times the
+    catalogue's 0.1 N m box (a small motor's): before session 40 the point fits held it at the box, ``fit`` returned
+    0.1 and ``diagnose`` named ``k_t``, ``c_tau`` and Stribeck friction instead. Torque-valued boxes reach the
+    motor's torque in the log (k_t times the largest current, 1.6 N m here)."""
+    p = {"J": 2e-3, "B": 2e-3, "c_tau": 1e-4, "c_f": 4e-3, "k_t": 0.5, "k_e": 0.5, "R": 0.5, "L": 2e-3}
+    tau_c = 0.4
+    w = np.concatenate([np.linspace(-100, -5, 12), np.linspace(5, 100, 12)])
+    i = (p["B"] * w + p["c_tau"] * w * np.abs(w) + tau_c * np.sign(w)) / p["k_t"]
+    write_csv({"voltage": p["R"] * i + p["k_e"] * w, "current": i, "omega": w, "thrust": p["c_f"] * w * np.abs(w)},
+              tmp_path / "big.csv")
+    log = read_log(tmp_path / "big.csv", kind="steady-state")
+    d = diagnose(load_plant(p), log).to_dict()
+    assert d["verdict"] == ["coulomb_friction"]
+    assert d["ranking"][0]["parameters"]["tau_c"] == pytest.approx(tau_c, rel=0.02)
+    res = fit(load_plant(p), log, ["coulomb_friction"])
+    assert res.values[0] == pytest.approx(tau_c, rel=0.02)
+
+
+def test_the_torque_scale_of_a_sweep_without_current_is_the_drag_at_its_peak_speed(tmp_path: Path) -> None:
+    """Oracle, closed form: an ESC sweep logs speed and thrust only (no current, no torque cell); the boxes' torque
+    scale is then the plant's drag ``B w + c_tau w^2`` at the peak speed."""
+    th = Thruster()
+    cols = {k: v for k, v in thruster_sweep(th).items() if k in ("PWM (µs)", "RPM", "Voltage (V)", "Force (N)")}
+    write_csv(cols, tmp_path / "s.csv")
+    log = read_log(tmp_path / "s.csv")
+    plant = load_plant(th.params())
+    assert np.all(np.isnan(log.current)) and log.torque is None
+    w = float(np.max(np.abs(log.omega)))
+    assert peak_torque(plant, log) == pytest.approx(plant.params.B * w + plant.params.c_tau * w * w, rel=1e-12)
 
 
 def test_a_time_effect_asked_for_by_name_on_a_sweep_is_refused(tmp_path: Path) -> None:
