@@ -133,6 +133,28 @@ def model_load(plant: DCMotorPlant, log: Log, volts: np.ndarray | None = None) -
     return -plant.params.J * np.asarray(plant.rhs(x, zero)[0], float)
 
 
+#: a sweep's row is at rest where its speed is within this fraction of the sweep's largest (stated, not tuned: the
+#: speed a stalled rotor's sensor may read)
+REST_FRACTION = 0.01
+#: effects whose friction holds a rotor at rest up to their breakaway torque (their parameters summed)
+DRY_HOLD = {"coulomb_friction": "tau_c", "stribeck": "tau_s"}
+
+
+def held(plant: DCMotorPlant, log: Log, r: np.ndarray, drive: np.ndarray, volts: np.ndarray) -> np.ndarray:
+    """The torque balance's residual ``r`` (N,) [N m] with a sweep's rows at rest (:data:`REST_FRACTION`) set-valued:
+    dry friction holds whatever torque is within its breakaway (the plant's :data:`DRY_HOLD` summed), so there the
+    residual is the motor's torque ``drive`` less the load without dry friction, shrunk by that breakaway (a
+    stalled row of a sweep with Stribeck friction, at rest under 8.4 mN m, left a residual no smooth friction
+    explains). On a time series, or without dry friction, ``r`` as it is."""
+    hold = sum(float(getattr(e, key)) for e in plant.effects for name, key in DRY_HOLD.items() if e.name == name)
+    if log.kind is not LogKind.STEADY_STATE or hold <= 0.0:
+        return r
+    rest = np.abs(log.omega) <= REST_FRACTION * float(np.max(np.abs(log.omega), initial=0.0))
+    smooth = DCMotorPlant(plant.params, tuple(e for e in plant.effects if e.name not in DRY_HOLD))
+    free = drive - model_load(smooth, log, volts)
+    return np.where(rest, np.sign(free) * np.maximum(np.abs(free) - hold, 0.0), r)
+
+
 def residuals(plant: DCMotorPlant, log: Log, names: tuple[str, ...]) -> dict[str, np.ndarray]:
     """Residuals (N,) measured - model of the equations ``names`` (module doc; units :data:`UNITS`)."""
     p = plant.params
@@ -146,10 +168,9 @@ def residuals(plant: DCMotorPlant, log: Log, names: tuple[str, ...]) -> dict[str
     for eq in names:
         if eq == "thrust":
             out[eq] = log.thrust - np.asarray(plant.thrust(zero_i), float)
-        elif eq == "mechanical" and log.torque is not None:
-            out[eq] = log.torque - (load + p.J * wd)
         elif eq == "mechanical":
-            out[eq] = p.k_t * i_true - load - p.J * wd
+            drive = log.torque if log.torque is not None else p.k_t * i_true
+            out[eq] = held(plant, log, drive - load - p.J * wd, drive, volts)
         elif eq == "electrical":
             # eq:dc_electrical  L i' = V - R i - k_e w  ->  residual [V] = L (rhs_i - i')
             rhs = plant.rhs(_state(plant, log, i_true, volts), volts)

@@ -9,7 +9,10 @@ jointly with those already chosen (a static map has few points: a compromise fit
 the next; ``thrust_asymmetry`` is fitted with ``c_f`` free, :data:`PARTNERS`, and must then beat ``c_f``
 alone too), on the training rows (every ``holdout_every``-th held out), scored by the held-out combined error
 ``E = sqrt(mean_eq (rms_eq / noise_eq)^2)``, and accepted when it improves ``E`` by at least
-``min_improvement`` while ``E > noise_floor``.
+``min_improvement`` while ``E > noise_floor``. A constant so adopted is named only beyond ``tolerance`` of its
+nominal value; within it, the plant takes it as a calibration (``calibration``, as the dynamic check reports it).
+Candidates whose held-out error is within the held-out points' sampling scatter of the adopted one's
+(:func:`_margin`) are reported as its rivals (``ambiguous``).
 
 The direction maps are plant-free least squares per direction: thrust ``F = c w|w|`` gives the
 forward and reverse thrust coefficients and their ratio (reverse / forward); torque ``tau = c w|w|``
@@ -167,7 +170,13 @@ def pool(log: Log, opt: DiagnoseOptions, plant: DCMotorPlant) -> list[Candidate]
     else:
         cands = all_candidates(opt.include_params)
     present = {e.name for e in plant.effects}
-    return [c for c in cands if c.name not in present and allowed(c.name, c.channel, log)]
+    out = [c for c in cands if c.name not in present and allowed(c.name, c.channel, log)]
+    if opt.candidates is None and {"mechanical", "electrical"} <= set(checked(log)) \
+            and any(c.name == "param:k" for c in out):
+        # k_t = k_e in SI: where both equations judge the motor constant, it is corrected as one (as the dynamic
+        # check does); k_t alone mimicked a propeller drag error on a sweep (i ~ w^2 there)
+        out = [c for c in out if c.name not in ("param:k_t", "param:k_e")]
+    return out
 
 
 @dataclass(frozen=True)
@@ -230,23 +239,71 @@ def _try(current: DCMotorPlant, chosen: list[Candidate], cand: Candidate, pool_:
                           cand.explain(current, fitted.plant)), fitted.plant, (*extra, cand))
 
 
-def _rivals(best: _Try, tries: list[_Try], base: float, opt: DiagnoseOptions) -> list[dict[str, Any]]:
-    """Other candidates that fit the held-out rows as well as ``best``: held-out score within
-    ``ambiguity_margin`` of it, or both within the noise (``noise_floor``; ``base`` is the score before this
-    round, in noise units). The sweep cannot tell them apart (e.g. Coulomb friction and a viscous ``B``
-    change at one speed)."""
+def _margin(opt: DiagnoseOptions, held: int) -> float:
+    """The relative difference of held-out scores within which two candidates fit equally well: ``ambiguity_margin``
+    or two standard errors of an RMS over the ``held`` held-out residuals, ``2 / sqrt(2 held)``, whichever is wider
+    (as the dynamic check's :func:`.evidence.scatter`): a sweep of 15 points holds out 5 per equation, and a score
+    10 % better there is sampling noise (a brush drop and a driver dead band, alike wherever the motor drives)."""
+    return max(opt.ambiguity_margin, 2.0 / math.sqrt(2.0 * max(held, 1)))
+
+
+def _rivals(best: _Try, tries: list[_Try], base: float, opt: DiagnoseOptions, held: int) -> list[dict[str, Any]]:
+    """Other candidates that fit the held-out rows as well as ``best``: held-out score within :func:`_margin` of it,
+    or both within the noise (``noise_floor``; ``base`` is the score before this round, in noise units). The sweep
+    cannot tell them apart (e.g. Coulomb friction and a viscous ``B`` change at one speed)."""
     out: list[dict[str, Any]] = []
-    ref = base * (1.0 - best.entry.improvement)
+    ref, margin = base * (1.0 - best.entry.improvement), _margin(opt, held)
     for t in tries:
         alt = base * (1.0 - t.entry.improvement)
-        if t is not best and t.entry.significant and alt <= max(ref * (1.0 + opt.ambiguity_margin), opt.noise_floor):
+        if t is not best and t.entry.significant and alt <= max(ref * (1.0 + margin), opt.noise_floor):
             out.append({"adopted": best.entry.name, "alternative": t.entry.name, "score": ref,
                         "alternative_score": alt,
                         "reason": f"{t.entry.name} instead of {best.entry.name} fits the held-out points as well "
-                                  f"({alt:.3g} vs {ref:.3g} noise units; within {100 * opt.ambiguity_margin:.1f} % "
+                                  f"({alt:.3g} vs {ref:.3g} noise units; within {100 * margin:.1f} % "
                                   f"or both within the noise floor {opt.noise_floor:g}): "
                                   "this log cannot tell them apart"})
     return out
+
+
+#: pairs a steady log tells apart only on rows where the current opposes the command (a brush drop acts against the
+#: current, a driver dead band against the command); a motor driving a load at steady state has none
+SIGN_ALIKE = frozenset({"brush_drop", "voltage_deadband"})
+
+
+def _sign_alike(best: _Try, tries: list[_Try], log: Log, base: float) -> list[dict[str, Any]]:
+    """The other of :data:`SIGN_ALIKE` as ``best``'s rival where no row of ``log`` has a current (over 1 % of the
+    largest) opposing its command: there the two predict the same rows, whatever their fits' held-out scores (the
+    catalogue's brush drop is smooth in the current near zero, so the dead band fitted a sweep's brush drop better
+    on the proving ground's sweeps, ``bench/pg_sweeps.py``)."""
+    if best.entry.name not in SIGN_ALIKE or "electrical" not in checked(log):  # (the armature's V and i logged)
+        return []
+    i, v = log.current, log.voltage
+    if np.any((np.sign(i) * np.sign(v) < 0) & (np.abs(i) > 0.01 * float(np.max(np.abs(i))))):
+        return []
+    other = next((t for t in tries if t.entry.name in SIGN_ALIKE - {best.entry.name}), None)
+    if other is None:
+        return []
+    score_of = lambda t: base * (1.0 - t.entry.improvement)  # noqa: E731
+    return [{"adopted": best.entry.name, "alternative": other.entry.name, "score": score_of(best),
+             "alternative_score": score_of(other),
+             "reason": f"on this log the current never opposes the command, the only rows where a brush drop (against "
+                       f"the current) and a driver dead band (against the command) differ: it cannot tell "
+                       f"{best.entry.name} from {other.entry.name}"}]
+
+
+def _calibrated(plant: DCMotorPlant, fitted: DCMotorPlant, cand: Candidate, tol: float) -> dict[str, Any]:
+    """A constant's entry in ``calibration`` (the dynamic check's keys): nominal (in ``plant``), fitted (in
+    ``fitted``), relative change, unit, and whether it is beyond the tolerance ``tol`` (named)."""
+    nominal = _value(plant, cand.param_key)
+    fit_ = float(cand.values(fitted)[cand.param_key])
+    x = fit_ / nominal - 1.0 if nominal else math.inf
+    return {"nominal": nominal, "fitted": fit_, "relative": x, "unit": cand.units()[cand.param_key],
+            "named": abs(x) > tol, "within_tolerance": abs(x) <= tol}
+
+
+def _value(plant: DCMotorPlant, key: str) -> float:
+    """Constant ``key`` of ``plant`` (``k``: the motor constant, read as ``k_t``)."""
+    return float(getattr(plant.params, "k_t" if key == "k" else key))
 
 
 def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None) -> PointDiagnosis:
@@ -260,11 +317,14 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
     nz = noise(log, eqs, plant)
     test = np.arange(log.n) % opt.holdout_every == opt.holdout_every - 1
     rows = (~test, test)
-    current, verdict, explanations, rounds = plant, [], [], []
+    current, explanations, rounds = plant, [], []
+    verdict: list[str] = []
     chosen: list[Candidate] = []
     ambiguous: list[dict[str, Any]] = []
+    calibration: dict[str, dict[str, Any]] = {}
     cands = pool(log, opt, plant)
-    for _ in range(opt.max_effects):
+    held = int(test.sum()) * len(eqs)
+    while len(verdict) < opt.max_effects and len(chosen) < len(cands):
         base = score(current, log, test, nz)
         r0 = residuals(current, log, eqs)
         scale = {eq: max(float(np.sqrt(np.mean(r0[eq][~test] ** 2))), 1e-12) for eq in eqs}
@@ -274,8 +334,11 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
         best = next((t for t in tries if t.entry.significant), None)  # a paired one may rank first yet fail
         if best is None:
             break
-        ambiguous += _rivals(best, tries, base.combined, opt)
-        if len(best.cands) > 1:  # the partner (c_f) is named too when it matters on its own
+        for c in best.cands:  # a constant: named beyond the tolerance, else a calibration the plant takes
+            if c.is_param:
+                calibration[c.param_key] = _calibrated(plant, best.plant, c, opt.tolerance)
+        if len(best.cands) > 1 and calibration[best.cands[0].param_key]["named"]:
+            # the partner (c_f) is named too when it matters on its own
             alone = fit_candidates(current, [*chosen, best.cands[-1]], log, rows[0], scale)
             gain = 1.0 - score(best.plant, log, test, nz).combined / score(alone.plant, log, test, nz).combined
             if gain >= opt.min_improvement:
@@ -284,11 +347,19 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
                                     f"{best.entry.name}; held-out error down {100 * gain:.0f} % against it alone.")
         current = best.plant
         chosen += best.cands
+        if best.cands[-1].is_param and not calibration[best.cands[-1].param_key]["named"]:
+            explanations.append(f"{best.entry.explanation} Within the {100 * opt.tolerance:g} % tolerance: "
+                                "calibrated, not named.")
+            continue
+        rivals = _rivals(best, tries, base.combined, opt, held)
+        ambiguous += rivals + [a for a in _sign_alike(best, tries, log, base.combined)
+                               if a["alternative"] not in {r["alternative"] for r in rivals}]
         verdict.append(best.entry.name)
         explanations.append(f"{best.entry.explanation} Held-out error down {100 * best.entry.improvement:.0f} %.")
     fitted_maps = {"thrust_ratio_reverse_to_forward": finite(r) if (r := thrust_ratio(current, log)) else None}
-    return PointDiagnosis(verdict, rounds, current, nz, explanations, ambiguous=ambiguous, equations=statuses(log),
-                          maps=direction_maps(log), kind=log.kind.value, notes=log.notes, fitted_maps=fitted_maps)
+    return PointDiagnosis(verdict, rounds, current, nz, explanations, calibration=calibration, ambiguous=ambiguous,
+                          tolerance=opt.tolerance, equations=statuses(log), maps=direction_maps(log),
+                          kind=log.kind.value, notes=log.notes, fitted_maps=fitted_maps)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,106 @@
+"""The point-by-point check on steady-state sweeps nobody here exported (session 40): the proving ground's rig held at
+each command (:mod:`tests.proving_ground.sweeps`, its own formulas), read as a CSV sweep. ``bench/pg_sweeps.py`` runs
+200 of them; these are its classes, each on a draw that shows it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ocp.identify import DiagnoseOptions, diagnose
+from ocp.identify.equations import residuals
+from ocp.identify.steady import pool
+from ocp.logs import Log, read_log
+from ocp.model.effects import make_effect
+from ocp.model.params import MotorParams
+from ocp.model.plant import DCMotorPlant
+from tests.logfiles import write_csv
+from tests.proving_ground.sweeps import Sweep, make_sweep
+
+
+def _log(sw: Sweep, tmp_path: Path) -> Log:
+    write_csv(sw.columns, tmp_path / f"sweep-{sw.seed}.csv")
+    return read_log(tmp_path / f"sweep-{sw.seed}.csv", kind="steady-state")
+
+
+def _plant(sw: Sweep) -> DCMotorPlant:
+    return DCMotorPlant(MotorParams(**sw.nominal))
+
+
+def test_a_constant_within_the_tolerance_is_calibrated_not_named(tmp_path: Path) -> None:
+    """Sweep 35: the user's ``c_f`` is 9.1 % high, within the 10 % tolerance. The sweep finds it (-8.9 %) and the
+    plant takes it, but it is not named (before: named, a false alarm on a log with nothing wrong beyond the
+    tolerance)."""
+    sw = make_sweep(35)
+    assert sw.expected == frozenset() and sw.truth.c_f / sw.nominal["c_f"] - 1 == pytest.approx(-0.091, abs=0.002)
+    res = diagnose(_plant(sw), _log(sw, tmp_path))
+    assert res.verdict == []
+    cal = res.calibration["c_f"]
+    assert cal["within_tolerance"] and not cal["named"] and cal["relative"] == pytest.approx(-0.091, abs=0.01)
+    assert res.plant.params.c_f == pytest.approx(sw.truth.c_f, rel=0.01)
+    assert any("Within the 10 % tolerance: calibrated, not named." in e for e in res.explanations)
+
+
+def test_a_constant_beyond_the_tolerance_is_named(tmp_path: Path) -> None:
+    """Sweep 166: ``B`` 43 % off. Named, and in ``calibration`` as named."""
+    sw = make_sweep(166)
+    assert sw.expected == frozenset({"param:B"})
+    res = diagnose(_plant(sw), _log(sw, tmp_path))
+    assert res.verdict == ["param:B"]
+    assert res.calibration["B"]["named"] and res.calibration["B"]["relative"] == pytest.approx(0.43, abs=0.1)
+
+
+def test_the_motor_constant_is_corrected_as_one_where_both_equations_judge_it(tmp_path: Path) -> None:
+    """Sweep 173: the propeller drag ``c_tau`` is off. Offered ``k_t`` alone (unphysical in SI, where k_t = k_e), the
+    sweep named it: a propeller's current grows as w^2, as its drag does. Where the torque and armature equations are
+    both checked, only ``k`` (both together) is offered; a torque-cell sweep without the armature keeps ``k_t``."""
+    sw = make_sweep(173)
+    assert sw.expected == frozenset({"param:c_tau"})
+    log = _log(sw, tmp_path)
+    assert diagnose(_plant(sw), log).verdict == ["param:c_tau"]
+    names = {c.name for c in pool(log, DiagnoseOptions(), _plant(sw))}
+    assert "param:k" in names and not names & {"param:k_t", "param:k_e"}
+
+
+def test_a_stalled_row_is_held_by_dry_friction(tmp_path: Path) -> None:
+    """Sweep 30: Stribeck friction shows only where the rotor stalls (its two lowest commands; it moves at 35 rad/s
+    and more, far beyond the film's 10.7 rad/s). At rest, dry friction holds any torque within its breakaway, so the
+    torque balance there is set-valued: oracle, the true plant's residual on the rows at rest is 0 (their motor
+    torque, 8.4 mN m, within the 13.8 mN m breakaway), and a smooth friction model left all of it. Named now (before:
+    nothing)."""
+    sw = make_sweep(30)
+    log = _log(sw, tmp_path)
+    rest = np.abs(log.omega) <= 0.01 * np.max(np.abs(log.omega))
+    assert rest.sum() == 2 and sw.expected == frozenset({"stribeck"})
+    true = DCMotorPlant(_plant(sw).params, (make_effect("stribeck", sw.truth.effects["stribeck"]),))
+    r = residuals(true, log, ("mechanical",))["mechanical"]
+    assert np.all(r[rest] == 0.0) and np.all(np.abs(true.params.k_t * log.current[rest]) > 0.008)
+    assert diagnose(_plant(sw), log).verdict == ["stribeck"]
+
+
+def test_a_brush_drop_and_a_dead_band_are_rivals_where_the_current_never_opposes_the_command(tmp_path: Path) -> None:
+    """Sweep 33: a brush drop (against the current) read as a driver dead band (against the command): on a motor
+    driving its propeller the two signs agree on every row, so the sweep cannot tell them apart, and says so. With one
+    row whose current opposes its command (a braking point), the two differ there and no rival is forced."""
+    sw = make_sweep(33)
+    log = _log(sw, tmp_path)
+    res = diagnose(_plant(sw), log)
+    assert res.verdict == ["voltage_deadband"] and sw.expected == frozenset({"brush_drop"})
+    told = [a for a in res.ambiguous if a["alternative"] == "brush_drop"]
+    assert told and "current never opposes the command" in told[0]["reason"]
+    k = int(np.argmax(np.abs(sw.columns["current"])))
+    braking = {**sw.columns, "current": sw.columns["current"].copy()}
+    braking["current"][k] *= -1.0
+    res = diagnose(_plant(sw), _log(Sweep(33, sw.kind, braking, sw.nominal, sw.expected, sw.truth), tmp_path))
+    assert not any("never opposes" in a["reason"] for a in res.ambiguous)
+
+
+def test_no_false_alarm_on_clean_sweeps(tmp_path: Path) -> None:
+    """The issue's target on the sweeps of seeds 0..59 whose truth the sweep does not show as wrong (21 logs:
+    nothing drawn, or a constant within the tolerance, or one the rows cannot show): nothing named."""
+    clean = [sw for sw in map(make_sweep, range(60)) if not sw.expected]
+    assert len(clean) >= 12
+    for sw in clean:
+        assert diagnose(_plant(sw), _log(sw, tmp_path)).verdict == [], sw.seed
