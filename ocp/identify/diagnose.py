@@ -283,7 +283,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     is called as the work advances (for progress bars)."""
     opt = options or DiagnoseOptions()
     if not dynamic(log):  # sweeps, ESC rigs and flight logs: point by point, never a time effect (issue #13)
-        from ocp.identify.steady import diagnose_points
+        from ocp.identify.steady_diagnose import diagnose_points
 
         return diagnose_points(plant, log, opt)
     effects, pool = _pool(plant, opt)

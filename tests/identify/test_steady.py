@@ -12,7 +12,8 @@ from ocp.errors import LogError
 from ocp.identify import check, diagnose, fit
 from ocp.identify.equations import TIME_EFFECTS
 from ocp.identify.estimate import peak_torque
-from ocp.identify.steady import PointCheck, PointDiagnosis
+from ocp.identify.steady import PointCheck
+from ocp.identify.steady_diagnose import PointDiagnosis
 from ocp.logs import ReadOptions, read_log
 from ocp.model.effects import load_plant
 from tests.logfiles import RPM, Thruster, thruster_sweep, tyto_series, write_csv, write_ulog

@@ -11,7 +11,7 @@ import pytest
 
 from ocp.identify import DiagnoseOptions, diagnose
 from ocp.identify.equations import residuals
-from ocp.identify.steady import pool
+from ocp.identify.steady_diagnose import pool
 from ocp.logs import Log, read_log
 from ocp.model.effects import make_effect
 from ocp.model.params import MotorParams
