@@ -178,6 +178,33 @@ def _value(plant: DCMotorPlant, key: str) -> float:
     return float(getattr(plant.params, "k_t" if key == "k" else key))
 
 
+def _backward(plant: DCMotorPlant, log: Log, chosen: list[Candidate], verdict: list[str],
+              text: tuple[list[str], dict[str, str]], rows: tuple[np.ndarray, np.ndarray], nz: dict[str, float],
+              opt: DiagnoseOptions) -> DCMotorPlant:
+    """Each named item but the last adopted, tested again beside all the others (the dynamic check's backward step,
+    :func:`.select.select`): refitted without it on the training points, the held-out score must be worse by
+    ``min_improvement``, else it is dropped from ``chosen`` and ``verdict`` (in place) and its sentence in ``text``
+    (the explanations, and each named item's sentence in them) replaced by why: an early greedy pick the later
+    ones explain (a thrust asymmetry taken for a force offset's reverse side: proving ground sweep 55). Returns the
+    plant of what is left, fitted on the training points."""
+    train, test = rows
+    r0 = residuals(plant, log, tuple(nz))
+    scale = {eq: max(float(np.sqrt(np.mean(r0[eq][train] ** 2))), 1e-12) for eq in nz}
+    full = fit_candidates(plant, chosen, log, train, scale).plant
+    for name in verdict[:-1]:
+        rest = [c for c in chosen if c.name != name]
+        without = fit_candidates(plant, rest, log, train, scale).plant
+        if score(full, log, test, nz).combined <= (1.0 - opt.min_improvement) * score(without, log, test, nz).combined:
+            continue
+        chosen[:] = rest
+        verdict.remove(name)
+        text[0].remove(text[1][name])
+        text[0].append(f"{name} is not named: adopted in an early round, it no longer wins on held-out points "
+                       f"beside {', '.join(verdict)}")
+        full = without
+    return full
+
+
 def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None) -> PointDiagnosis:
     """Rank the time-free candidates on the checkable equations, point by point (module doc)."""
     opt = options or DiagnoseOptions()
@@ -190,6 +217,13 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
     test = np.arange(log.n) % opt.holdout_every == opt.holdout_every - 1
     rows = (~test, test)
     current, explanations, rounds = plant, [], []
+    said: dict[str, str] = {}  # a named item's sentence in explanations
+
+    def name_it(name: str, text: str) -> None:
+        verdict.append(name)
+        explanations.append(text)
+        said[name] = text
+
     verdict: list[str] = []
     chosen: list[Candidate] = []
     ambiguous: list[dict[str, Any]] = []
@@ -214,9 +248,9 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
             alone = fit_candidates(current, [*chosen, best.cands[-1]], log, rows[0], scale)
             gain = 1.0 - score(best.plant, log, test, nz).combined / score(alone.plant, log, test, nz).combined
             if gain >= opt.min_improvement:
-                verdict.append(best.cands[0].name)
-                explanations.append(f"{best.cands[0].explain(current, best.plant)} Fitted with "
-                                    f"{best.entry.name}; held-out error down {100 * gain:.0f} % against it alone.")
+                name_it(best.cands[0].name, f"{best.cands[0].explain(current, best.plant)} Fitted with "
+                                            f"{best.entry.name}; held-out error down {100 * gain:.0f} % against it "
+                                            "alone.")
         current = best.plant
         chosen += best.cands
         if best.cands[-1].is_param and not calibration[best.cands[-1].param_key]["named"]:
@@ -226,8 +260,9 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
         rivals = _rivals(best, tries, base.combined, opt, held)
         ambiguous += rivals + [a for a in _sign_alike(best, tries, log, base.combined)
                                if a["alternative"] not in {r["alternative"] for r in rivals}]
-        verdict.append(best.entry.name)
-        explanations.append(f"{best.entry.explanation} Held-out error down {100 * best.entry.improvement:.0f} %.")
+        name_it(best.entry.name, f"{best.entry.explanation} Held-out error down {100 * best.entry.improvement:.0f} %.")
+    if len(verdict) > 1:
+        current = _backward(plant, log, chosen, verdict, (explanations, said), rows, nz, opt)
     fitted_maps = {"thrust_ratio_reverse_to_forward": finite(r) if (r := thrust_ratio(current, log)) else None}
     return PointDiagnosis(verdict, rounds, current, nz, explanations, calibration=calibration, ambiguous=ambiguous,
                           tolerance=opt.tolerance, equations=statuses(log), maps=direction_maps(log),
