@@ -148,7 +148,7 @@ def _reference(design: Design, idx: np.ndarray) -> np.ndarray:
     column, an absolute one of another equation (a thrust asymmetry's ``dc_f`` in N s^2/rad^2: norm 2e9) emptied
     a relative ``L`` the current filter's lag had widened (proving ground 23144: the armature equation's held-out
     error rose 34-fold, the other coefficients fitted beside the ``L`` that was then zeroed)."""
-    per_eq = np.sqrt(np.maximum(np.einsum("ejj->ej", design.g_train[:, idx][:, :, idx]), 0.0))  # (3, P)
+    per_eq = np.sqrt(np.maximum(np.diagonal(design.g_train, axis1=1, axis2=2)[:, idx], 0.0))  # (3, P)
     return np.max(np.where(per_eq > 0, per_eq.max(axis=1, keepdims=True), 0.0), axis=0)
 
 

@@ -166,16 +166,10 @@ def _sign_alike(best: _Try, tries: list[_Try], log: Log, base: float) -> list[di
 def _calibrated(plant: DCMotorPlant, fitted: DCMotorPlant, cand: Candidate, tol: float) -> dict[str, Any]:
     """A constant's entry in ``calibration`` (the dynamic check's keys): nominal (in ``plant``), fitted (in
     ``fitted``), relative change, unit, and whether it is beyond the tolerance ``tol`` (named)."""
-    nominal = _value(plant, cand.param_key)
-    fit_ = float(cand.values(fitted)[cand.param_key])
+    nominal, fit_ = (float(cand.values(p)[cand.param_key]) for p in (plant, fitted))
     x = fit_ / nominal - 1.0 if nominal else math.inf
     return {"nominal": nominal, "fitted": fit_, "relative": x, "unit": cand.units()[cand.param_key],
             "named": abs(x) > tol, "within_tolerance": abs(x) <= tol}
-
-
-def _value(plant: DCMotorPlant, key: str) -> float:
-    """Constant ``key`` of ``plant`` (``k``: the motor constant, read as ``k_t``)."""
-    return float(getattr(plant.params, "k_t" if key == "k" else key))
 
 
 def _backward(plant: DCMotorPlant, log: Log, chosen: list[Candidate], verdict: list[str],
