@@ -38,6 +38,12 @@ def open_tab(page: Any, server: Server, tab: str) -> None:
     page.wait_for_function("document.querySelector('#d-preset').options.length > 1")
 
 
+def custom_params(page: Any, params: dict[str, float]) -> None:
+    """The Model check tab's parameters: a custom parameter file (JSON) instead of a preset."""
+    page.select_option("#m-preset", "__custom__")
+    page.fill("#m-params", json.dumps(params))
+
+
 def number(text: str) -> float:
     return float(text.strip().replace("−", "-"))
 

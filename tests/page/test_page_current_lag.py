@@ -4,7 +4,6 @@ its exact constants, shows the fitted lag on the alignment line, as the JSON has
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
@@ -17,7 +16,7 @@ from ocp.logs import write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.identify.test_current_sensor_lag import DRAWS
-from tests.page.test_page import LONG, open_tab
+from tests.page.test_page import LONG, custom_params, open_tab
 from tests.proving_ground import make_case
 from tests.service.test_service_support import Server
 
@@ -32,8 +31,7 @@ def test_the_fitted_current_lag_is_said_on_the_page(page: Any, server: Server, t
     write_log_csv(log, tmp_path / "filtered.csv")
     open_tab(page, server, "model")
     page.set_input_files("#m-log", str(tmp_path / "filtered.csv"))
-    page.select_option("#m-preset", "__custom__")
-    page.fill("#m-params", json.dumps(case.nominal))
+    custom_params(page, case.nominal)
     page.click("#m-check")
     page.wait_for_selector("#m-check-results:not([hidden])", timeout=LONG)
     text = page.inner_text("#m-check-alignment")

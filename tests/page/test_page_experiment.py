@@ -14,7 +14,7 @@ import pytest
 
 from ocp.logs import log_from_arrays, write_log_csv
 from ocp.optimize.mission import Mission
-from tests.page.test_page import LONG, downloaded, open_tab, shot
+from tests.page.test_page import LONG, custom_params, downloaded, open_tab, shot
 from tests.proving_ground.experiment import draw, single_speed
 from tests.service.test_service_support import Server
 
@@ -32,8 +32,7 @@ def test_the_model_tab_designs_the_experiment_and_downloads_its_mission(page: An
     current = round(3.0 * float(np.max(np.abs(log.current))), 3)
     open_tab(page, server, "model")
     page.set_input_files("#m-log", str(csv))
-    page.select_option("#m-preset", "__custom__")
-    page.fill("#m-params", json.dumps(rig.nominal))
+    custom_params(page, rig.nominal)
     page.fill("#m-d-voltage", str(rig.truth.v_max))
     page.fill("#m-d-current", str(current))
     page.click("#m-design")

@@ -13,7 +13,7 @@ import pytest
 
 from bench.modelcheck import case_log
 from ocp.logs import write_log_csv
-from tests.page.test_page import LONG, downloaded, open_tab
+from tests.page.test_page import LONG, custom_params, downloaded, open_tab
 from tests.proving_ground import make_case
 from tests.service.test_service_support import Server
 
@@ -25,8 +25,7 @@ def test_a_refit_that_predicts_worse_is_said_not_adopted(page: Any, server: Serv
     write_log_csv(case_log(case), tmp_path / "ripple.csv")
     open_tab(page, server, "model")
     page.set_input_files("#m-log", str(tmp_path / "ripple.csv"))
-    page.select_option("#m-preset", "__custom__")
-    page.fill("#m-params", json.dumps(case.nominal))
+    custom_params(page, case.nominal)
     page.click("#m-diagnose")
     page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
     boxes = page.locator("#m-ranking input[type=checkbox]")

@@ -4,22 +4,16 @@ equations checked and not, the verdict names the asymmetry. The server, browser 
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Any
 
 import pytest
 
 from tests.logfiles import Thruster, thruster_sweep, write_csv
-from tests.page.test_page import LONG, open_tab, shot
+from tests.page.test_page import LONG, custom_params, open_tab, shot
 from tests.service.test_service_support import Server
 
 pytestmark = pytest.mark.integration
-
-
-def _custom_params(page: Any, params: dict[str, float]) -> None:
-    page.select_option("#m-preset", "__custom__")
-    page.fill("#m-params", json.dumps(params))
 
 
 def test_page_diagnoses_an_esc_sweep_and_lists_the_equations(page: Any, server: Server, tmp_path: Path) -> None:
@@ -27,7 +21,7 @@ def test_page_diagnoses_an_esc_sweep_and_lists_the_equations(page: Any, server: 
     write_csv(thruster_sweep(th), tmp_path / "sweep.csv", title="Thruster at 16 V")
     open_tab(page, server, "model")
     page.set_input_files("#m-log", str(tmp_path / "sweep.csv"))
-    _custom_params(page, th.params())
+    custom_params(page, th.params())
     page.click("#m-diagnose")
     page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
     assert page.get_attribute("#m-verdict", "data-verdict") == "thrust_asymmetry"
