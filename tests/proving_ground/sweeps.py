@@ -30,6 +30,10 @@ SWEEP_EFFECTS = ("coulomb_friction", "stribeck", "drag_asymmetry", "thrust_asymm
                  "voltage_deadband", "brush_drop", "current_offset")
 #: constants a steady sweep can show (no J, no L)
 SWEEP_CONSTANTS = ("B", "c_tau", "c_f", "k", "R")
+#: through an ESC the armature's voltage and current are not logged, and the supply power's scale is the drive's
+#: efficiency: what the thrust map and the power balance's shape show
+ESC_EFFECTS = ("coulomb_friction", "stribeck", "drag_asymmetry", "thrust_asymmetry", "force_offset")
+ESC_CONSTANTS = ("c_f",)
 
 
 @dataclass(frozen=True)
@@ -74,12 +78,27 @@ def settle(t: Truth, v_cmd: float) -> tuple[float, float]:
     return w, current(w)
 
 
-def rows(t: Truth, commands: np.ndarray) -> np.ndarray:
-    """(4, P) the rig's true [voltage, current as sensed, omega, thrust] at each command [V] (P,)."""
+@dataclass(frozen=True)
+class Esc:
+    """A bidirectional ESC between a constant supply (the rig's ``v_max``) and the motor: the armature gets the
+    command as a duty cycle of the supply (its dead zone: ``voltage_deadband``), the supply delivers the armature's
+    input power over the drive's efficiency plus its idle power. Logged as a thrust stand does: the pulse width
+    (1500 +- 400 us for +-100 %), unsigned RPM, the supply's voltage and current."""
+
+    eta: float
+    p0: float  # [W]
+
+
+def rows(t: Truth, commands: np.ndarray, esc: Esc | None = None) -> np.ndarray:
+    """(4, P) the rig's true [command, current as sensed, omega, thrust] at each command [V] (P,); through an ``esc``
+    the command is the pulse width [us] and the current the supply's [A]."""
     out = np.empty((4, commands.size))
     for k, v in enumerate(commands):
         w, i = settle(t, float(v))
-        out[:, k] = v, i + t.e("current_offset", "i0"), w, quasi_static_thrust(t, w) + t.e("force_offset", "f0")
+        sensed = i + t.e("current_offset", "i0") if esc is None else \
+            (drive_voltage(t, float(v)) * i / esc.eta + esc.p0) / t.v_max
+        cmd = v if esc is None else 1500.0 + 400.0 * v / t.v_max
+        out[:, k] = cmd, sensed, w, quasi_static_thrust(t, w) + t.e("force_offset", "f0")
     return out
 
 
@@ -90,36 +109,44 @@ def _noise(clean: np.ndarray, rng: np.random.Generator) -> np.ndarray:
     return np.concatenate([[0.0], rng.uniform(1e-3, 5e-3, 3)]) * np.maximum(span, 1e-12)
 
 
-def visible(a: Truth, b: Truth, commands: np.ndarray, noise: np.ndarray) -> bool:
+def visible(a: Truth, b: Truth, commands: np.ndarray, noise: np.ndarray, esc: Esc | None = None) -> bool:
     """Whether rigs ``a`` and ``b`` give rows differing by ``VISIBLE`` noise levels (RMS) in some sensed channel."""
-    d = np.sqrt(np.mean((rows(a, commands) - rows(b, commands)) ** 2, axis=1))[1:] / noise[1:]
+    d = np.sqrt(np.mean((rows(a, commands, esc) - rows(b, commands, esc)) ** 2, axis=1))[1:] / noise[1:]
     return bool(np.max(d) >= VISIBLE)
 
 
-def make_sweep(seed: int) -> Sweep:
+def make_sweep(seed: int, esc: bool = False) -> Sweep:
     """Sweep number ``seed`` (deterministic): a motor from 5 W to 500 W (:func:`.cases.draw_motor`), 12-40 points
     over +-90 % of the supply (both directions, or forward only in one of four), kind clean / one / two / constant /
-    constant+one, effects sized as the time-series proving ground draws them, a wrong constant off by 5-50 %."""
-    rng = np.random.default_rng([seed, 7919])
+    constant+one, effects sized as the time-series proving ground draws them, a wrong constant off by 5-50 %.
+    ``esc``: through an :class:`Esc` (efficiency 0.85-0.97, idle power 0.5-2 % of the motor's), logged as a thrust
+    stand does; only what its channels show is drawn (:data:`ESC_EFFECTS`, :data:`ESC_CONSTANTS`)."""
+    rng = np.random.default_rng([seed, 7919] if not esc else [seed, 7919, 1])
     t, _ = draw_motor(rng)
     kind = str(rng.choice(["clean", "one", "one", "two", "constant", "constant+one"]))
     n_fx = {"clean": 0, "one": 1, "two": 2, "constant": 0, "constant+one": 1}[kind]
-    names = [str(x) for x in rng.choice(SWEEP_EFFECTS, size=n_fx, replace=False)]
+    names = [str(x) for x in rng.choice(ESC_EFFECTS if esc else SWEEP_EFFECTS, size=n_fx, replace=False)]
     effects = {n: draw_effect(n, t, 1e-3, rng) for n in names}
     errors: dict[str, float] = {}
     if kind.startswith("constant"):
-        c = str(rng.choice(SWEEP_CONSTANTS))
+        c = str(rng.choice(ESC_CONSTANTS if esc else SWEEP_CONSTANTS))
         errors[c] = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.05, 0.5))
     truth = replace(t, effects=effects)
     n = int(rng.integers(12, 41))
     top = 0.9 * t.v_max
     commands = np.linspace(-top, top, n) if rng.uniform() > 0.25 else np.linspace(top / n, top, n)
-    clean = rows(truth, commands)
+    drive = Esc(rng.uniform(0.85, 0.97), rng.uniform(0.005, 0.02) * t.v_max ** 2 / t.R / 4) if esc else None
+    clean = rows(truth, commands, drive)
     noise = _noise(clean, rng)
     measured = clean + noise[:, None] * rng.standard_normal(clean.shape)
     expected = {f"param:{c}" for c, e in errors.items() if abs(e) > TOLERANCE
-                and visible(truth, replace(truth, **{c: getattr(truth, c) / (1.0 + e)}), commands, noise)}
+                and visible(truth, replace(truth, **{c: getattr(truth, c) / (1.0 + e)}), commands, noise, drive)}
     expected |= {e for e in names if visible(truth, replace(truth, effects={k: v for k, v in effects.items()
-                                                                            if k != e}), commands, noise)}
-    cols = dict(zip(("voltage", "current", "omega", "thrust"), measured, strict=True))
+                                                                            if k != e}), commands, noise, drive)}
+    if drive is None:
+        cols = dict(zip(("voltage", "current", "omega", "thrust"), measured, strict=True))
+    else:
+        cols = {"PWM (µs)": measured[0], "RPM": np.abs(measured[2]) * 60.0 / (2.0 * math.pi),
+                "Voltage (V)": t.v_max * (1.0 + 1e-3 * rng.standard_normal(n)), "Current (A)": measured[1],
+                "Force (N)": measured[3]}
     return Sweep(seed, kind, cols, _nominal(truth, errors), frozenset(expected), truth)
