@@ -10,14 +10,14 @@ import numpy as np
 import pytest
 
 from ocp.identify import DiagnoseOptions, diagnose
-from ocp.identify.equations import residuals
+from ocp.identify.equations import checked, residuals
 from ocp.identify.steady_diagnose import pool
 from ocp.logs import Log, read_log
 from ocp.model.effects import make_effect
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.logfiles import write_csv
-from tests.proving_ground.sweeps import Sweep, make_sweep
+from tests.proving_ground.sweeps import ESC_CONSTANTS, ESC_EFFECTS, Sweep, make_sweep
 
 
 def _log(sw: Sweep, tmp_path: Path) -> Log:
@@ -118,3 +118,16 @@ def test_no_false_alarm_on_clean_sweeps(tmp_path: Path) -> None:
     assert len(clean) >= 12
     for sw in clean:
         assert diagnose(_plant(sw), _log(sw, tmp_path)).verdict == [], sw.seed
+
+
+def test_an_esc_sweep_is_logged_as_a_thrust_stand_and_read_so(tmp_path: Path) -> None:
+    """Pulse width, unsigned RPM, the supply's voltage and current, signed thrust: read as a steady-state ESC sweep
+    (supply-side electrics: the power balance checked, not the armature), labelled only within what that shows."""
+    sw = make_sweep(3, esc=True)
+    assert set(sw.columns) == {"PWM (µs)", "RPM", "Voltage (V)", "Current (A)", "Force (N)"}
+    assert np.all(sw.columns["RPM"] >= 0)
+    write_csv(sw.columns, tmp_path / "esc.csv")
+    log = read_log(tmp_path / "esc.csv")
+    assert set(checked(log)) == {"thrust", "power"}
+    labels = set().union(*(make_sweep(s, esc=True).expected for s in range(40)))
+    assert labels <= set(ESC_EFFECTS) | {f"param:{c}" for c in ESC_CONSTANTS}

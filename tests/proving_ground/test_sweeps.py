@@ -4,7 +4,6 @@ by the rig's own formulas, and a label is kept only where the sweep shows it."""
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,8 +11,6 @@ import pytest
 from tests.proving_ground.cases import draw_motor
 from tests.proving_ground.physics import drive_voltage, load_torque, quasi_static_thrust
 from tests.proving_ground.sweeps import (
-    ESC_CONSTANTS,
-    ESC_EFFECTS,
     SWEEP_CONSTANTS,
     SWEEP_EFFECTS,
     Esc,
@@ -71,19 +68,3 @@ def test_through_an_esc_the_supply_delivers_the_armatures_power_over_its_efficie
         assert r[0, k] == pytest.approx(1500.0 + 400.0 * vk / t.v_max)
         assert r[1, k] * t.v_max == pytest.approx(drive_voltage(t, float(vk)) * i / 0.9 + 1.5, rel=1e-12)
 
-
-def test_an_esc_sweep_is_logged_as_a_thrust_stand_and_read_so(tmp_path: Path) -> None:
-    """Pulse width, unsigned RPM, the supply's voltage and current, signed thrust: read as a steady-state ESC sweep
-    (supply-side electrics: the power balance checked, not the armature), labelled only within what that shows."""
-    from ocp.identify.equations import checked
-    from ocp.logs import read_log
-    from tests.logfiles import write_csv
-
-    sw = make_sweep(3, esc=True)
-    assert set(sw.columns) == {"PWM (µs)", "RPM", "Voltage (V)", "Current (A)", "Force (N)"}
-    assert np.all(sw.columns["RPM"] >= 0)
-    write_csv(sw.columns, tmp_path / "esc.csv")
-    log = read_log(tmp_path / "esc.csv")
-    assert set(checked(log)) == {"thrust", "power"}
-    labels = set().union(*(make_sweep(s, esc=True).expected for s in range(40)))
-    assert labels <= set(ESC_EFFECTS) | {f"param:{c}" for c in ESC_CONSTANTS}
