@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from ocp.logs import Log, LogKind
+from ocp.model.effect_base import EffectBase
 from ocp.model.effects import measured_current, stateful
 from ocp.model.plant import DCMotorPlant
 
@@ -136,21 +137,20 @@ def model_load(plant: DCMotorPlant, log: Log, volts: np.ndarray | None = None) -
 #: a sweep's row is at rest where its speed is within this fraction of the sweep's largest (stated, not tuned: the
 #: speed a stalled rotor's sensor may read)
 REST_FRACTION = 0.01
-#: effects whose friction holds a rotor at rest up to their breakaway torque (their parameters summed)
-DRY_HOLD = {"coulomb_friction": "tau_c", "stribeck": "tau_s"}
 
 
 def held(plant: DCMotorPlant, log: Log, r: np.ndarray, drive: np.ndarray, volts: np.ndarray) -> np.ndarray:
     """The torque balance's residual ``r`` (N,) [N m] with a sweep's rows at rest (:data:`REST_FRACTION`) set-valued:
-    dry friction holds whatever torque is within its breakaway (the plant's :data:`DRY_HOLD` summed), so there the
+    dry friction holds whatever torque is within its breakaway (the effects' ``breakaway()`` summed), so there the
     residual is the motor's torque ``drive`` less the load without dry friction, shrunk by that breakaway (a
     stalled row of a sweep with Stribeck friction, at rest under 8.4 mN m, left a residual no smooth friction
     explains). On a time series, or without dry friction, ``r`` as it is."""
-    hold = sum(float(getattr(e, key)) for e in plant.effects for name, key in DRY_HOLD.items() if e.name == name)
+    hold = sum(e.breakaway() for e in plant.effects if isinstance(e, EffectBase))
     if log.kind is not LogKind.STEADY_STATE or hold <= 0.0:
         return r
     rest = np.abs(log.omega) <= REST_FRACTION * float(np.max(np.abs(log.omega), initial=0.0))
-    smooth = DCMotorPlant(plant.params, tuple(e for e in plant.effects if e.name not in DRY_HOLD))
+    smooth = DCMotorPlant(plant.params, tuple(e for e in plant.effects
+                                              if not (isinstance(e, EffectBase) and e.breakaway() > 0.0)))
     free = drive - model_load(smooth, log, volts)
     return np.where(rest, np.sign(free) * np.maximum(np.abs(free) - hold, 0.0), r)
 

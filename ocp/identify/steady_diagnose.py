@@ -123,18 +123,20 @@ def _rivals(best: _Try, tries: list[_Try], base: float, opt: DiagnoseOptions, he
     """Other candidates that fit the held-out rows as well as ``best``: held-out score within :func:`_margin` of it,
     or both within the noise (``noise_floor``; ``base`` is the score before this round, in noise units). The sweep
     cannot tell them apart (e.g. Coulomb friction and a viscous ``B`` change at one speed)."""
-    out: list[dict[str, Any]] = []
     ref, margin = base * (1.0 - best.entry.improvement), _margin(opt, held)
-    for t in tries:
-        alt = base * (1.0 - t.entry.improvement)
-        if t is not best and t.entry.significant and alt <= max(ref * (1.0 + margin), opt.noise_floor):
-            out.append({"adopted": best.entry.name, "alternative": t.entry.name, "score": ref,
-                        "alternative_score": alt,
-                        "reason": f"{t.entry.name} instead of {best.entry.name} fits the held-out points as well "
-                                  f"({alt:.3g} vs {ref:.3g} noise units; within {100 * margin:.1f} % "
-                                  f"or both within the noise floor {opt.noise_floor:g}): "
-                                  "this log cannot tell them apart"})
-    return out
+    return [_rival(best, t, base, f"{t.entry.name} instead of {best.entry.name} fits the held-out points as well "
+                                  f"({base * (1.0 - t.entry.improvement):.3g} vs {ref:.3g} noise units; within "
+                                  f"{100 * margin:.1f} % or both within the noise floor {opt.noise_floor:g}): "
+                                  "this log cannot tell them apart")
+            for t in tries if t is not best and t.entry.significant
+            and base * (1.0 - t.entry.improvement) <= max(ref * (1.0 + margin), opt.noise_floor)]
+
+
+def _rival(best: _Try, other: _Try, base: float, reason: str) -> dict[str, Any]:
+    """An ``ambiguous`` entry: the adopted candidate, its rival, their held-out scores [noise units] and why."""
+    return {"adopted": best.entry.name, "alternative": other.entry.name,
+            "score": base * (1.0 - best.entry.improvement),
+            "alternative_score": base * (1.0 - other.entry.improvement), "reason": reason}
 
 
 #: pairs a steady log tells apart only on rows where the current opposes the command (a brush drop acts against the
@@ -155,12 +157,9 @@ def _sign_alike(best: _Try, tries: list[_Try], log: Log, base: float) -> list[di
     other = next((t for t in tries if t.entry.name in SIGN_ALIKE - {best.entry.name}), None)
     if other is None:
         return []
-    score_of = lambda t: base * (1.0 - t.entry.improvement)  # noqa: E731
-    return [{"adopted": best.entry.name, "alternative": other.entry.name, "score": score_of(best),
-             "alternative_score": score_of(other),
-             "reason": f"on this log the current never opposes the command, the only rows where a brush drop (against "
-                       f"the current) and a driver dead band (against the command) differ: it cannot tell "
-                       f"{best.entry.name} from {other.entry.name}"}]
+    return [_rival(best, other, base, "on this log the current never opposes the command, the only rows where a "
+                                      "brush drop (against the current) and a driver dead band (against the "
+                                      f"command) differ: it cannot tell {best.entry.name} from {other.entry.name}")]
 
 
 def _calibrated(plant: DCMotorPlant, fitted: DCMotorPlant, cand: Candidate, tol: float) -> dict[str, Any]:
@@ -185,17 +184,19 @@ def _backward(plant: DCMotorPlant, log: Log, chosen: list[Candidate], verdict: l
     r0 = residuals(plant, log, tuple(nz))
     scale = {eq: max(float(np.sqrt(np.mean(r0[eq][train] ** 2))), 1e-12) for eq in nz}
     full = fit_candidates(plant, chosen, log, train, scale).plant
+    kept = score(full, log, test, nz).combined
     for name in verdict[:-1]:
         rest = [c for c in chosen if c.name != name]
         without = fit_candidates(plant, rest, log, train, scale).plant
-        if score(full, log, test, nz).combined <= (1.0 - opt.min_improvement) * score(without, log, test, nz).combined:
+        dropped = score(without, log, test, nz).combined
+        if kept <= (1.0 - opt.min_improvement) * dropped:
             continue
         chosen[:] = rest
         verdict.remove(name)
         text[0].remove(text[1][name])
         text[0].append(f"{name} is not named: adopted in an early round, it no longer wins on held-out points "
                        f"beside {', '.join(verdict)}")
-        full = without
+        full, kept = without, dropped
     return full
 
 

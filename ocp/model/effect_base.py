@@ -47,6 +47,10 @@ class EffectBase:
         """Current [A] the sensor reports when ``current`` flows."""
         return current
 
+    def breakaway(self) -> float:
+        """The torque [N m] this effect holds a rotor at rest against (dry friction: any torque up to it); 0: none."""
+        return 0.0
+
     def parameters(self) -> dict[str, float]:
         """All parameters (SI), by name."""
         return {f.name: float(getattr(self, f.name)) for f in fields(self) if f.name != "name"}

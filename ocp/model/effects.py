@@ -52,6 +52,9 @@ class CoulombFriction(EffectBase):
     def load_torque(self, omega: Expr, ops: Ops, sign: float | None) -> Expr:
         return self.tau_c * smooth_sign(omega, self.omega_eps, ops, sign)
 
+    def breakaway(self) -> float:
+        return self.tau_c
+
 
 @dataclass(frozen=True)
 class Stribeck(EffectBase):
@@ -89,6 +92,9 @@ class Stribeck(EffectBase):
             e = self.omega_eps / self.omega_s
             decay = (r * r + e * e) ** (0.5 * self.delta)
         return self.tau_s * ops.exp(-decay) * smooth_sign(omega, self.omega_eps, ops, sign)
+
+    def breakaway(self) -> float:
+        return self.tau_s
 
 
 @dataclass(frozen=True)
