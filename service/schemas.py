@@ -232,6 +232,9 @@ class ExperimentDesignPublic(_Open):
     misclassification: float | None = Field(description="Phi(-z/2): probability a likelihood-ratio test confuses "
                                                         "the closest pair")
     mission: dict[str, Any] | None = Field(description="the proposed mission (POST it to /v1/references/optimize)")
+    logging: dict[str, Any] | None = Field(
+        default=None, description="where the log is too slow to check a constant (L/R under two samples): "
+        "{constant, log_rate_hz, resolves_from_hz, rate_hz (advised), reason}")
     message: str
     diagnosis: dict[str, Any]
 

@@ -28,6 +28,10 @@ it) says whether either is: rivals that differ by a large ``z`` on the log yet m
 Rivals are fitted to the log as :func:`ocp.identify.fit` fits, the free-run refinement included: the one-step
 start alone fitted ``J`` a sixth of the rig's on a 10 kHz log (6168; the rivals' free runs missed the log by
 150 noise units, the diagnosed plant by 1.4).
+
+**Logging.** Where the log is too slow for its electrical time constant (L/R under two samples,
+:func:`.regression.slow_armature`), no excitation at its rate checks ``L``: the design says so and advises a
+rate (:func:`logging_advice`), whatever else it proposes.
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ from ocp.identify.candidates import candidate
 from ocp.identify.diagnose import DiagnoseResult, aligned, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
 from ocp.identify.predict import CHANNELS, MAX_STEPS_PER_SAMPLE, SUBSTEPS, noise_levels, substeps
+from ocp.identify.regression import ADVISED_SAMPLES, ARMATURE_SAMPLES, advised_rate, slow_armature
 from ocp.identify.separation import (
     Rival,
     confusion,
@@ -153,6 +158,8 @@ class DesignResult:
     log_errors: dict[str, float]
     noise: dict[str, float]
     duration_s: float
+    #: the faster log a constant needs (:func:`logging_advice`), or None
+    logging: dict[str, Any] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         worst = self.chosen.worst if self.chosen is not None else None
@@ -165,13 +172,16 @@ class DesignResult:
             "current_log_separation": {k: _finite(v) for k, v in self.current_log.items()},
             "current_log_errors": {k: _finite(v) for k, v in self.log_errors.items()},
             "verification": self.verification, "noise": {k: _finite(v) for k, v in self.noise.items()},
-            "duration_s": self.duration_s, "mission": self.mission, "message": self.message(),
+            "duration_s": self.duration_s, "mission": self.mission, "logging": self.logging,
+            "message": self.message(),
         }
 
     def message(self) -> str:
         if not self.needed:
-            return "nothing to settle: the diagnosis is not ambiguous and the log covers reversals, low speed " \
-                   "and a range of speeds"
+            return "nothing to settle by an excitation: the diagnosis is not ambiguous and the log covers " \
+                   "reversals, low speed and a range of speeds" + (
+                       f"; but this log is too slow to check L: log at {self.logging['rate_hz'] / 1e3:.3g} kHz or "
+                       "faster" if self.logging else "")
         if self.chosen is None:
             return "no candidate experiment ran within the limits: " + "; ".join(c.note for c in self.candidates)
         z = self.chosen.worst
@@ -308,13 +318,14 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
     cov = coverage(log)
     rivals, reasons, detect = rivals_from(plant, log, diagnosis, opt, sc, cov)
     rivals, left = _simulable(rivals, log, keep_first=detect)
-    reasons += left
+    advice = logging_advice(plant, log)
+    reasons += left + ([advice["reason"]] if advice else [])
     noise = noise_levels(log)
     sigma = np.array([noise[ch] for ch in CHANNELS])
     rate = 1.0 / log.dt
     errors = {} if detect else {r.name: _log_error(r.plant, log, noise) for r in rivals}
     base: dict[str, Any] = dict(needed=len(rivals) > 1, reasons=reasons, coverage=cov, rivals=rivals, noise=noise,
-                duration_s=duration, log_errors=errors)
+                duration_s=duration, log_errors=errors, logging=advice)
     if len(rivals) < 2:
         return DesignResult(**base, candidates=[], chosen=None, mission=None, current_log={}, verification={})
     tl, vl = held_on_grid(log.t, log.voltage, log.dt)
@@ -347,6 +358,25 @@ def design(plant: DCMotorPlant, log: Log, diagnosis: DiagnoseResult, options: De
            "tracking_rms_error": res.verification.get("tracking_rms_error"), "duration_s": float(res.arrays["t"][-1]),
            "limits": {"voltage": voltage, "current": current}}
     return DesignResult(**base, candidates=cands, chosen=best, mission=mission, current_log=before, verification=ver)
+
+
+def logging_advice(plant: DCMotorPlant, log: Log) -> dict[str, Any] | None:
+    """Where ``log`` samples too slowly to check ``L`` (:func:`.regression.slow_armature`, ``plant``'s L/R, as
+    :func:`ocp.identify.diagnose` judges it): the constant, the log's rate, the rate from which the check resolves
+    it and the advised one [Hz] (:func:`.regression.advised_rate`), and why; else None. Under two samples per L/R
+    an inductance error, a current filter and a fraction of a sample of command timing look alike whatever the
+    command; logged faster under voltage steps, ``L`` is named (proving-ground rigs: :data:`.regression.
+    ADVISED_SAMPLES`)."""
+    p = plant.params
+    if not slow_armature(p, log.dt):
+        return None
+    rate = advised_rate(p)
+    return {"constant": "L", "log_rate_hz": 1.0 / log.dt, "resolves_from_hz": ARMATURE_SAMPLES * p.R / p.L,
+            "rate_hz": rate,
+            "reason": f"L cannot be checked at this log's rate ({1.0 / log.dt:.4g} Hz: L/R = {1e3 * p.L / p.R:.3g} "
+                      "ms is under two samples): no excitation tells an inductance error from current filtering "
+                      f"or sub-sample command timing there; log current and voltage at {rate / 1e3:.3g} kHz or "
+                      f"faster ({ADVISED_SAMPLES:g} samples per L/R) under voltage steps to check it"}
 
 
 def _simulable(rivals: list[Rival], log: Log, keep_first: bool) -> tuple[list[Rival], list[str]]:

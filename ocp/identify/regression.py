@@ -98,6 +98,9 @@ DEGENERATE = 1e-6
 #: a held-out block (:func:`_blocks`) spans at least this many independent torque rows (rotor time constants of
 #: the speed view), so that blocks are nearly independent of each other
 BLOCK_INDEPENDENT = 3.0
+#: the fewest samples per L/R that resolve ``L`` (:func:`unresolved`), and those advised (:func:`advised_rate`): rigs at
+#: 0.01-1.9 samples re-logged under voltage steps had an ``L`` error named in 26 and 36 of 41 (bench/logging_rate.py)
+ARMATURE_SAMPLES, ADVISED_SAMPLES = 2.0, 4.0
 
 
 @dataclass
@@ -423,10 +426,21 @@ def unresolved(p: MotorParams, log: Log) -> dict[str, str]:
     electrical time constant L/R is under two samples (a current filter or a fraction of a sample of
     command timing then looks the same)."""
     out = {}
-    if log.kind is LogKind.STEADY_STATE or p.L / p.R < 2 * log.dt:
+    if log.kind is LogKind.STEADY_STATE or slow_armature(p, log.dt):
         out["L"] = (f"L/R = {1e3 * p.L / p.R:.3g} ms is under two samples ({1e3 * log.dt:.3g} ms): the log cannot tell "
-                    "an inductance error from current filtering or sub-sample command timing")
+                    "an inductance error from current filtering or sub-sample command timing; logged at "
+                    f"{advised_rate(p) / 1e3:.3g} kHz or faster (voltage steps, any excitation) it can")
     return out
+
+
+def slow_armature(p: MotorParams, dt: float) -> bool:
+    """Whether samples ``dt`` [s] apart are too few per electrical time constant L/R to resolve ``L``."""
+    return p.L / p.R < ARMATURE_SAMPLES * dt
+
+
+def advised_rate(p: MotorParams) -> float:
+    """The logging rate [Hz] that checks ``L``: :data:`ADVISED_SAMPLES` samples per electrical time constant L/R."""
+    return ADVISED_SAMPLES * p.R / p.L
 
 
 def _mid(cols: list[tuple[Column, np.ndarray]], item: str) -> float:

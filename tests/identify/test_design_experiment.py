@@ -113,6 +113,10 @@ def test_a_ripple_beyond_the_logs_reach_is_probed_and_the_proposal_reveals_it() 
                                                 current=3.0 * float(np.max(np.abs(log.current))))).to_dict()
     probe = "diagnosed plant vs cogging (probe)"
     assert f"at most {cov['ripple_periods']} periods/rev" in " ".join(d["reasons"])
+    # and its L/R is under two samples at 200 Hz: the design says so, with the closed-form rate (four per L/R)
+    assert rig.nominal["L"] / rig.nominal["R"] < 2 * log.dt
+    assert d["logging"]["rate_hz"] == pytest.approx(4 * rig.nominal["R"] / rig.nominal["L"])
+    assert d["logging"]["reason"] in d["reasons"]
     assert d["chosen"]["separation"][probe] > d["current_log_separation"][probe]
     res = optimize(Mission.model_validate(d["mission"]))
     new = _log(run_command(rig, res.arrays["t"], res.arrays["voltage"], RIPPLE_SEED + 7))
@@ -139,3 +143,4 @@ def test_a_probe_the_free_run_cannot_simulate_is_left_out_with_its_reason() -> N
     brush = with_effect(res.rivals[0].plant, "brush_drop", {"v_b": 0.03 * rig.truth.v_max})
     with pytest.raises(SolverError, match="too stiff"):
         simulate(brush, log.t[:50], np.full(50, 1.0))
+

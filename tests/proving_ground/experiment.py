@@ -11,7 +11,7 @@ command (t, V) on the same rig and logger, from rest. Shares no code with ``ocp`
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -77,3 +77,17 @@ def run_command(rig: Rig, t: np.ndarray, voltage: np.ndarray, seed: int) -> dict
     tk = np.arange(int(t[-1] / lg.dt)) * lg.dt
     idx = np.clip(np.searchsorted(t, tk, side="right") - 1, 0, t.size - 1)
     return _columns(rig, np.round(voltage[idx] / lg.q_v) * lg.q_v, 0, seed)
+
+
+def voltage_steps(rig: Rig, seed: int, duration: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
+    """A command of random voltage steps (t, V) [s, V]: levels +-0.3 and +-1 of 0.6 ``V_max``, held half a
+    mechanical time constant (at least 5 ms), for ``duration``: a current transient at every step."""
+    rng = np.random.default_rng(seed)
+    hold = max(rig.tau_m / 2, 0.005)
+    n = int(duration / hold) + 1
+    return np.arange(n) * hold, rig.truth.v_max * 0.6 * rng.choice([-1.0, -0.3, 0.3, 1.0], n)
+
+
+def at_rate(rig: Rig, rate: float) -> Rig:
+    """``rig`` with its logger's habits (skew and filter in samples, noise, quantisation) at ``rate`` [Hz]."""
+    return replace(rig, logger=replace(rig.logger, rate=float(rate)))
