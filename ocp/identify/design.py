@@ -2,9 +2,9 @@
 
 When :func:`ocp.identify.diagnose` cannot tell explanations apart on a log (``ambiguous``: Coulomb friction
 or a viscous ``B`` change on one operating speed, ...) or an effect cannot show in it (no reversal, no time
-at low speed, one speed only), :func:`design` proposes a mission for the optimiser whose command makes the
-rivals' predicted outputs differ the most relative to the log's noise, and says how well it will separate
-them.
+at low speed, one speed only, one voltage magnitude), :func:`design` proposes a mission for the optimiser whose
+command makes the rivals' predicted outputs differ the most relative to the log's noise, and says how well it
+will separate them.
 
 **Rivals.** Ambiguity: the verdict, and the verdict with each ambiguous item swapped for its alternative,
 each fitted to the log (:func:`ocp.identify.fit`). Coverage gaps: the diagnosed plant, and the same plant with
@@ -81,13 +81,16 @@ PROBES: dict[str, Callable[[dict[str, float]], dict[str, float]]] = {
 }
 #: which probes each coverage gap calls for
 GAPS = {"reversal": ("drag_asymmetry", "thrust_asymmetry", "coulomb_friction", "voltage_deadband", "brush_drop"),
-        "low_speed": ("coulomb_friction", "stribeck"), "speed_range": ("param:B",), "ripple_reach": ("cogging",)}
+        "low_speed": ("coulomb_friction", "stribeck"), "speed_range": ("param:B",), "ripple_reach": ("cogging",),
+        "voltage_range": ("voltage_deadband", "brush_drop")}
 #: the share of the moving rows that must resolve a 64-period ripple (:func:`coverage`): a log near one speed has
 #: none; the proposals that revealed a hidden ripple on the proving ground had 3.7-14 % (seeds 0, 2, 6, 9 of
 #: :mod:`tests.proving_ground.experiment`), so the gap closes once such an experiment is logged
 RIPPLE_ROWS = 0.01
 GAP_TEXT = {"reversal": "the log never reverses", "low_speed": "the log spends no time at low speed",
             "speed_range": "the log holds one speed only",
+            "voltage_range": "the command holds one voltage magnitude (a dead band or a brush drop then acts as a "
+                             "gain on it, which the constants take up)",
             "ripple_reach": f"under {100 * RIPPLE_ROWS:g} % of the moving rows are slow enough to show an angle "
                             f"ripple of {MAX_PERIODS} periods/rev (the log resolves at most {{ripple_periods}} "
                             "periods/rev on half of them)"}
@@ -179,7 +182,7 @@ class DesignResult:
     def message(self) -> str:
         if not self.needed:
             return "nothing to settle by an excitation: the diagnosis is not ambiguous and the log covers " \
-                   "reversals, low speed and a range of speeds" + (
+                   "reversals, low speed, a range of speeds and of voltages" + (
                        f"; but this log is too slow to check L: log at {self.logging['rate_hz'] / 1e3:.3g} kHz or "
                        "faster" if self.logging else "")
         if self.chosen is None:
@@ -210,10 +213,14 @@ def _finite(x: float | None) -> float | None:
 
 def coverage(log: Log) -> dict[str, Any]:
     """What the log exercises: both directions (a reversal), time at low speed (< 10 % of its top speed),
-    a range of speeds (10th over 90th percentile of |w| below one half), and rows slow enough to show an angle
+    a range of speeds (10th over 90th percentile of |w| below one half), rows slow enough to show an angle
     ripple of :data:`.angle.MAX_PERIODS` periods/rev (sampled twice a period, ``64 |d theta| < pi``) on at least
     :data:`RIPPLE_ROWS` of the moving rows (``ripple_rows``; ``ripple_periods``: the largest count resolved on half
-    of them; an angle integrated from the speed where none is logged)."""
+    of them; an angle integrated from the speed where none is logged), and a range of command voltage magnitudes
+    (``voltage_spread``: 10th over 90th percentile of |V| over the rows above 1 % of its peak, below one half): under
+    a two-level command (+-V0, or 0 and V0) a dead band's ``V0 - v_db`` and a brush drop's ``V0 - v_b`` (the current
+    following the command's sign) are a gain on the command, which ``k`` and ``R`` take up (proving-ground rigs 0..5
+    under random +-0.6 V_max steps: the dead band named on none of six, with four levels on all six)."""
     theta = rotor_angle(log)
     step = np.abs(np.diff(theta))
     moving = step[step > 0]
@@ -224,9 +231,13 @@ def coverage(log: Log) -> dict[str, Any]:
     pos, neg = float(np.mean(log.omega > 0.05 * top)), float(np.mean(log.omega < -0.05 * top))
     low = float(np.mean(w < 0.1 * top))
     spread = float(np.percentile(w, 10) / max(float(np.percentile(w, 90)), 1e-300))
+    v = np.abs(log.voltage)
+    on = v[v > 0.01 * float(np.max(v))]
+    levels = float(np.percentile(on, 10) / max(float(np.percentile(on, 90)), 1e-300)) if on.size else 1.0
     return {"reversal": min(pos, neg) > 0.05, "low_speed": low > 0.05, "speed_range": spread < 0.5,
-            "ripple_reach": slow >= RIPPLE_ROWS, "forward_fraction": pos, "reverse_fraction": neg,
-            "low_speed_fraction": low, "speed_spread": spread, "ripple_rows": slow, "ripple_periods": reach}
+            "ripple_reach": slow >= RIPPLE_ROWS, "voltage_range": levels < 0.5, "forward_fraction": pos,
+            "reverse_fraction": neg, "low_speed_fraction": low, "speed_spread": spread, "ripple_rows": slow,
+            "ripple_periods": reach, "voltage_spread": levels}
 
 
 def _scales(plant: DCMotorPlant, voltage: float, current: float) -> dict[str, float]:

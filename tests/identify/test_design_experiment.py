@@ -20,7 +20,7 @@ from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from ocp.optimize.mission import Mission
 from ocp.optimize.solve import optimize
-from tests.proving_ground.experiment import draw, run_command, single_speed
+from tests.proving_ground.experiment import draw, run_command, single_speed, voltage_steps
 
 SEED = 6  # any rig whose single-speed log the identifier does not settle; the assertions hold whatever it is
 #: the command's wobble around the one speed [fraction]: at 8 % the identifier separates Coulomb friction from a
@@ -144,3 +144,32 @@ def test_a_probe_the_free_run_cannot_simulate_is_left_out_with_its_reason() -> N
     with pytest.raises(SolverError, match="too stiff"):
         simulate(brush, log.t[:50], np.full(50, 1.0))
 
+
+#: a rig with a hidden voltage dead band, logged at 200 Hz (any rig whose two-level log misses its dead band; the
+#: assertions hold whatever it is)
+LEVELS_SEED = 0
+
+
+def test_a_dead_band_a_two_level_command_hides_is_probed_and_the_proposal_reveals_it() -> None:
+    """Under random steps between +-0.6 V_max the dead band's ``V0 - v_db`` is a gain on the command, which the
+    constants take up: the check names ``R`` instead. The design takes the one voltage magnitude as a coverage gap
+    (dead band and brush drop probed), and the proposed command, played on the same rig, shows the dead band."""
+    rig = draw(LEVELS_SEED, "voltage_deadband")
+    t, v = voltage_steps(rig, LEVELS_SEED, levels=(-1.0, 1.0))
+    log = _log(run_command(rig, t, v, LEVELS_SEED + 1))
+    plant = DCMotorPlant(MotorParams(**rig.nominal))
+    first = diagnose(plant, log)
+    cov = coverage(log)
+    on = np.abs(log.voltage)[np.abs(log.voltage) > 0.01 * np.max(np.abs(log.voltage))]
+    assert cov["voltage_spread"] == pytest.approx(np.percentile(on, 10) / np.percentile(on, 90))
+    assert not cov["voltage_range"] and "voltage_deadband" not in first.verdict
+    d = design(plant, log, first, DesignOptions(voltage=rig.truth.v_max,
+                                                current=3.0 * float(np.max(np.abs(log.current))))).to_dict()
+    assert any("one voltage magnitude" in r for r in d["reasons"])
+    names = {r["name"] for r in d["rivals"]}
+    assert "voltage_deadband (probe)" in names
+    assert "brush_drop (probe)" in names or any(r.startswith("brush_drop (probe) left out") for r in d["reasons"])
+    res = optimize(Mission.model_validate(d["mission"]))
+    new = _log(run_command(rig, res.arrays["t"], res.arrays["voltage"], LEVELS_SEED + 7))
+    assert coverage(new)["voltage_range"]  # the gap closes once the experiment is logged
+    assert "voltage_deadband" in diagnose(plant, new).verdict

@@ -79,13 +79,14 @@ def run_command(rig: Rig, t: np.ndarray, voltage: np.ndarray, seed: int) -> dict
     return _columns(rig, np.round(voltage[idx] / lg.q_v) * lg.q_v, 0, seed)
 
 
-def voltage_steps(rig: Rig, seed: int, duration: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
-    """A command of random voltage steps (t, V) [s, V]: levels +-0.3 and +-1 of 0.6 ``V_max``, held half a
-    mechanical time constant (at least 5 ms), for ``duration``: a current transient at every step."""
+def voltage_steps(rig: Rig, seed: int, duration: float = 3.0, levels: tuple[float, ...] = (-1.0, -0.3, 0.3, 1.0)
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """A command of random voltage steps (t, V) [s, V]: ``levels`` of 0.6 ``V_max`` drawn at random, each held
+    half a mechanical time constant (at least 5 ms), for ``duration``: a current transient at every step."""
     rng = np.random.default_rng(seed)
     hold = max(rig.tau_m / 2, 0.005)
     n = int(duration / hold) + 1
-    return np.arange(n) * hold, rig.truth.v_max * 0.6 * rng.choice([-1.0, -0.3, 0.3, 1.0], n)
+    return np.arange(n) * hold, rig.truth.v_max * 0.6 * rng.choice(np.asarray(levels), n)
 
 
 def at_rate(rig: Rig, rate: float) -> Rig:
