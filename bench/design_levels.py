@@ -28,7 +28,8 @@ EFFECTS = ("voltage_deadband", "brush_drop")
 
 def main(argv: list[str] | None = None) -> int:
     from ocp.identify import diagnose
-    from ocp.identify.design import DesignOptions, coverage, design
+    from ocp.identify.coverage import coverage
+    from ocp.identify.design import DesignOptions, design
     from ocp.logs import log_from_arrays
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant

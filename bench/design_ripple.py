@@ -26,7 +26,8 @@ from tests.proving_ground.experiment import draw, run_command, single_speed
 
 def main(argv: list[str] | None = None) -> int:
     from ocp.identify import diagnose
-    from ocp.identify.design import DesignOptions, coverage, design
+    from ocp.identify.coverage import coverage
+    from ocp.identify.design import DesignOptions, design
     from ocp.logs import log_from_arrays
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant

@@ -193,6 +193,10 @@ class DiagnosePublic(_Open):
     message: str
     noise: dict[str, float | None]
     rounds: list[dict[str, Any]]
+    blind_spots: list[dict[str, Any]] = Field(
+        default_factory=list, description="[{gap, text, hidden}] what the log cannot show (no reversal, no time at "
+        "low speed, one speed, one voltage magnitude, no rows slow enough for a 64-period ripple) and the effects "
+        "and constants it hides, those in the verdict left out (time series; design-experiment probes them)")
 
 
 class FitPublic(_Open):

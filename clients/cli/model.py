@@ -358,6 +358,8 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
         print(f"  {text}")
     for a in d.get("ambiguous") or []:
         print(f"ambiguous: {a['adopted']} or {a['alternative']}: {a['reason']}")
+    for b in d.get("blind_spots") or []:
+        print(f"this log cannot show {', '.join(b['hidden'])}: {b['text']} (design-experiment proposes a run that can)")
     _print_alignment(d, rule=True)
     cal = d.get("calibration") or {}
     if cal:

@@ -10,7 +10,7 @@ will separate them.
 each fitted to the log (:func:`ocp.identify.fit`). Coverage gaps: the diagnosed plant, and the same plant with
 each effect the log cannot show at a *probe* size (:data:`PROBES`, relative to the plant's torque, thrust
 and voltage at the top speed): "would this experiment reveal a 5 % Coulomb friction?"; where hardly a moving row is slow
-enough to show an angle ripple of 64 periods/rev (:func:`coverage`), such a ripple. ``rivals`` in
+enough to show an angle ripple of 64 periods/rev (:func:`.coverage.coverage`), such a ripple. ``rivals`` in
 :class:`DesignOptions` names the candidate sets instead.
 
 **Criterion** (:mod:`.separation`: T-optimal discrimination, Atkinson & Fedorov 1975, linearised). Every
@@ -39,14 +39,15 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Any, cast
+from typing import Any
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from ocp.errors import LogError, ParameterError, ThrustshapeError
-from ocp.identify.angle import MAX_PERIODS, angle_limits, rotor_angle
+from ocp.identify.angle import MAX_PERIODS
 from ocp.identify.candidates import candidate
+from ocp.identify.coverage import GAP_TEXT, GAPS, coverage
 from ocp.identify.diagnose import DiagnoseResult, aligned, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
 from ocp.identify.predict import CHANNELS, MAX_STEPS_PER_SAMPLE, SUBSTEPS, noise_levels, substeps
@@ -76,24 +77,9 @@ PROBES: dict[str, Callable[[dict[str, float]], dict[str, float]]] = {
     "thrust_asymmetry": lambda s: {"dc_f": 0.2 * s["c_f"]},
     "voltage_deadband": lambda s: {"v_db": 0.05 * s["V"]},
     "brush_drop": lambda s: {"v_b": 0.03 * s["V"]},
-    # the highest count offered (for a log almost without rows slow enough to show it, :func:`coverage`)
+    # the highest count offered (for a log almost without rows slow enough to show it, :func:`.coverage.coverage`)
     "cogging": lambda s: {"tau_sin": 0.05 * s["tau_top"], "tau_cos": 0.0, "periods": float(MAX_PERIODS)},
 }
-#: which probes each coverage gap calls for
-GAPS = {"reversal": ("drag_asymmetry", "thrust_asymmetry", "coulomb_friction", "voltage_deadband", "brush_drop"),
-        "low_speed": ("coulomb_friction", "stribeck"), "speed_range": ("param:B",), "ripple_reach": ("cogging",),
-        "voltage_range": ("voltage_deadband", "brush_drop")}
-#: the share of the moving rows that must resolve a 64-period ripple (:func:`coverage`): a log near one speed has
-#: none; the proposals that revealed a hidden ripple on the proving ground had 3.7-14 % (seeds 0, 2, 6, 9 of
-#: :mod:`tests.proving_ground.experiment`), so the gap closes once such an experiment is logged
-RIPPLE_ROWS = 0.01
-GAP_TEXT = {"reversal": "the log never reverses", "low_speed": "the log spends no time at low speed",
-            "speed_range": "the log holds one speed only",
-            "voltage_range": "the command holds one voltage magnitude (a dead band or a brush drop then acts as a "
-                             "gain on it, which the constants take up)",
-            "ripple_reach": f"under {100 * RIPPLE_ROWS:g} % of the moving rows are slow enough to show an angle "
-                            f"ripple of {MAX_PERIODS} periods/rev (the log resolves at most {{ripple_periods}} "
-                            "periods/rev on half of them)"}
 SHORTLIST = 3  # candidates whose separation is computed with the refit (best raw separations)
 
 
@@ -209,35 +195,6 @@ class DesignResult:
 
 def _finite(x: float | None) -> float | None:
     return float(x) if x is not None and math.isfinite(x) else None
-
-
-def coverage(log: Log) -> dict[str, Any]:
-    """What the log exercises: both directions (a reversal), time at low speed (< 10 % of its top speed),
-    a range of speeds (10th over 90th percentile of |w| below one half), rows slow enough to show an angle
-    ripple of :data:`.angle.MAX_PERIODS` periods/rev (sampled twice a period, ``64 |d theta| < pi``) on at least
-    :data:`RIPPLE_ROWS` of the moving rows (``ripple_rows``; ``ripple_periods``: the largest count resolved on half
-    of them; an angle integrated from the speed where none is logged), and a range of command voltage magnitudes
-    (``voltage_spread``: 10th over 90th percentile of |V| over the rows above 1 % of its peak, below one half): under
-    a two-level command (+-V0, or 0 and V0) a dead band's ``V0 - v_db`` and a brush drop's ``V0 - v_b`` (the current
-    following the command's sign) are a gain on the command, which ``k`` and ``R`` take up (proving-ground rigs 0..5
-    under random +-0.6 V_max steps: the dead band named on none of six, with four levels on all six)."""
-    theta = rotor_angle(log)
-    step = np.abs(np.diff(theta))
-    moving = step[step > 0]
-    slow = float(np.mean(MAX_PERIODS * moving < math.pi)) if moving.size else 1.0
-    reach = cast(int, angle_limits(theta, MAX_PERIODS, log.theta is not None)["max_resolved_periods"])
-    w = np.abs(log.omega)
-    top = float(np.percentile(w, 99)) or 1.0
-    pos, neg = float(np.mean(log.omega > 0.05 * top)), float(np.mean(log.omega < -0.05 * top))
-    low = float(np.mean(w < 0.1 * top))
-    spread = float(np.percentile(w, 10) / max(float(np.percentile(w, 90)), 1e-300))
-    v = np.abs(log.voltage)
-    on = v[v > 0.01 * float(np.max(v))]
-    levels = float(np.percentile(on, 10) / max(float(np.percentile(on, 90)), 1e-300)) if on.size else 1.0
-    return {"reversal": min(pos, neg) > 0.05, "low_speed": low > 0.05, "speed_range": spread < 0.5,
-            "ripple_reach": slow >= RIPPLE_ROWS, "voltage_range": levels < 0.5, "forward_fraction": pos,
-            "reverse_fraction": neg, "low_speed_fraction": low, "speed_spread": spread, "ripple_rows": slow,
-            "ripple_periods": reach, "voltage_spread": levels}
 
 
 def _scales(plant: DCMotorPlant, voltage: float, current: float) -> dict[str, float]:

@@ -50,6 +50,7 @@ from ocp.identify.align import (
     within,
 )
 from ocp.identify.candidates import candidate
+from ocp.identify.coverage import blind_spots
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
     KEYS,
@@ -125,8 +126,7 @@ class Split:
 
 
 def split(log: Log, segment_s: float, every: int, cross: bool = False) -> Split:
-    """Every ``every``-th segment (row for sweeps) held out; ``cross``: and as folds, each class of segments in
-    turn."""
+    """Every ``every``-th segment (row for sweeps) held out; ``cross``: and as folds, each class in turn."""
     length = 1 if log.kind is LogKind.STEADY_STATE else max(2, round(segment_s / log.dt))
     cls = (np.arange(log.n) // length) % every
     test = cls == every - 1
@@ -173,8 +173,7 @@ class RankEntry:
     def to_dict(self) -> dict[str, Any]:
         return {"effect": self.name, "improvement": finite(self.improvement), "significant": self.significant,
                 "parameters": {k: finite(v) for k, v in self.parameters.items()}, "units": self.units,
-                "heldout_rms": {k: finite(v) for k, v in self.heldout_rms.items()},
-                "explanation": self.explanation}
+                "heldout_rms": {k: finite(v) for k, v in self.heldout_rms.items()}, "explanation": self.explanation}
 
 
 @dataclass(frozen=True)
@@ -197,6 +196,7 @@ class DiagnoseResult:
     ambiguous: list[dict[str, Any]] = field(default_factory=list)
     angle_periodic: dict[str, Any] | None = None
     tolerance: float = 0.10
+    blind_spots: list[dict[str, Any]] = field(default_factory=list)  # what the log cannot show (.coverage)
 
     @property
     def ranking(self) -> list[RankEntry]:
@@ -212,7 +212,7 @@ class DiagnoseResult:
             "alignment": self.alignment.to_dict() if self.alignment else None,
             "calibration": {k: {kk: finite(vv) if isinstance(vv, float) else vv for kk, vv in v.items()}
                             for k, v in self.calibration.items()},
-            "tolerance": self.tolerance,
+            "tolerance": self.tolerance, "blind_spots": self.blind_spots,
             "ambiguous": [{k: finite(v) if isinstance(v, float) else v for k, v in a.items()} for a in self.ambiguous],
             "angle_periodic": self.angle_periodic,
             "noise": {k: finite(v) for k, v in self.noise.items()},
@@ -355,7 +355,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     ambiguous += [rival] if rival else []
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
-                          spectrum_peak(design), opt.tolerance)
+                          spectrum_peak(design), opt.tolerance, blind_spots(log, verdict))
 
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],

@@ -197,7 +197,7 @@ export function showDiagnose(res) {
   }
 }
 
-/* Alignment, ambiguity, calibration and the angle spectrum's peak, in a block after the verdict. */
+/* Ambiguity, blind spots, alignment, calibration and the angle spectrum's peak, in a block after the verdict. */
 function showDiagnosisDetails(res, after) {
   let box = document.getElementById("m-diag-details");
   if (!box) {
@@ -214,6 +214,9 @@ function showDiagnosisDetails(res, after) {
     box.appendChild(p);
   };
   for (const a of res.ambiguous || []) line(`Ambiguous: ${a.adopted} or ${a.alternative} — ${a.reason}`, "m-ambiguous");
+  for (const b of res.blind_spots || []) {  // what this log cannot show, whatever the verdict
+    line(`This log cannot show ${b.hidden.join(", ")}: ${b.text}. Design the experiment to show them.`, "m-blind");
+  }
   const al = res.alignment;
   if (al) {
     line(`Alignment: the command acts ${fmt(al.samples, 3)} samples (${fmt(1e3 * al.seconds, 3)} ms) after its row` +

@@ -13,7 +13,8 @@ import pytest
 from clients.cli import main
 from ocp.errors import SolverError
 from ocp.identify import diagnose
-from ocp.identify.design import RIPPLE_ROWS, DesignOptions, confusion, coverage, design
+from ocp.identify.coverage import RIPPLE_ROWS, coverage
+from ocp.identify.design import DesignOptions, confusion, design
 from ocp.identify.separation import simulate, with_effect
 from ocp.logs import log_from_arrays, write_log_csv
 from ocp.model.params import MotorParams

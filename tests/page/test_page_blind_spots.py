@@ -1,0 +1,36 @@
+"""The Model check tab says what a log cannot show (headless Chromium, real server): a proving-ground rig with a
+hidden voltage dead band logged under random steps between +-0.6 V_max (one voltage magnitude, where the dead band
+is a gain on the command); the diagnosis misses it and the page says the log cannot show a dead band or a brush
+drop, and why, beside the verdict."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from ocp.logs import log_from_arrays, write_log_csv
+from tests.page.test_page import LONG, custom_params, open_tab
+from tests.proving_ground.experiment import draw, run_command, voltage_steps
+from tests.service.test_service_support import Server
+
+pytestmark = pytest.mark.integration
+
+
+def test_the_page_says_a_two_level_log_cannot_show_a_dead_band(page: Any, server: Server, tmp_path: Path) -> None:
+    rig = draw(0, "voltage_deadband")
+    t, v = voltage_steps(rig, 0, levels=(-1.0, 1.0))
+    cols = run_command(rig, t, v, 1)
+    log = log_from_arrays(cols["t"], cols["voltage"], cols["current"], cols["thrust"], omega=cols["omega"],
+                          theta=cols.get("theta"), source="proving-ground")
+    write_log_csv(log, tmp_path / "two-level.csv")
+    open_tab(page, server, "model")
+    page.set_input_files("#m-log", str(tmp_path / "two-level.csv"))
+    custom_params(page, rig.nominal)
+    page.click("#m-diagnose")
+    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    blind = page.locator("#m-blind")
+    assert blind.count() >= 1
+    text = " ".join(blind.nth(k).inner_text() for k in range(blind.count()))
+    assert "This log cannot show voltage_deadband, brush_drop" in text and "one voltage magnitude" in text
