@@ -26,18 +26,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 def one(seed: int, effect: str) -> dict[str, object]:
     from ocp.identify import diagnose
     from ocp.identify.design import DesignOptions, design
-    from ocp.logs import log_from_arrays
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
     from ocp.optimize.mission import Mission
     from ocp.optimize.solve import optimize
     from tests.proving_ground.experiment import draw, run_command, single_speed
-
-    def as_log(c: dict[str, np.ndarray]):  # type: ignore[no-untyped-def]
-        return log_from_arrays(c["t"], c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    from tests.rig_log import rig_log
 
     rig = draw(seed, effect)
-    log = as_log(single_speed(rig, seed))
+    log = rig_log(single_speed(rig, seed))
     plant = DCMotorPlant(MotorParams(**rig.nominal))
     t0 = time.perf_counter()
     first = diagnose(plant, log)
@@ -50,7 +47,7 @@ def one(seed: int, effect: str) -> dict[str, object]:
     if d.mission is None or d.chosen is None:
         return {**out, "proposal": None, "second": None, "right": False}
     res = optimize(Mission.model_validate(d.mission))
-    second = diagnose(plant, as_log(run_command(rig, res.arrays["t"], res.arrays["voltage"], seed + 7)))
+    second = diagnose(plant, rig_log(run_command(rig, res.arrays["t"], res.arrays["voltage"], seed + 7)))
     return {**out, "proposal": d.chosen.name, "z": d.chosen.worst, "z_log": min(d.current_log.values()),
             "second": second.verdict, "second_ambiguous": bool(second.ambiguous),
             "right": second.verdict == [effect] and not second.ambiguous}

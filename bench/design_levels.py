@@ -22,6 +22,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tests.proving_ground.experiment import draw, run_command, voltage_steps
+from tests.rig_log import rig_log
 
 EFFECTS = ("voltage_deadband", "brush_drop")
 
@@ -30,7 +31,6 @@ def main(argv: list[str] | None = None) -> int:
     from ocp.identify import diagnose
     from ocp.identify.coverage import coverage
     from ocp.identify.design import DesignOptions, design
-    from ocp.logs import log_from_arrays
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
     from ocp.optimize.mission import Mission
@@ -41,16 +41,12 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n", type=int, default=12)
     args = ap.parse_args(argv)
 
-    def as_log(cols: dict[str, np.ndarray]):  # type: ignore[no-untyped-def]
-        return log_from_arrays(cols["t"], cols["voltage"], cols["current"], cols["thrust"], omega=cols["omega"],
-                               theta=cols.get("theta"), source="proving-ground")
-
     before = after = gapped = total = 0
     for seed in range(args.first, args.first + args.n):
         for effect in EFFECTS:
             rig = draw(seed, effect)
             t, v = voltage_steps(rig, seed, levels=(-1.0, 1.0))
-            log = as_log(run_command(rig, t, v, seed + 1))
+            log = rig_log(run_command(rig, t, v, seed + 1))
             plant = DCMotorPlant(MotorParams(**rig.nominal))
             first = diagnose(plant, log)
             gap = not coverage(log)["voltage_range"]
@@ -65,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{head} | no proposal: {d['message'][:90]}", flush=True)
                 continue
             res = optimize(Mission.model_validate(d["mission"]))
-            second = diagnose(plant, as_log(run_command(rig, res.arrays["t"], res.arrays["voltage"], seed + 7)))
+            second = diagnose(plant, rig_log(run_command(rig, res.arrays["t"], res.arrays["voltage"], seed + 7)))
             after += second.verdict == [effect]
             print(f"{head} | {d['chosen']['name']:18s} | after: {second.verdict}"
                   f"{' (ambiguous)' if second.ambiguous else ''}", flush=True)

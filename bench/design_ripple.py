@@ -22,13 +22,13 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tests.proving_ground.experiment import draw, run_command, single_speed
+from tests.rig_log import rig_log
 
 
 def main(argv: list[str] | None = None) -> int:
     from ocp.identify import diagnose
     from ocp.identify.coverage import coverage
     from ocp.identify.design import DesignOptions, design
-    from ocp.logs import log_from_arrays
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
     from ocp.optimize.mission import Mission
@@ -39,15 +39,11 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n", type=int, default=12)
     args = ap.parse_args(argv)
 
-    def as_log(cols: dict[str, np.ndarray]):  # type: ignore[no-untyped-def]
-        return log_from_arrays(cols["t"], cols["voltage"], cols["current"], cols["thrust"], omega=cols["omega"],
-                               theta=cols.get("theta"), source="proving-ground")
-
     named = gapped = 0
     for seed in range(args.first, args.first + args.n):
         rig = draw(seed, "cogging")
         count = int(rig.truth.effects["cogging"]["periods"])
-        log = as_log(single_speed(rig, seed))
+        log = rig_log(single_speed(rig, seed))
         plant = DCMotorPlant(MotorParams(**rig.nominal))
         first = diagnose(plant, log)
         cov = coverage(log)
@@ -58,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"{seed:4d} {count:3d}/rev: no proposal ({d['reasons']})", flush=True)
             continue
         res = optimize(Mission.model_validate(d["mission"]))
-        new = as_log(run_command(rig, res.arrays["t"], res.arrays["voltage"], seed + 7))
+        new = rig_log(run_command(rig, res.arrays["t"], res.arrays["voltage"], seed + 7))
         second = diagnose(plant, new)
         found = "cogging" in second.verdict
         named += found

@@ -24,6 +24,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from tests.proving_ground.experiment import at_rate, draw, run_command, voltage_steps
+from tests.rig_log import rig_log
 
 #: the sampling rates compared: the log's own, then samples per nominal L/R
 RATES = (None, 2.0, 4.0)
@@ -31,7 +32,6 @@ RATES = (None, 2.0, 4.0)
 
 def one(seed: int) -> dict | None:
     from ocp.identify import diagnose
-    from ocp.logs import log_from_arrays
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
 
@@ -50,10 +50,7 @@ def one(seed: int) -> dict | None:
         verdicts = []
         for k in RATES:
             rate = rig.logger.rate if k is None else k * nominal["R"] / nominal["L"]
-            cols = run_command(at_rate(rig, rate), t, v, seed + 1)
-            log = log_from_arrays(cols["t"], cols["voltage"], cols["current"], cols["thrust"], omega=cols["omega"],
-                                  theta=cols.get("theta"), source="proving-ground")
-            verdicts.append(sorted(diagnose(plant, log).verdict))
+            verdicts.append(sorted(diagnose(plant, rig_log(run_command(at_rate(rig, rate), t, v, seed + 1))).verdict))
         out[name] = verdicts
     return out
 

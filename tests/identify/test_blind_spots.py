@@ -19,15 +19,14 @@ from ocp.logs import log_from_arrays, write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground.experiment import draw, run_command, voltage_steps
+from tests.rig_log import rig_log
 
 SEED = 0  # a 200 Hz rig whose two-level log misses its dead band (test_design_experiment's); any such rig holds
 
 
 def _log(rig, levels: tuple[float, ...]):  # type: ignore[no-untyped-def]
     t, v = voltage_steps(rig, SEED, levels=levels)
-    cols = run_command(rig, t, v, SEED + 1)
-    return log_from_arrays(cols["t"], cols["voltage"], cols["current"], cols["thrust"], omega=cols["omega"],
-                           theta=cols.get("theta"), source="proving-ground")
+    return rig_log(run_command(rig, t, v, SEED + 1))
 
 
 def test_a_two_level_log_says_it_cannot_show_a_dead_band(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -16,12 +16,13 @@ from ocp.identify import diagnose
 from ocp.identify.coverage import RIPPLE_ROWS, coverage
 from ocp.identify.design import DesignOptions, confusion, design
 from ocp.identify.separation import simulate, with_effect
-from ocp.logs import log_from_arrays, write_log_csv
+from ocp.logs import write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from ocp.optimize.mission import Mission
 from ocp.optimize.solve import optimize
 from tests.proving_ground.experiment import draw, run_command, single_speed, voltage_steps
+from tests.rig_log import rig_log
 
 SEED = 6  # any rig whose single-speed log the identifier does not settle; the assertions hold whatever it is
 #: the command's wobble around the one speed [fraction]: at 8 % the identifier separates Coulomb friction from a
@@ -29,15 +30,10 @@ SEED = 6  # any rig whose single-speed log the identifier does not settle; the a
 SWING = 0.02
 
 
-def _log(cols: dict[str, np.ndarray]):  # type: ignore[no-untyped-def]
-    return log_from_arrays(cols["t"], cols["voltage"], cols["current"], cols["thrust"], omega=cols["omega"],
-                           theta=cols.get("theta"), source="proving-ground")
-
-
 def test_the_proposed_experiment_turns_an_ambiguous_verdict_into_the_right_one(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     rig = draw(SEED, "coulomb_friction")
-    log = _log(single_speed(rig, SEED, swing=SWING))
+    log = rig_log(single_speed(rig, SEED, swing=SWING))
     plant = DCMotorPlant(MotorParams(**rig.nominal))
     first = diagnose(plant, log)
     cov = coverage(log)
@@ -66,7 +62,7 @@ def test_the_proposed_experiment_turns_an_ambiguous_verdict_into_the_right_one(
     assert np.max(np.abs(res.arrays["current"])) <= current * (1 + 1e-6)
     assert np.max(np.abs(res.arrays["voltage"])) <= rig.truth.v_max * (1 + 1e-6)
     # played on the same rig (the proving ground's own simulation of the command), the new log settles it
-    new = _log(run_command(rig, res.arrays["t"], res.arrays["voltage"], SEED + 7))
+    new = rig_log(run_command(rig, res.arrays["t"], res.arrays["voltage"], SEED + 7))
     assert coverage(new)["reversal"]
     second = diagnose(plant, new)
     assert second.verdict == ["coulomb_friction"] and not second.ambiguous
@@ -75,7 +71,7 @@ def test_the_proposed_experiment_turns_an_ambiguous_verdict_into_the_right_one(
 def test_design_refuses_what_it_cannot_use(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     rig = draw(SEED, "coulomb_friction")
     csv = tmp_path / "rig.csv"
-    write_log_csv(_log(single_speed(rig, SEED)), csv)
+    write_log_csv(rig_log(single_speed(rig, SEED)), csv)
     assert main(["design-experiment", str(csv), "--params", "paper-rig", "--rival", "coulomb_friction",
                  "--json"]) == 1
     err = json.loads(capsys.readouterr().err)
@@ -99,7 +95,7 @@ def test_a_ripple_beyond_the_logs_reach_is_probed_and_the_proposal_reveals_it() 
     count."""
     rig = draw(RIPPLE_SEED, "cogging")
     count = rig.truth.effects["cogging"]["periods"]
-    log = _log(single_speed(rig, RIPPLE_SEED))
+    log = rig_log(single_speed(rig, RIPPLE_SEED))
     plant = DCMotorPlant(MotorParams(**rig.nominal))
     first = diagnose(plant, log)
     cov = coverage(log)
@@ -120,7 +116,7 @@ def test_a_ripple_beyond_the_logs_reach_is_probed_and_the_proposal_reveals_it() 
     assert d["logging"]["reason"] in d["reasons"]
     assert d["chosen"]["separation"][probe] > d["current_log_separation"][probe]
     res = optimize(Mission.model_validate(d["mission"]))
-    new = _log(run_command(rig, res.arrays["t"], res.arrays["voltage"], RIPPLE_SEED + 7))
+    new = rig_log(run_command(rig, res.arrays["t"], res.arrays["voltage"], RIPPLE_SEED + 7))
     assert coverage(new)["ripple_reach"]  # the gap closes once the experiment is logged
     second = diagnose(plant, new)
     assert "cogging" in second.verdict and second.angle_periodic is not None
@@ -132,7 +128,7 @@ def test_a_probe_the_free_run_cannot_simulate_is_left_out_with_its_reason() -> N
     at zero current) needs more RK4 steps a sample than the free run takes, from rest, where every proposal starts.
     The design used to fail on it as a whole; it leaves that probe out, says why, and proposes a run for the rest."""
     rig = draw(17, "cogging")
-    log = _log(single_speed(rig, 17))
+    log = rig_log(single_speed(rig, 17))
     plant = DCMotorPlant(MotorParams(**rig.nominal))
     res = design(plant, log, diagnose(plant, log),
                  DesignOptions(voltage=rig.truth.v_max, current=3.0 * float(np.max(np.abs(log.current)))))
@@ -157,7 +153,7 @@ def test_a_dead_band_a_two_level_command_hides_is_probed_and_the_proposal_reveal
     (dead band and brush drop probed), and the proposed command, played on the same rig, shows the dead band."""
     rig = draw(LEVELS_SEED, "voltage_deadband")
     t, v = voltage_steps(rig, LEVELS_SEED, levels=(-1.0, 1.0))
-    log = _log(run_command(rig, t, v, LEVELS_SEED + 1))
+    log = rig_log(run_command(rig, t, v, LEVELS_SEED + 1))
     plant = DCMotorPlant(MotorParams(**rig.nominal))
     first = diagnose(plant, log)
     cov = coverage(log)
@@ -171,6 +167,6 @@ def test_a_dead_band_a_two_level_command_hides_is_probed_and_the_proposal_reveal
     assert "voltage_deadband (probe)" in names
     assert "brush_drop (probe)" in names or any(r.startswith("brush_drop (probe) left out") for r in d["reasons"])
     res = optimize(Mission.model_validate(d["mission"]))
-    new = _log(run_command(rig, res.arrays["t"], res.arrays["voltage"], LEVELS_SEED + 7))
+    new = rig_log(run_command(rig, res.arrays["t"], res.arrays["voltage"], LEVELS_SEED + 7))
     assert coverage(new)["voltage_range"]  # the gap closes once the experiment is logged
     assert "voltage_deadband" in diagnose(plant, new).verdict

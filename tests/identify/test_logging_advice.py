@@ -13,17 +13,13 @@ from ocp.logs import log_from_arrays
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground.experiment import at_rate, draw, run_command, voltage_steps
+from tests.rig_log import rig_log
 
 #: a proving-ground rig whose L/R is under two samples at its drawn rate (200 Hz, L/R 0.23 samples, no current
 #: filter); the assertions hold for any such rig
 SEED = 9
 #: the inductance error hidden from the check: the rig's L is this much above the nominal the user believes
 L_ERROR = 0.4
-
-
-def _log(cols: dict[str, np.ndarray]):  # type: ignore[no-untyped-def]
-    return log_from_arrays(cols["t"], cols["voltage"], cols["current"], cols["thrust"], omega=cols["omega"],
-                           theta=cols.get("theta"), source="proving-ground")
 
 
 def test_the_advice_is_the_closed_form_rate_and_only_where_the_log_is_too_slow() -> None:
@@ -52,7 +48,7 @@ def test_the_advised_rate_names_the_inductance_error_the_slow_log_could_not() ->
     plant = DCMotorPlant(MotorParams(**nominal))
     t, v = voltage_steps(rig, SEED)
 
-    slow = _log(run_command(rig, t, v, SEED + 1))
+    slow = rig_log(run_command(rig, t, v, SEED + 1))
     assert rig.truth.L / rig.truth.R < 2 * slow.dt  # under two samples, by construction
     first = diagnose(plant, slow)
     assert "param:L" not in first.verdict
@@ -60,7 +56,7 @@ def test_the_advised_rate_names_the_inductance_error_the_slow_log_could_not() ->
     assert advice is not None
     assert f"{advice['rate_hz'] / 1e3:.3g} kHz" in first.to_dict()["calibration"]["L"]["unresolved"]
 
-    fast = _log(run_command(at_rate(rig, advice["rate_hz"]), t, v, SEED + 1))  # the same command, logger habits
+    fast = rig_log(run_command(at_rate(rig, advice["rate_hz"]), t, v, SEED + 1))  # the same command, logger habits
     assert logging_advice(plant, fast) is None
     second = diagnose(plant, fast)
     assert second.verdict == ["param:L"]

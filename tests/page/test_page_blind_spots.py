@@ -10,9 +10,10 @@ from typing import Any
 
 import pytest
 
-from ocp.logs import log_from_arrays, write_log_csv
+from ocp.logs import write_log_csv
 from tests.page.test_page import LONG, custom_params, open_tab
 from tests.proving_ground.experiment import draw, run_command, voltage_steps
+from tests.rig_log import rig_log
 from tests.service.test_service_support import Server
 
 pytestmark = pytest.mark.integration
@@ -21,10 +22,7 @@ pytestmark = pytest.mark.integration
 def test_the_page_says_a_two_level_log_cannot_show_a_dead_band(page: Any, server: Server, tmp_path: Path) -> None:
     rig = draw(0, "voltage_deadband")
     t, v = voltage_steps(rig, 0, levels=(-1.0, 1.0))
-    cols = run_command(rig, t, v, 1)
-    log = log_from_arrays(cols["t"], cols["voltage"], cols["current"], cols["thrust"], omega=cols["omega"],
-                          theta=cols.get("theta"), source="proving-ground")
-    write_log_csv(log, tmp_path / "two-level.csv")
+    write_log_csv(rig_log(run_command(rig, t, v, 1)), tmp_path / "two-level.csv")
     open_tab(page, server, "model")
     page.set_input_files("#m-log", str(tmp_path / "two-level.csv"))
     custom_params(page, rig.nominal)
