@@ -4,12 +4,16 @@ that settles it, where the missing evidence is the logger's rate rather than the
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from clients.cli import main
 from ocp.identify import diagnose
 from ocp.identify.design import logging_advice
-from ocp.logs import log_from_arrays
+from ocp.logs import log_from_arrays, write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground.experiment import at_rate, draw, run_command, voltage_steps
@@ -41,7 +45,8 @@ def test_the_advice_is_the_closed_form_rate_and_only_where_the_log_is_too_slow()
     assert logging_advice(plant, log_at(4100.0)) is None  # 2.05 samples: the check resolves L itself
 
 
-def test_the_advised_rate_names_the_inductance_error_the_slow_log_could_not() -> None:
+def test_the_advised_rate_names_the_inductance_error_the_slow_log_could_not(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     rig = draw(SEED, "coulomb_friction")
     rig.truth.effects = {}  # the inductance error alone
     nominal = dict(rig.nominal, L=rig.truth.L / (1 + L_ERROR))
@@ -55,6 +60,11 @@ def test_the_advised_rate_names_the_inductance_error_the_slow_log_could_not() ->
     advice = logging_advice(plant, slow)
     assert advice is not None
     assert f"{advice['rate_hz'] / 1e3:.3g} kHz" in first.to_dict()["calibration"]["L"]["unresolved"]
+    csv, params = tmp_path / "slow.csv", tmp_path / "nominal.json"
+    write_log_csv(slow, csv)
+    params.write_text(json.dumps(nominal))
+    assert main(["diagnose", str(csv), "--params", str(params)]) == 0  # the CLI text says it too
+    assert f"logged at {advice['rate_hz'] / 1e3:.3g} kHz or faster" in capsys.readouterr().out
 
     fast = rig_log(run_command(at_rate(rig, advice["rate_hz"]), t, v, SEED + 1))  # the same command, logger habits
     assert logging_advice(plant, fast) is None
