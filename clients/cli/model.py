@@ -369,9 +369,7 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
             rel = 100 * c["relative"] if isinstance(c["relative"], int | float) else None
             print(f"  {k:6s} {_g(c['nominal'], '.4g'):>10s} -> {_g(c['fitted'], '.4g'):>10s} {c['unit']:16s} "
                   f"{_g(rel, '+6.1f')} %{'  NAMED' if c['named'] else ''}{_kept(c)}")
-        for k, c in cal.items():  # what the log cannot resolve of a constant, and how to (e.g. a faster log)
-            if c.get("unresolved"):
-                print(f"  {k}: {c['unresolved']}")
+        print("".join(f"  {k}: {c['unresolved']}\n" for k, c in cal.items() if c.get("unresolved")), end="")
     ap = d.get("angle_periodic")
     if ap:
         print(f"angle-periodic torque: best fit at {ap['periods']} periods/rev, "
