@@ -24,6 +24,7 @@ import numpy as np
 
 from ocp.errors import ParameterError
 from ocp.identify.candidates import Candidate, all_candidates, candidate
+from ocp.identify.coverage import blind_spots
 from ocp.identify.diagnose import DiagnoseOptions, DiagnoseResult, RankEntry, Round, Score, finite
 from ocp.identify.equations import EquationStatus, allowed, checked, noise, residuals, statuses
 from ocp.identify.steady import ROUTE, UNITS, direction_maps, fit_candidates, score
@@ -260,5 +261,6 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
         current = _backward(plant, log, chosen, verdict, (explanations, said), rows, nz, opt)
     fitted_maps = {"thrust_ratio_reverse_to_forward": finite(r) if (r := thrust_ratio(current, log)) else None}
     return PointDiagnosis(verdict, rounds, current, nz, explanations, calibration=calibration, ambiguous=ambiguous,
-                          tolerance=opt.tolerance, equations=statuses(log), maps=direction_maps(log),
+                          tolerance=opt.tolerance, blind_spots=blind_spots(log, verdict, rows=True),
+                          equations=statuses(log), maps=direction_maps(log),
                           kind=log.kind.value, notes=log.notes, fitted_maps=fitted_maps)

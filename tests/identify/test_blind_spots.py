@@ -2,7 +2,7 @@
 hidden voltage dead band logged under random steps between +-0.6 V_max (one voltage magnitude, where the dead band
 is a gain on the command) is diagnosed without it; the diagnosis says the log holds one voltage magnitude and that
 a dead band or a brush drop cannot show there, in the JSON and the CLI text. Under four voltage levels the gap is
-gone and the dead band is named."""
+gone and the dead band is named. A sweep that turns one way only cannot show a drag or thrust asymmetry."""
 
 from __future__ import annotations
 
@@ -15,9 +15,11 @@ import pytest
 from clients.cli import main
 from ocp.identify import diagnose
 from ocp.identify.coverage import GAPS, blind_spots, coverage
-from ocp.logs import log_from_arrays, write_log_csv
+from ocp.logs import log_from_arrays, read_log, write_log_csv
+from ocp.model.effects import load_plant
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
+from tests.logfiles import write_csv
 from tests.proving_ground.experiment import draw, run_command, voltage_steps
 from tests.rig_log import rig_log
 
@@ -63,3 +65,25 @@ def test_what_the_verdict_names_is_not_a_blind_spot() -> None:
     assert [b["hidden"] for b in blind_spots(log, ["brush_drop"]) if b["gap"] == "voltage_range"] == [
         ["voltage_deadband"]]
     assert "voltage_range" not in {b["gap"] for b in blind_spots(log, ["brush_drop", "voltage_deadband"])}
+
+
+def _sweep(w: np.ndarray, path: Path):  # type: ignore[no-untyped-def]
+    """A noise-free sweep of the plant ``P`` at the speeds ``w`` [rad/s] (its steady current, voltage and thrust in
+    closed form: eqs. dc_mechanical and dc_electrical with zero derivatives), read as a steady-state log."""
+    i = (P["B"] * w + P["c_tau"] * w * np.abs(w)) / P["k_t"]
+    write_csv({"voltage": P["R"] * i + P["k_e"] * w, "current": i, "omega": w, "thrust": P["c_f"] * w * np.abs(w)},
+              path)
+    return read_log(path, kind="steady-state")
+
+
+P = {"J": 2e-3, "B": 2e-3, "c_tau": 1e-4, "c_f": 4e-3, "k_t": 0.5, "k_e": 0.5, "R": 0.5, "L": 2e-3}
+
+
+def test_a_sweep_that_turns_one_way_says_it_cannot_show_an_asymmetry(tmp_path: Path) -> None:
+    forward = np.linspace(5.0, 100.0, 16)
+    one_way = diagnose(load_plant(P), _sweep(forward, tmp_path / "forward.csv")).to_dict()
+    assert one_way["verdict"] == []
+    assert one_way["blind_spots"] == [{"gap": "reversal", "text": "the log never reverses",
+                                       "hidden": ["drag_asymmetry", "thrust_asymmetry"]}]
+    both = diagnose(load_plant(P), _sweep(np.concatenate([-forward[::-1], forward]), tmp_path / "both.csv"))
+    assert both.verdict == [] and both.to_dict()["blind_spots"] == []
