@@ -81,5 +81,10 @@ def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False) -> list
         table = ROW_GAPS
     else:
         cov, table = coverage(log), GAPS
-    gaps = [(g, [h for h in table[g] if h not in named]) for g in table if not cov[g]]
-    return [{"gap": g, "text": GAP_TEXT[g].format(**cov), "hidden": hidden} for g, hidden in gaps if hidden]
+    spots = [(g, text, [h for h in hidden if h not in named]) for g, text, hidden in open_gaps(cov, table)]
+    return [{"gap": g, "text": text, "hidden": hidden} for g, text, hidden in spots if hidden]
+
+
+def open_gaps(cov: dict[str, Any], table: dict[str, tuple[str, ...]] = GAPS) -> list[tuple[str, str, tuple[str, ...]]]:
+    """The gaps of ``table`` that ``cov`` (:func:`coverage`) leaves open: each one's name, why, what it hides."""
+    return [(g, GAP_TEXT[g].format(**cov), table[g]) for g in table if not cov[g]]

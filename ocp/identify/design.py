@@ -47,7 +47,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 from ocp.errors import LogError, ParameterError, ThrustshapeError
 from ocp.identify.angle import MAX_PERIODS
 from ocp.identify.candidates import candidate
-from ocp.identify.coverage import GAP_TEXT, GAPS, coverage
+from ocp.identify.coverage import coverage, open_gaps
 from ocp.identify.diagnose import DiagnoseResult, aligned, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
 from ocp.identify.predict import CHANNELS, MAX_STEPS_PER_SAMPLE, SUBSTEPS, noise_levels, substeps
@@ -235,7 +235,7 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
     if opt.rivals is not None:
         return [fitted(r) for r in opt.rivals], ["rivals given by the user"], False
     reasons, sets = [], []
-    gaps = [GAP_TEXT[g].format(**cov) for g in GAPS if not cov[g]]
+    gaps = open_gaps(cov)
     if res.ambiguous:
         sets.append(tuple(sorted(res.verdict)))
         closest = sorted(res.ambiguous, key=lambda a: float(a["alternative_score"]))  # best-fitting first
@@ -247,14 +247,12 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
             swapped = tuple(sorted(str(a["alternative"]) if v == a["adopted"] else v for v in res.verdict))
             reasons.append(str(a["reason"]))
             sets += [] if swapped in sets else [swapped]
-        reasons += [f"{g} (an effect may hide there)" for g in gaps]
+        reasons += [f"{text} (an effect may hide there)" for _, text, _ in gaps]
         return [fitted(s) for s in sets], reasons, False
     out = [Rival("diagnosed plant", tuple(res.verdict), res.plant)]
     present = {e.name for e in res.plant.effects} | set(res.verdict)
-    for gap, probes in GAPS.items():
-        if cov[gap]:
-            continue
-        reasons.append(GAP_TEXT[gap].format(**cov))
+    for _, text, probes in gaps:
+        reasons.append(text)
         for name in probes:
             if name in present or any(r.name.startswith(name) for r in out):
                 continue
