@@ -19,6 +19,9 @@ GAPS: dict[str, tuple[str, ...]] = {
     "reversal": ("drag_asymmetry", "thrust_asymmetry", "coulomb_friction", "voltage_deadband", "brush_drop"),
     "low_speed": ("coulomb_friction", "stribeck"), "speed_range": ("param:B",), "ripple_reach": ("cogging",),
     "voltage_range": ("voltage_deadband", "brush_drop")}
+#: the constants a gain on a command of one voltage magnitude (a dead band's ``V0 - v_db``) is taken up by: ``V / a``
+#: in the armature equation is ``R / a`` and ``k / a``, and with ``k`` the torque equation's ``J``, ``B``, ``c_tau``
+GAIN = ("param:R", "param:k", "param:J", "param:B", "param:c_tau")
 #: ... and those a log checked point by point can have (its rows hold no time, angle or voltage levels that count)
 ROW_GAPS: dict[str, tuple[str, ...]] = {"reversal": ("drag_asymmetry", "thrust_asymmetry")}
 #: the share of the moving rows that must resolve a 64-period ripple (:func:`coverage`): a log near one speed has
@@ -81,7 +84,10 @@ def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False) -> list
         table = ROW_GAPS
     else:
         cov, table = coverage(log), GAPS
-    spots = [(g, text, [h for h in hidden if h not in named]) for g, text, hidden in open_gaps(cov, table)]
+    gain = [n for n in named if n in GAIN]  # a one-magnitude command's gain, taken up as corrections
+    spots = [(g, text + (f"; the corrections named here ({', '.join(gain)}) may be that gain"
+                         if g == "voltage_range" and gain else ""), [h for h in hidden if h not in named])
+             for g, text, hidden in open_gaps(cov, table)]
     return [{"gap": g, "text": text, "hidden": hidden} for g, text, hidden in spots if hidden]
 
 

@@ -14,7 +14,7 @@ import pytest
 
 from clients.cli import main
 from ocp.identify import diagnose
-from ocp.identify.coverage import GAPS, blind_spots, coverage
+from ocp.identify.coverage import GAIN, GAPS, blind_spots, coverage
 from ocp.logs import log_from_arrays, read_log, write_log_csv
 from ocp.model.effects import load_plant
 from ocp.model.params import MotorParams
@@ -40,6 +40,8 @@ def test_a_two_level_log_says_it_cannot_show_a_dead_band(tmp_path: Path, capsys:
     spots = {b["gap"]: b for b in res.to_dict()["blind_spots"]}
     assert spots["voltage_range"]["hidden"] == [h for h in GAPS["voltage_range"] if h not in res.verdict]
     assert "one voltage magnitude" in spots["voltage_range"]["text"]
+    named = [v for v in res.verdict if v in GAIN]  # R (and k, J) taking up the dead band's gain
+    assert named and f"corrections named here ({', '.join(named)}) may be that gain" in spots["voltage_range"]["text"]
     # every gap coverage() finds is reported, and only those
     cov = coverage(two)
     assert set(spots) <= {g for g in GAPS if not cov[g]}
