@@ -81,7 +81,8 @@ def _sweep(w: np.ndarray, path: Path):  # type: ignore[no-untyped-def]
 P = {"J": 2e-3, "B": 2e-3, "c_tau": 1e-4, "c_f": 4e-3, "k_t": 0.5, "k_e": 0.5, "R": 0.5, "L": 2e-3}
 
 
-def test_a_sweep_that_turns_one_way_says_it_cannot_show_an_asymmetry(tmp_path: Path) -> None:
+def test_a_sweep_that_turns_one_way_says_it_cannot_show_an_asymmetry(tmp_path: Path,
+                                                                     capsys: pytest.CaptureFixture[str]) -> None:
     forward = np.linspace(5.0, 100.0, 16)
     one_way = diagnose(load_plant(P), _sweep(forward, tmp_path / "forward.csv")).to_dict()
     assert one_way["verdict"] == []
@@ -89,3 +90,8 @@ def test_a_sweep_that_turns_one_way_says_it_cannot_show_an_asymmetry(tmp_path: P
                                        "hidden": ["drag_asymmetry", "thrust_asymmetry"]}]
     both = diagnose(load_plant(P), _sweep(np.concatenate([-forward[::-1], forward]), tmp_path / "both.csv"))
     assert both.verdict == [] and both.to_dict()["blind_spots"] == []
+    (tmp_path / "plant.json").write_text(json.dumps(P))
+    assert main(["diagnose", str(tmp_path / "forward.csv"), "--params", str(tmp_path / "plant.json"),
+                 "--steady-state"]) == 0
+    out = capsys.readouterr().out  # no design-experiment offered: a sweep has none
+    assert "this log cannot show drag_asymmetry, thrust_asymmetry: the log never reverses\n" in out

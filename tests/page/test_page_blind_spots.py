@@ -1,7 +1,7 @@
 """The Model check tab says what a log cannot show (headless Chromium, real server): a proving-ground rig with a
 hidden voltage dead band logged under random steps between +-0.6 V_max (one voltage magnitude, where the dead band
 is a gain on the command); the diagnosis misses it and the page says the log cannot show a dead band or a brush
-drop, and why, beside the verdict."""
+drop, and why, beside the verdict; a thrust stand swept forward only, that it cannot show an asymmetry."""
 
 from __future__ import annotations
 
@@ -11,6 +11,7 @@ from typing import Any
 import pytest
 
 from ocp.logs import write_log_csv
+from tests.logfiles import Thruster, thruster_sweep, write_csv
 from tests.page.test_page import LONG, custom_params, open_tab
 from tests.proving_ground.experiment import draw, run_command, voltage_steps
 from tests.rig_log import rig_log
@@ -32,3 +33,20 @@ def test_the_page_says_a_two_level_log_cannot_show_a_dead_band(page: Any, server
     assert blind.count() >= 1
     text = " ".join(blind.nth(k).inner_text() for k in range(blind.count()))
     assert "This log cannot show voltage_deadband, brush_drop" in text and "one voltage magnitude" in text
+
+
+def test_the_page_says_a_forward_only_esc_sweep_cannot_show_an_asymmetry(page: Any, server: Server,
+                                                                         tmp_path: Path) -> None:
+    """An ESC thrust stand swept forward only (the upper half of the PWM range): no design is offered for it (a
+    sweep is checked point by point), only what it cannot show."""
+    th = Thruster(ratio=0.8)
+    rows = thruster_sweep(th)
+    forward = rows["PWM (µs)"] > 1525.0
+    write_csv({k: v[forward] for k, v in rows.items()}, tmp_path / "forward.csv", title="Thruster at 16 V")
+    open_tab(page, server, "model")
+    page.set_input_files("#m-log", str(tmp_path / "forward.csv"))
+    custom_params(page, th.params())
+    page.click("#m-diagnose")
+    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    text = page.inner_text("#m-blind")
+    assert text == "This log cannot show drag_asymmetry, thrust_asymmetry: the log never reverses."
