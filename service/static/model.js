@@ -216,7 +216,7 @@ function showDiagnosisDetails(res, after) {
   for (const a of res.ambiguous || []) line(`Ambiguous: ${a.adopted} or ${a.alternative} — ${a.reason}`, "m-ambiguous");
   for (const b of res.blind_spots || []) {  // what this log cannot show, whatever the verdict
     line(`This log cannot show ${b.hidden.join(", ")}: ${b.text}.` +
-         (res.route ? "" : " Design the experiment to show them."), "m-blind");  // (no design for a sweep)
+         (res.route === "point-by-point" ? "" : " Design the experiment to show them."), "m-blind");  // (no design for a sweep)
   }
   const al = res.alignment;
   if (al) {

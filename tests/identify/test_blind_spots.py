@@ -50,7 +50,8 @@ def test_a_two_level_log_says_it_cannot_show_a_dead_band(tmp_path: Path, capsys:
     write_log_csv(two, csv)
     params.write_text(json.dumps(rig.nominal))
     assert main(["diagnose", str(csv), "--params", str(params)]) == 0
-    assert "this log cannot show voltage_deadband" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "this log cannot show voltage_deadband" in out and "(design-experiment proposes a run that can)" in out
 
     four = _log(rig, (-1.0, -0.3, 0.3, 1.0))
     again = diagnose(plant, four)

@@ -33,6 +33,7 @@ def test_the_page_says_a_two_level_log_cannot_show_a_dead_band(page: Any, server
     assert blind.count() >= 1
     text = " ".join(blind.nth(k).inner_text() for k in range(blind.count()))
     assert "This log cannot show voltage_deadband, brush_drop" in text and "one voltage magnitude" in text
+    assert text.endswith("Design the experiment to show them.")
 
 
 def test_the_page_says_a_forward_only_esc_sweep_cannot_show_an_asymmetry(page: Any, server: Server,
