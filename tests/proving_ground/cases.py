@@ -35,9 +35,9 @@ MAX_ATTEMPTS = 20
 
 
 @dataclass
-class Case:
-    """One log with its truth. ``columns``: t, voltage, current, omega, thrust (+ theta) in SI;
-    ``nominal``: the constants the user believes (J, B, c_tau, c_f, k_t, k_e, R, L)."""
+class Drawn:
+    """A drawn rig's record: ``columns`` its logged signals in SI; ``nominal`` the constants the user believes (J,
+    B, c_tau, c_f, k_t, k_e, R, L); ``expected`` the labels (effect names, ``param:<key>``); ``truth`` the rig."""
 
     seed: int
     kind: str
@@ -45,6 +45,13 @@ class Case:
     nominal: dict[str, float]
     expected: frozenset[str]
     truth: Truth
+
+
+@dataclass
+class Case(Drawn):
+    """One log with its truth. ``columns``: t, voltage, current, omega, thrust (+ theta); how it was logged and
+    excited; the constants' drawn errors."""
+
     logger: Logger
     excitations: tuple[str, ...]
     constant_error: dict[str, float] = field(default_factory=dict)

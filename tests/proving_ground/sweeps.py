@@ -22,7 +22,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from tests.proving_ground.cases import TOLERANCE, VISIBLE, _nominal, draw_effect, draw_motor
+from tests.proving_ground.cases import TOLERANCE, VISIBLE, Drawn, _nominal, draw_effect, draw_motor
 from tests.proving_ground.physics import Truth, drive_voltage, load_torque, quasi_static_thrust
 
 #: effects a steady sweep can show (no time, no angle)
@@ -36,18 +36,10 @@ ESC_EFFECTS = ("coulomb_friction", "stribeck", "drag_asymmetry", "thrust_asymmet
 ESC_CONSTANTS = ("c_f",)
 
 
-@dataclass(frozen=True)
-class Sweep:
-    """One sweep: ``columns`` voltage [V], current [A], omega [rad/s], thrust [N], (P,) each; ``nominal`` the
-    constants the user believes (J, B, c_tau, c_f, k_t, k_e, R, L); ``expected`` the labels (effect names,
-    ``param:<key>``)."""
-
-    seed: int
-    kind: str
-    columns: dict[str, np.ndarray]
-    nominal: dict[str, float]
-    expected: frozenset[str]
-    truth: Truth
+@dataclass
+class Sweep(Drawn):
+    """One sweep: ``columns`` voltage [V], current [A], omega [rad/s], thrust [N], (P,) each (no logger, timing or
+    excitation: settled rows)."""
 
 
 def settle(t: Truth, v_cmd: float) -> tuple[float, float]:
