@@ -194,7 +194,7 @@ class DiagnosePublic(_Open):
     noise: dict[str, float | None]
     rounds: list[dict[str, Any]]
     blind_spots: list[dict[str, Any]] = Field(
-        default_factory=list, description="[{gap, text, hidden}] what the log cannot show and the effects and "
+        default_factory=list, description="[{gap, text, hidden, design}] what the log cannot show and the effects and "
         "constants it hides, those in the verdict left out: a time series with no reversal, no time at low speed, "
         "one speed, one voltage magnitude or no rows slow enough for a 64-period ripple (design-experiment probes "
         "them); a log checked point by point that turns one way only (no drag or thrust asymmetry)")

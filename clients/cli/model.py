@@ -357,9 +357,9 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
     print("".join(f"  {text}\n" for text in d["explanations"]), end="")
     for a in d.get("ambiguous") or []:
         print(f"ambiguous: {a['adopted']} or {a['alternative']}: {a['reason']}")
-    hint = "" if d.get("route") == "point-by-point" else " (design-experiment proposes a run that can)"  # (no design)
     for b in d.get("blind_spots") or []:
-        print(f"this log cannot show {', '.join(b['hidden'])}: {b['text']}{hint}")
+        print(f"this log cannot show {', '.join(b['hidden'])}: {b['text']}"
+              + (" (design-experiment proposes a run that can)" if b.get("design") else ""))
     _print_alignment(d, rule=True)
     cal = d.get("calibration") or {}
     if cal:

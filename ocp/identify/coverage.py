@@ -73,11 +73,12 @@ def directions(omega: np.ndarray) -> tuple[float, float, float]:
 
 
 def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False) -> list[dict[str, Any]]:
-    """Per coverage gap of ``log`` (:func:`coverage`): ``gap``, why (``text``) and the effects and constants it
-    hides (``hidden``, catalogue names or ``param:<key>``) but those ``named`` (a verdict's: shown after all); a
-    verdict without them says nothing about them. ``rows``: a log checked point by point (a sweep, an ESC rig, a
-    flight log: no time, maybe no armature voltage), where only the direction counts: turning one way only, it
-    cannot show a drag or thrust asymmetry (:data:`ROW_GAPS`)."""
+    """Per coverage gap of ``log`` (:func:`coverage`): ``gap``, why (``text``), the effects and constants it hides
+    (``hidden``, catalogue names or ``param:<key>``, those ``named`` left out: a verdict's, shown after all) and
+    whether ``design-experiment`` probes it (``design``: a time series); a verdict without them says nothing about
+    them. ``rows``: a log checked point by point (a sweep, an ESC rig, a flight log: no time, maybe no armature
+    voltage), where only the direction counts: turning one way only, it cannot show a drag or thrust asymmetry
+    (:data:`ROW_GAPS`)."""
     if rows:
         pos, neg, _ = directions(log.omega)
         cov: dict[str, Any] = {"reversal": min(pos, neg) > 0.05}
@@ -88,7 +89,7 @@ def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False) -> list
     spots = [(g, text + (f"; the corrections named here ({', '.join(gain)}) may be that gain"
                          if g == "voltage_range" and gain else ""), [h for h in hidden if h not in named])
              for g, text, hidden in open_gaps(cov, table)]
-    return [{"gap": g, "text": text, "hidden": hidden} for g, text, hidden in spots if hidden]
+    return [{"gap": g, "text": text, "hidden": hidden, "design": not rows} for g, text, hidden in spots if hidden]
 
 
 def open_gaps(cov: dict[str, Any], table: dict[str, tuple[str, ...]] = GAPS) -> list[tuple[str, str, tuple[str, ...]]]:

@@ -88,7 +88,7 @@ def test_a_sweep_that_turns_one_way_says_it_cannot_show_an_asymmetry(tmp_path: P
     one_way = diagnose(load_plant(P), _sweep(forward, tmp_path / "forward.csv")).to_dict()
     assert one_way["verdict"] == []
     assert one_way["blind_spots"] == [{"gap": "reversal", "text": "the log never reverses",
-                                       "hidden": ["drag_asymmetry", "thrust_asymmetry"]}]
+                                       "hidden": ["drag_asymmetry", "thrust_asymmetry"], "design": False}]
     both = diagnose(load_plant(P), _sweep(np.concatenate([-forward[::-1], forward]), tmp_path / "both.csv"))
     assert both.verdict == [] and both.to_dict()["blind_spots"] == []
     (tmp_path / "plant.json").write_text(json.dumps(P))
