@@ -12,16 +12,20 @@ from typing import Any, cast
 import numpy as np
 
 from ocp.identify.angle import MAX_PERIODS, angle_limits, rotor_angle
-from ocp.logs import Log
+from ocp.logs import Log, LogKind
 
 #: the effects and constants each coverage gap hides (the probes :func:`ocp.identify.design.design` adds)
 GAPS: dict[str, tuple[str, ...]] = {
     "reversal": ("drag_asymmetry", "thrust_asymmetry", "coulomb_friction", "voltage_deadband", "brush_drop"),
     "low_speed": ("coulomb_friction", "stribeck"), "speed_range": ("param:B",), "ripple_reach": ("cogging",),
     "voltage_range": ("voltage_deadband", "brush_drop")}
-#: the constants a gain on a command of one voltage magnitude (a dead band's ``V0 - v_db``) is taken up by: ``V / a``
-#: in the armature equation is ``R / a`` and ``k / a``, and with ``k`` the torque equation's ``J``, ``B``, ``c_tau``
-GAIN = ("param:R", "param:k", "param:J", "param:B", "param:c_tau")
+#: the constants a gain ``a`` on the command (under one voltage magnitude a dead band's ``V0 - v_db``) is taken up by:
+#: ``a V`` in the armature equation is ``R / a``, ``L / a`` and ``k / a``, with ``k`` the torque equation's ``J``,
+#: ``B``, ``c_tau`` (:mod:`.gain`); as verdict names
+COMMON = ("R", "L", "k", "J", "B", "c_tau")
+GAIN = tuple(f"param:{c}" for c in COMMON)
+#: the regression's pseudo-item for one common error of the constants a gain on the command scales (:mod:`.gain`)
+COMMON_GAIN = "command_gain"
 #: ... and those a log checked point by point can have (its rows hold no time, angle or voltage levels that count)
 ROW_GAPS: dict[str, tuple[str, ...]] = {"reversal": ("drag_asymmetry", "thrust_asymmetry")}
 #: the share of the moving rows that must resolve a 64-period ripple (:func:`coverage`): a log near one speed has
@@ -62,6 +66,11 @@ def coverage(log: Log) -> dict[str, Any]:
             "ripple_reach": slow >= RIPPLE_ROWS, "voltage_range": levels < 0.5, "forward_fraction": pos,
             "reverse_fraction": neg, "low_speed_fraction": low, "speed_spread": spread, "ripple_rows": slow,
             "ripple_periods": reach, "voltage_spread": levels}
+
+
+def one_magnitude(log: Log) -> bool:
+    """Whether ``log`` is a time series whose command holds one voltage magnitude (:func:`coverage`)."""
+    return log.kind is LogKind.TIME_SERIES and not coverage(log)["voltage_range"]
 
 
 def directions(omega: np.ndarray) -> tuple[float, float, float]:

@@ -18,8 +18,8 @@ Procedure:
    (``calibration``); a constant is *named* (``param:<key>`` in the verdict) only when freeing it beyond
    the tolerance wins on held-out data: forward selection while the held-out score is above ``noise_floor``
    and falls beyond sampling noise (an effect: also by ``min_improvement``; a constant's materiality is the
-   tolerance). Adopted items that another item explains
-   equally well (within ``ambiguity_margin``) are reported under ``ambiguous`` with the reason.
+   tolerance). Adopted items that another item, or named constants that one gain on the command (:mod:`.gain`),
+   explain equally well (within ``ambiguity_margin``) are reported under ``ambiguous`` with the reason.
 5. The user's plant and each round's adopted model are simulated (free run under the measured voltage,
    :func:`ocp.identify.predict.free_run`) on the held-out segments: the per-channel errors reported.
    ``verdict`` is the list of adopted effects and named constants, most important first.
@@ -50,7 +50,7 @@ from ocp.identify.align import (
     within,
 )
 from ocp.identify.candidates import candidate
-from ocp.identify.coverage import blind_spots
+from ocp.identify.coverage import blind_spots, one_magnitude
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
     KEYS,
@@ -65,6 +65,7 @@ from ocp.identify.explain import (
     units,
     with_band,
 )
+from ocp.identify.gain import gain_rival
 from ocp.identify.inductance import (
     TIMING_MIMICS,
     delay_rival,
@@ -92,10 +93,9 @@ class DiagnoseOptions(BaseModel):
     # once), rather than on the one class of held-out segments (evidence at a few slow reversals fell in training)
     cross_validate: bool = True
     min_improvement: float = Field(default=0.12, gt=0, lt=1)  # an effect's held-out score must fall by this
-    # [noise units] a model whose every equation is within this of its noise level is done. 1: the noise level
-    # itself. (Until session 10, 1.15: a viscous B error halving a torque equation at 1.149 noise units was not
-    # looked at.) A constant is named only for an equation above it; an effect's material fall may also show an
-    # equation's noise level overestimated (module doc of .select).
+    # [noise units] a model whose every equation is within this of its noise level (1) is done (until session 10,
+    # 1.15: a B error halving a torque equation at 1.149 noise units was not looked at). A constant is named only
+    # for an equation above it; an effect's material fall may show a noise level overestimated (.select's doc).
     noise_floor: float = Field(default=1.0, gt=0)
     max_effects: int = Field(default=3, ge=1, le=10)  # at most this many items in the verdict
     include_params: bool = True  # constants may be named beyond the tolerance (else: calibration only)
@@ -228,9 +228,7 @@ def _message(verdict: list[str], explanations: list[str], ambiguous: list[dict[s
     if not verdict:
         return "nothing missing"
     text = "; ".join(explanations)
-    if ambiguous:
-        text = "ambiguous: " + "; ".join(str(a["reason"]) for a in ambiguous) + ". " + text
-    return text
+    return "ambiguous: " + "; ".join(str(a["reason"]) for a in ambiguous) + ". " + text if ambiguous else text
 
 
 def _pool(plant: DCMotorPlant, opt: DiagnoseOptions) -> tuple[tuple[str, ...], list[str]]:
@@ -352,7 +350,8 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
                  for a in sel.ambiguous]
     rival = delay_rival(current, unconfirmed.samples, align.samples, noise["current"], opt.ambiguity_margin) \
         if unconfirmed is not None and "param:L" in verdict else None
-    ambiguous += [rival] if rival else []
+    gain = gain_rival(design, sel.final, opt.tolerance, opt.ambiguity_margin, one_magnitude(log))
+    ambiguous += [r for r in (rival, gain) if r]
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
                           spectrum_peak(design), opt.tolerance, blind_spots(log, verdict))

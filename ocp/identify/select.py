@@ -55,6 +55,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ocp.identify.boxqp import box_qp
+from ocp.identify.coverage import COMMON_GAIN
 from ocp.identify.evidence import (
     IMPLAUSIBLE_FACTOR,
     Fitted,
@@ -78,8 +79,7 @@ NAMED_BOUNDS = (-0.8, 3.0)
 #: a pair of items is tried among this many best single challengers when none clears the test alone (:func:`_pair`)
 PAIR_TOP = 4
 #: [noise units] forward rounds that leave an equation beyond this explained little: a pair of the first round's
-#: best single effects is tried as their start instead (:func:`_rescue`; set once, not tuned: three times the noise
-#: level, where 1 is the noise itself)
+#: best single effects starts them instead (:func:`_rescue`; set once, not tuned: three times the noise, 1)
 RESCUE = 3.0
 #: ... among this many best single effects (set once, not tuned)
 PAIR_WIDE = 6
@@ -103,7 +103,7 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float,
         c = design.columns[j]
         if c.item in NUISANCES:
             a, b = NUISANCE_BOUNDS[c.item]
-        elif c.item in CONSTANTS:
+        elif c.item in (*CONSTANTS, COMMON_GAIN):
             # a constant the log cannot resolve is a free nuisance (never named): boxing it in would leave
             # what it stands for (a current filter for L) to be explained by a wrong item
             box = tol + design.slack.get(c.item, 0.0)  # (wider where a nuisance could mimic the error)
@@ -162,7 +162,7 @@ def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
     """Fit a model (module doc): shaped effects take their best grid column by training cost and its better
     neighbour (:func:`_shape_columns`)."""
     base = [j for c in (*CONSTANTS, *NUISANCES) for j in design.index(c)]
-    named = {i for i in items if i in CONSTANTS}
+    named = {i for i in items if i in (*CONSTANTS, COMMON_GAIN)}  # (the common gain of .gain: a constant)
     chosen: list[int] = list(base)
     for item in sorted(items, key=lambda i: i == "stribeck"):  # (Stribeck's band and decay beside a Coulomb level)
         if item in CONSTANTS:
