@@ -47,7 +47,7 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 from ocp.errors import LogError, ParameterError, ThrustshapeError
 from ocp.identify.angle import MAX_PERIODS
 from ocp.identify.candidates import candidate
-from ocp.identify.coverage import coverage, open_gaps
+from ocp.identify.coverage import COMMON_GAIN, coverage, open_gaps
 from ocp.identify.diagnose import DiagnoseResult, aligned, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
 from ocp.identify.predict import CHANNELS, MAX_STEPS_PER_SAMPLE, SUBSTEPS, noise_levels, substeps
@@ -167,8 +167,10 @@ class DesignResult:
 
     def message(self) -> str:
         if not self.needed:
-            return "nothing to settle by an excitation: the diagnosis is not ambiguous and the log covers " \
-                   "reversals, low speed, a range of speeds and of voltages" + (
+            said = [r for r in self.reasons if not self.logging or r != self.logging["reason"]]
+            return "nothing to settle by an excitation: " + ("; ".join(said) or "the diagnosis is not ambiguous and "
+                                                             "the log covers reversals, low speed, a range of speeds "
+                                                             "and of voltages") + (
                        f"; but this log is too slow to check L: log at {self.logging['rate_hz'] / 1e3:.3g} kHz or "
                        "faster" if self.logging else "")
         if self.chosen is None:
@@ -234,11 +236,13 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
 
     if opt.rivals is not None:
         return [fitted(r) for r in opt.rivals], ["rivals given by the user"], False
-    reasons, sets = [], []
+    # a gain on the command no excitation tells from the constants it scales (.gain): said, not a rival
+    reasons = [str(a["reason"]) for a in res.ambiguous if a["alternative"] == COMMON_GAIN]
+    pairs, sets = [a for a in res.ambiguous if a["alternative"] != COMMON_GAIN], []
     gaps = open_gaps(cov)
-    if res.ambiguous:
+    if pairs:
         sets.append(tuple(sorted(res.verdict)))
-        closest = sorted(res.ambiguous, key=lambda a: float(a["alternative_score"]))  # best-fitting first
+        closest = sorted(pairs, key=lambda a: float(a["alternative_score"]))  # best-fitting first
         for k, a in enumerate(closest):
             if len(sets) == MAX_RIVALS:
                 reasons.append(f"{len(closest) - k} further ambiguities not taken as rivals (at most {MAX_RIVALS}: "
