@@ -6,13 +6,18 @@ raise it. Under a two-level command a hidden dead band raises it too, and the de
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from clients.cli import main
 from ocp.identify import diagnose
 from ocp.identify.coverage import COMMON_GAIN
 from ocp.identify.gain import with_gain
 from ocp.identify.regression import build
+from ocp.logs import write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground.experiment import Rig, draw, run_command, voltage_steps
@@ -52,6 +57,17 @@ def test_a_scaled_command_is_reported_as_a_gain_at_its_scale(seed: int, levels: 
     assert "a measured terminal voltage" in gain["reason"]
     assert ("one voltage magnitude" in gain["reason"]) == (levels == TWO)
     assert res.to_dict()["message"].startswith("ambiguous: ") and gain["reason"] in res.to_dict()["message"]
+
+
+def test_the_cli_text_lists_the_gain(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    rig = _clean(0)
+    t, v = voltage_steps(rig, 0, levels=TWO)
+    cols = run_command(rig, t, v, 1)
+    write_log_csv(rig_log(dict(cols, voltage=1.3 * cols["voltage"])), tmp_path / "scaled.csv")
+    (tmp_path / "nominal.json").write_text(json.dumps(rig.nominal))
+    assert main(["diagnose", str(tmp_path / "scaled.csv"), "--params", str(tmp_path / "nominal.json")]) == 0
+    line = next(x for x in capsys.readouterr().out.splitlines() if "command_gain" in x)
+    assert line.startswith("ambiguous: param:R or command_gain: one common error of R, L, k, J, B and c_tau (+30")
 
 
 @pytest.mark.parametrize(("seed", "levels"), [(2, FOUR), (3, TWO)])

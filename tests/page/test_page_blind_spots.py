@@ -1,7 +1,8 @@
 """The Model check tab says what a log cannot show (headless Chromium, real server): a proving-ground rig with a
 hidden voltage dead band logged under random steps between +-0.6 V_max (one voltage magnitude, where the dead band
 is a gain on the command); the diagnosis misses it and the page says the log cannot show a dead band or a brush
-drop, and why, beside the verdict; a thrust stand swept forward only, that it cannot show an asymmetry."""
+drop, and why, beside the verdict, and lists a gain on the command as the rival of what it named; a thrust stand
+swept forward only, that it cannot show an asymmetry."""
 
 from __future__ import annotations
 
@@ -34,6 +35,9 @@ def test_the_page_says_a_two_level_log_cannot_show_a_dead_band(page: Any, server
     text = " ".join(blind.nth(k).inner_text() for k in range(blind.count()))
     assert "This log cannot show voltage_deadband, brush_drop" in text and "one voltage magnitude" in text
     assert text.endswith("Design the experiment to show them.")
+    # the constants it named for the dead band are listed beside their rival, one gain on the command
+    gain = page.locator("#m-ambiguous", has_text="command_gain")
+    assert gain.count() == 1 and "a measured terminal voltage does" in gain.inner_text()
 
 
 def test_the_page_says_a_forward_only_esc_sweep_cannot_show_an_asymmetry(page: Any, server: Server,
