@@ -3,8 +3,8 @@
 Two stages: an equation-error fit (one-step residuals; fast, linear in most effect amplitudes)
 gives the start; a free-run refinement (plant simulated under the measured voltage, restarted
 every ``segment_s``) polishes it and is kept only if it lowers the free-run error. The fit is adopted only where
-it predicts the log's free run better than the plant it started from (:func:`_adopted`); else the calibrated plant is
-the starting one, and the result says so beside the fitted values and the error they gave. Before/after
+it predicts the log's free run better than the plant it started from (:func:`adoption_note`); else the calibrated
+plant is the starting one, and the result says so beside the fitted values and the error they gave. Before/after
 RMS per channel (free run) and per equation (one step) are reported on the whole log, with the
 parameters' standard errors and correlations from the last stage's Jacobian. Both stages see the log realigned by
 the command-to-sensor lag logging conventions explain, reported as ``alignment``
@@ -174,7 +174,7 @@ def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptio
         if e_ref < e_est:
             est, stage, e_est = refined, "free-run", e_ref
     e_start = _combined(free_run_errors(start, log, every, noise, opt.segment_s))
-    note = _adopted(e_start, e_est)
+    note = adoption_note(e_start, e_est)
     (before, lag_before), (after, lag_after) = (_read_rms(p, log, opt.segment_s) for p in (start, est.plant))
     return FitResult(
         plant=est.plant if note is None else start, effects=tuple(c.name for c in cands), stage=stage,
@@ -184,12 +184,14 @@ def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptio
     )
 
 
-def _adopted(e_start: float, e_fit: float) -> str | None:
-    """None where the fitted plant's free-run error over the log (``e_fit``, combined over the channels in noise
-    units) is below the starting plant's (``e_start``); else why the fit is not adopted. Fitted to this very log,
-    added parameters can only lower the error at the optimum: a rise means the fit did not reach it (an effect the
-    log cannot show, a ripple's count beyond its sampling) and the starting plant is the better one."""
+def adoption_note(e_start: float, e_fit: float, what: str = "predicts this log's free run",
+                  unit: str = "noise levels") -> str | None:
+    """None where the fitted plant's error over the log (``e_fit``: the free run's, combined over the channels in
+    noise units; a sweep's equations, :func:`.steady.fit_points`) is below the starting plant's (``e_start``); else
+    why the fit is not adopted. Fitted to this very log, added parameters can only lower the error at the optimum:
+    a rise means the fit did not reach it (an effect the log cannot show, a ripple's count beyond its sampling) and
+    the starting plant is the better one; no fall, that the log holds nothing of them."""
     if e_fit < e_start:
         return None
-    return (f"not adopted: the fitted plant predicts this log's free run worse than the starting plant (combined "
-            f"error {e_start:.4g} -> {e_fit:.4g} noise levels); the calibrated plant is the starting one")
+    return (f"not adopted: the fitted plant {what} no better than the starting plant (combined error "
+            f"{e_start:.4g} -> {e_fit:.4g} {unit}); the calibrated plant is the starting one")

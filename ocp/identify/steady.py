@@ -205,10 +205,11 @@ def fit_points(plant: DCMotorPlant, log: Log, names: Sequence[str]) -> FitResult
     """Add the named candidates and fit them on every row of the checkable equations (point by point).
 
     Before/after errors are the equation residual RMS [equation unit]; a candidate that needs time or acts
-    on no checked equation is refused naming it.
+    on no checked equation is refused naming it. The fit is adopted only where it lowers the residuals (combined
+    over the equations, each in units of its starting RMS: :func:`.fit.adoption_note`); else the starting plant.
     """
     from ocp.errors import LogError
-    from ocp.identify.fit import FitResult
+    from ocp.identify.fit import FitResult, adoption_note
 
     eqs = checked(log)
     cands = [candidate(n) for n in dict.fromkeys(names)]
@@ -230,7 +231,10 @@ def fit_points(plant: DCMotorPlant, log: Log, names: Sequence[str]) -> FitResult
     np.fill_diagonal(corr, 1.0)
     before = {eq: float(np.sqrt(np.mean(r ** 2))) for eq, r in r0.items()}
     after = {eq: float(np.sqrt(np.mean(r ** 2))) for eq, r in residuals(f.plant, log, eqs).items()}
-    return FitResult(plant=f.plant, effects=tuple(c.name for c in cands), stage="equation-error",
+    e_start, e_fit = (float(np.sqrt(np.mean([(e[eq] / scale[eq]) ** 2 for eq in eqs]))) for e in (before, after))
+    note = adoption_note(e_start, e_fit, "fits this log's equations", "of the starting residuals")
+    return FitResult(plant=f.plant if note is None else plant, adopted=note is None, note=note,
+                     effects=tuple(c.name for c in cands), stage="equation-error",
                      names=tuple(f"{c.name}.{key}" for c in cands for key in c.keys), values=f.values,
                      stderr=np.where(sd > 0, sd, np.inf), correlation=corr, before=before, after=after,
                      before_equations=before, after_equations=after)

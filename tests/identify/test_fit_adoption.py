@@ -15,7 +15,7 @@ import pytest
 
 from bench.modelcheck import case_log
 from clients.cli import main
-from ocp.identify.fit import _adopted
+from ocp.identify.fit import adoption_note
 from ocp.logs.writers import write_log_csv
 from ocp.model.effects import load_plant
 from ocp.model.params import MotorParams
@@ -50,7 +50,7 @@ def test_a_fit_that_predicts_worse_is_not_adopted(tmp_path: Path, capsys: pytest
 def test_the_rule_is_a_strict_fall(e_start: float, e_fit: float, adopted: bool) -> None:
     """A fit is adopted only where it lowers the combined free-run error; a tie keeps the starting plant (the
     simpler one), and the note gives both errors."""
-    note = _adopted(e_start, e_fit)
+    note = adoption_note(e_start, e_fit)
     assert (note is None) == adopted
     if note is not None:
         assert f"{e_start:.4g} -> {e_fit:.4g}" in note

@@ -83,9 +83,24 @@ def test_sweep_fit_and_refusal_of_time_effects(tmp_path: Path) -> None:
     dc = dict(zip(res.names, res.values, strict=True))["thrust_asymmetry.dc_f"]
     assert (th.c_f + dc) / th.c_f == pytest.approx(0.8, abs=0.02)
     assert res.after["thrust"] < 0.2 * res.before["thrust"]
+    assert res.adopted and [e.name for e in res.plant.effects] == ["thrust_asymmetry"]
     with pytest.raises(LogError) as err:
         fit(load_plant(th.params()), log, ["thrust_lag"])
     assert err.value.field == "effects" and "needs time" in err.value.reason
+
+
+def test_a_sweep_fit_the_log_cannot_show_is_not_adopted(tmp_path: Path) -> None:
+    """A stand swept forward only holds nothing of a thrust asymmetry (it acts in reverse): the fit leaves the
+    residuals as they were, and the calibrated plant is the starting one, with the reason (as ``fit`` on a time
+    series, where the free run decides)."""
+    th = Thruster(ratio=0.8)
+    rows = thruster_sweep(th)
+    forward = rows["PWM (µs)"] > 1525.0
+    write_csv({k: v[forward] for k, v in rows.items()}, tmp_path / "forward.csv", title="Thruster at 16 V")
+    res = fit(load_plant(th.params()), read_log(tmp_path / "forward.csv"), ["thrust_asymmetry"])
+    assert res.after == res.before and not res.adopted and res.plant.effects == ()
+    assert res.note is not None and "no better than the starting plant" in res.note
+    assert res.to_dict()["adopted"] is False and res.calibrated()["notes"]["adopted"] is False
 
 
 def test_tyto_series_checks_torque_from_the_cell_and_thrust(tmp_path: Path) -> None:
