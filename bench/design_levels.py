@@ -8,7 +8,8 @@ played on the same rig (the proving ground's own simulation) and diagnosed again
 
 Per rig and effect: the verdict under the two-level command, whether the one-magnitude gap was raised
 (:func:`ocp.identify.design.coverage`: ``voltage_range``), the proposal and the verdict after it; then how many were
-right before and after. Session 41: the gap was built on seeds 0..5. ~30 s a rig and effect.
+right before and after, and on how many a gain on the command was the named constants' rival (:mod:`ocp.identify.gain`).
+Session 41: the gap was built on seeds 0..5. ~30 s a rig and effect.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ EFFECTS = ("voltage_deadband", "brush_drop")
 
 def main(argv: list[str] | None = None) -> int:
     from ocp.identify import diagnose
-    from ocp.identify.coverage import coverage
+    from ocp.identify.coverage import COMMON_GAIN, coverage
     from ocp.identify.design import DesignOptions, design
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
@@ -41,7 +42,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--n", type=int, default=12)
     args = ap.parse_args(argv)
 
-    before = after = gapped = total = 0
+    before = after = gapped = gained = total = 0
     for seed in range(args.first, args.first + args.n):
         for effect in EFFECTS:
             rig = draw(seed, effect)
@@ -53,10 +54,13 @@ def main(argv: list[str] | None = None) -> int:
             total += 1
             gapped += gap
             before += first.verdict == [effect]
+            gain = any(a["alternative"] == COMMON_GAIN for a in first.ambiguous)
+            gained += gain
             d = design(plant, log, first, DesignOptions(voltage=rig.truth.v_max,
                                                         current=3.0 * float(np.max(np.abs(log.current))))).to_dict()
             head = (f"{seed:4d} {effect:16s} {rig.logger.rate:6.0f} Hz | two-level: {first.verdict}"
-                    f"{' (ambiguous)' if first.ambiguous else ''} | gap {'yes' if gap else 'no '}")
+                    f"{' (gain rival)' if gain else ' (ambiguous)' if first.ambiguous else ''}"
+                    f" | gap {'yes' if gap else 'no '}")
             if d["mission"] is None:
                 print(f"{head} | no proposal: {d['message'][:90]}", flush=True)
                 continue
@@ -65,7 +69,8 @@ def main(argv: list[str] | None = None) -> int:
             after += second.verdict == [effect]
             print(f"{head} | {d['chosen']['name']:18s} | after: {second.verdict}"
                   f"{' (ambiguous)' if second.ambiguous else ''}", flush=True)
-    print(f"\nexactly right under the two-level command: {before} of {total}; the gap raised on {gapped}; "
+    print(f"\nexactly right under the two-level command: {before} of {total}; a gain on the command the rival of "
+          f"named constants on {gained}; the gap raised on {gapped}; "
           f"exactly right after the proposed experiment: {after} of {total}")
     return 0
 

@@ -117,6 +117,7 @@ def one(seed: int, cache: str | None = None, quiet: bool = False, angle: bool = 
     noise, :func:`noise_free`; ``angle=False``: without its angle column, :func:`case_log`; ``shapes``: see
     :func:`load_case`); a JSON-ready record."""
     from ocp.identify import diagnose
+    from ocp.identify.coverage import COMMON_GAIN
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
 
@@ -132,12 +133,13 @@ def one(seed: int, cache: str | None = None, quiet: bool = False, angle: bool = 
         align = res.alignment.samples if res.alignment else 0.0
         measured = bool(res.alignment and res.alignment.identified)
         amb = bool(res.ambiguous)
+        gain = next((float(a["relative"]) for a in res.ambiguous if a["alternative"] == COMMON_GAIN), None)
     except Exception as exc:  # a crash is a wrong verdict, recorded with its message
-        verdict, err, align, amb, measured = [], f"{type(exc).__name__}: {exc}", 0.0, False, False
+        verdict, err, align, amb, measured, gain = [], f"{type(exc).__name__}: {exc}", 0.0, False, False, None
     t2 = time.perf_counter()
     lag = case.logger.skew + case.truth.e("input_delay", "delay") / case.logger.dt
     return {"seed": seed, "kind": case.kind, "expected": sorted(case.expected), "verdict": verdict, "error": err,
-            "ambiguous": amb, "rate": case.logger.rate, "n": log.n, "speed": case.logger.speed,
+            "ambiguous": amb, "gain": gain, "rate": case.logger.rate, "n": log.n, "speed": case.logger.speed,
             "excitations": list(case.excitations), "true_lag": lag, "alignment": align, "align_measured": measured,
             "armature": case.nominal["L"] / case.nominal["R"] / case.logger.dt,
             "current_filter": (1.0 - case.logger.alpha) / case.logger.alpha,
@@ -211,6 +213,10 @@ def table(rows: list[dict[str, Any]], optional: bool = False) -> str:
     kinds = Counter(r["kind"] for r in rows)
     ok = Counter(r["kind"] for r in rows if right(r, optional))
     lines += ["", "by case kind: " + ", ".join(f"{k} {ok[k]}/{kinds[k]}" for k in sorted(kinds))]
+    gains = [r for r in rows if r.get("gain") is not None]  # (records before session 42 have none)
+    lines += [f"a gain on the command listed beside the verdict (ocp.identify.gain): {len(gains)} logs"
+              + "".join(f"; {r['seed']} ({'+'.join(r['expected']) or 'clean'}: {100 * r['gain']:+.0f} %)"
+                        for r in gains)]
     return "\n".join(lines + alignment_table(rows))
 
 
