@@ -81,22 +81,25 @@ def directions(omega: np.ndarray) -> tuple[float, float, float]:
     return float(np.mean(omega > 0.05 * top)), float(np.mean(omega < -0.05 * top)), float(np.mean(w < 0.1 * top))
 
 
-def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False) -> list[dict[str, Any]]:
+def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False,
+                gain: Sequence[str] = ()) -> list[dict[str, Any]]:
     """Per coverage gap of ``log`` (:func:`coverage`): ``gap``, why (``text``), the effects and constants it hides
     (``hidden``, catalogue names or ``param:<key>``, those ``named`` left out: a verdict's, shown after all) and
     whether ``design-experiment`` probes it (``design``: a time series); a verdict without them says nothing about
     them. ``rows``: a log checked point by point (a sweep, an ESC rig, a flight log: no time, maybe no armature
     voltage), where only the direction counts: turning one way only, it cannot show a drag or thrust asymmetry
-    (:data:`ROW_GAPS`)."""
+    (:data:`ROW_GAPS`). ``gain``: the named items that one gain on the command fits as well (:mod:`.gain`): on one
+    voltage magnitude the text says whether the corrections named among :data:`GAIN` are that gain."""
     if rows:
         pos, neg, _ = directions(log.omega)
         cov: dict[str, Any] = {"reversal": min(pos, neg) > 0.05}
         table = ROW_GAPS
     else:
         cov, table = coverage(log), GAPS
-    gain = [n for n in named if n in GAIN]  # a one-magnitude command's gain, taken up as corrections
-    spots = [(g, text + (f"; the corrections named here ({', '.join(gain)}) may be that gain"
-                         if g == "voltage_range" and gain else ""), [h for h in hidden if h not in named])
+    taken = [n for n in named if n in GAIN]  # a one-magnitude command's gain, taken up as corrections?
+    said = "" if not taken else f"; the corrections named here ({', '.join(taken)}) " + (
+        "fit as one gain on it (listed under ambiguous)" if gain else "are not that gain alone (held-out fit)")
+    spots = [(g, text + (said if g == "voltage_range" else ""), [h for h in hidden if h not in named])
              for g, text, hidden in open_gaps(cov, table)]
     return [{"gap": g, "text": text, "hidden": hidden, "design": not rows} for g, text, hidden in spots if hidden]
 

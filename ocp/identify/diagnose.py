@@ -354,7 +354,8 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     ambiguous += [r for r in (rival, gain) if r]
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
-                          spectrum_peak(design), opt.tolerance, blind_spots(log, verdict))
+                          spectrum_peak(design), opt.tolerance,
+                          blind_spots(log, verdict, gain=str(gain["adopted"]).split(" + ") if gain else ()))
 
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],

@@ -41,7 +41,8 @@ def test_a_two_level_log_says_it_cannot_show_a_dead_band(tmp_path: Path, capsys:
     assert spots["voltage_range"]["hidden"] == [h for h in GAPS["voltage_range"] if h not in res.verdict]
     assert "one voltage magnitude" in spots["voltage_range"]["text"]
     named = [v for v in res.verdict if v in GAIN]  # R (and k, J) taking up the dead band's gain
-    assert named and f"corrections named here ({', '.join(named)}) may be that gain" in spots["voltage_range"]["text"]
+    text = spots["voltage_range"]["text"]
+    assert named and f"corrections named here ({', '.join(named)}) fit as one gain on it" in text
     # every gap coverage() finds is reported, and only those
     cov = coverage(two)
     assert set(spots) <= {g for g in GAPS if not cov[g]}

@@ -14,7 +14,7 @@ import pytest
 
 from clients.cli import main
 from ocp.identify import diagnose
-from ocp.identify.coverage import COMMON_GAIN
+from ocp.identify.coverage import COMMON_GAIN, GAP_TEXT
 from ocp.identify.gain import with_gain
 from ocp.identify.regression import build
 from ocp.logs import write_log_csv
@@ -76,6 +76,9 @@ def test_one_wrong_constant_is_no_gain(seed: int, levels: tuple[float, ...]) -> 
     rig = _clean(seed)
     res = _diagnose(rig, seed, levels, nominal={**rig.nominal, "R": rig.truth.R / 1.3})
     assert res.verdict == ["param:R"] and not _gains(res)
+    spot = [b["text"] for b in res.blind_spots if b["gap"] == "voltage_range"]
+    assert spot == ([] if levels == FOUR else [f"{GAP_TEXT['voltage_range']}; the corrections named here (param:R) "
+                                               "are not that gain alone (held-out fit)"])
 
 
 def test_a_scale_within_the_tolerance_is_no_gain() -> None:
