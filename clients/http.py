@@ -36,7 +36,7 @@ def model_check_form(log: LogSource, params: str | Mapping[str, Any], *, columns
     path: read a local parameter file yourself and pass its mapping). ``fields`` are the extra form
     fields (``effects`` as a comma-separated string or a list of names; ``max_effects``, ``corrections``,
     ``refine``; the read options ``pole_pairs``, ``neutral_us``, ``throttle_range_us``, ``electrical``, ``motor``,
-    ``resample`` of :class:`ocp.logs.ReadOptions`); ``None`` values are left out. ``steady_state=None``: the
+    ``resample``, ``negate`` of :class:`ocp.logs.ReadOptions`); ``None`` values are left out. ``steady_state=None``: the
     server detects a sweep where the file makes it plain.
     """
     if isinstance(log, tuple):

@@ -74,11 +74,11 @@ def parse_columns(text: str | None) -> dict[str, Any] | None:
     return data
 
 
-READ_FIELDS = ("pole_pairs", "neutral_us", "throttle_range_us", "electrical", "motor", "resample")
+READ_FIELDS = ("pole_pairs", "neutral_us", "throttle_range_us", "electrical", "motor", "resample", "negate")
 
 
 def parse_read(**fields: Any) -> dict[str, Any]:
-    """The read options (form fields, ``throttle_range_us`` as ``"min,max"``) validated as
+    """The read options (form fields, ``throttle_range_us`` as ``"min,max"``, ``negate`` comma-separated) validated as
     :class:`ocp.logs.ReadOptions`; errors name the form field. Returns the non-default fields (JSON-ready)."""
     from pydantic import ValidationError
 

@@ -47,6 +47,8 @@ def _log_args(p: argparse.ArgumentParser) -> None:
                    help="whose voltage/current the log holds (auto: the supply's when there is an ESC command)")
     p.add_argument("--motor", type=int, default=0, help="which motor/ESC of a flight log (default 0)")
     p.add_argument("--no-resample", action="store_true", help="refuse irregular timestamps instead of resampling")
+    p.add_argument("--negate", action="append", choices=("voltage", "current", "omega", "thrust", "torque"),
+                   help="a channel the log holds with the opposite sign to the model's (repeatable)")
     p.add_argument("--json", action="store_true", help="machine-readable output")
     add_server_args(p)
 
@@ -55,7 +57,8 @@ def _read_fields(args: argparse.Namespace) -> dict[str, Any]:
     """The read options as the API's form fields (and :class:`ocp.logs.ReadOptions` fields after parsing)."""
     out: dict[str, Any] = {"pole_pairs": args.pole_pairs, "neutral_us": args.neutral_us,
                            "throttle_range_us": args.throttle_range, "electrical": args.electrical,
-                           "motor": args.motor, "resample": "refuse" if args.no_resample else "auto"}
+                           "motor": args.motor, "resample": "refuse" if args.no_resample else "auto",
+                           "negate": ",".join(args.negate) if args.negate else None}
     return {k: v for k, v in out.items() if v is not None}
 
 
@@ -76,8 +79,7 @@ def _read_options(args: argparse.Namespace) -> ReadOptions:
         return ReadOptions(**fields)
     except ValidationError as exc:
         err = exc.errors()[0]
-        name = str(err["loc"][0]) if err["loc"] else "options"
-        raise LogError(f"--{name.replace('_', '-')}", err["msg"]) from None
+        raise LogError(f"--{str(err['loc'][0] if err['loc'] else 'options').replace('_', '-')}", err["msg"]) from None
 
 
 def _steady(args: argparse.Namespace) -> bool | None:
@@ -105,8 +107,7 @@ def _print_points(d: dict[str, Any]) -> None:
 
 
 def _kept(c: dict[str, Any]) -> str:
-    """A calibration row's note when the calibrated plant does not take the fitted value (the log cannot
-    resolve the constant, or that side of it: ``applied`` differs from ``relative``)."""
+    """A calibration row's note where the plant does not take the fitted value (``applied`` is not ``relative``)."""
     a, r = c.get("applied"), c.get("relative")
     if not isinstance(a, int | float) or not isinstance(r, int | float) or abs(a - r) <= 1e-12:
         return ""
@@ -210,8 +211,7 @@ def _load_log(args: argparse.Namespace) -> Log:
         return read_log(args.log, _columns(args), kind, options=_read_options(args))
     name, data = _stdin_log(args)
     with tempfile.TemporaryDirectory(prefix="thrustshape-") as tmp:  # the log readers take a path
-        path = Path(tmp) / name
-        path.write_bytes(data)
+        (path := Path(tmp) / name).write_bytes(data)
         return read_log(path, _columns(args), kind, options=_read_options(args))
 
 

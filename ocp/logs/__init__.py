@@ -19,7 +19,8 @@ onto a uniform grid (stated in :attr:`Log.notes`) or refused (:mod:`ocp.logs.tim
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Literal
 
@@ -42,7 +43,7 @@ from ocp.logs.writers import write_log_csv, write_reference_mat
 
 __all__ = ["MIN_SAMPLES", "QUANTITIES", "UNITS", "ColumnSpec", "Log", "LogKind", "ReadOptions", "check_finite",
            "check_parquet_size", "check_size",
-           "column_specs", "command_fraction", "log_from_arrays", "log_from_table", "read_log", "read_table",
+           "column_specs", "command_fraction", "log_from_arrays", "log_from_table", "negated", "read_log", "read_table",
            "write_log_csv", "write_reference_mat"]
 
 Format = Literal["auto", "table", "ulog", "dataflash"]
@@ -70,5 +71,16 @@ def read_log(
         if opt.columns:
             raise LogError("columns", "a column map applies to tables (CSV, Parquet, .xlsx, .mat), not to flight logs")
 
-        return read_flight_log(p, flight, opt)
-    return log_from_table(read_table(p), opt, p.name)
+        return negated(read_flight_log(p, flight, opt), opt.negate)
+    return negated(log_from_table(read_table(p), opt, p.name), opt.negate)
+
+
+def negated(log: Log, channels: Sequence[str]) -> Log:
+    """``log`` with ``channels`` negated (the rotor angle with the speed), stated in its notes
+    (:attr:`ReadOptions.negate`)."""
+    if not channels:
+        return log
+    flip: dict[str, Any] = {c: -v for c in dict.fromkeys(channels) if (v := getattr(log, c)) is not None}
+    if "omega" in flip and log.theta is not None:
+        flip["theta"] = -log.theta
+    return replace(log, **flip, notes=(*log.notes, f"negated as asked: {', '.join(dict.fromkeys(channels))}"))

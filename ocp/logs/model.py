@@ -15,10 +15,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field, replace
 from enum import StrEnum
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from ocp.errors import LogError
 
@@ -77,6 +77,8 @@ class ReadOptions(BaseModel):
             command (us or %) or the file is a flight log, else the armature's
         resample: irregular timestamps are put on a uniform grid (``auto``, stated in the notes) or refused
         motor: which motor/ESC of a flight log (ESC instance; output channel ``motor + 1``)
+        negate: channels the file holds with the opposite sign to the motor model's (positive voltage drives
+            positive current, speed and thrust): negated after reading, stated in the notes
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -89,6 +91,12 @@ class ReadOptions(BaseModel):
     electrical: Literal["auto", "armature", "supply"] = "auto"
     resample: Literal["auto", "refuse"] = "auto"
     motor: int = Field(default=0, ge=0, le=15)
+    negate: tuple[Literal["voltage", "current", "omega", "thrust", "torque"], ...] = ()
+
+    @field_validator("negate", mode="before")
+    @classmethod
+    def _channels(cls, v: Any) -> Any:  # "current,thrust" (a form field, a CLI flag) as a tuple
+        return tuple(c.strip() for c in v.split(",") if c.strip()) if isinstance(v, str) else v
 
     def half_range_us(self) -> float:
         """Full-scale pulse offset [us] from neutral; the range must hold the neutral (a unidirectional ESC:

@@ -41,6 +41,8 @@ function readFields() {
   if ($("#m-electrical").value !== "auto") out.electrical = $("#m-electrical").value;
   const motor = readNumber($("#m-motor"), { optional: true, integer: true });
   if (motor !== undefined) out.motor = String(motor);
+  const negate = $("#m-negate").value.trim();
+  if (negate) out.negate = negate;
   return out;
 }
 

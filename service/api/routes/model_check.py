@@ -4,7 +4,7 @@
 by file name suffix or content), ``params`` (a preset name or the JSON text of a parameter mapping,
 optionally with an ``effects`` block -- never a server path), optional ``columns`` (JSON column map,
 see :mod:`ocp.logs`), ``steady_state`` (``true``/``false``; omitted: detected), the read options
-``pole_pairs``, ``neutral_us``, ``throttle_range_us``, ``electrical``, ``motor``, ``resample``
+``pole_pairs``, ``neutral_us``, ``throttle_range_us``, ``electrical``, ``motor``, ``resample``, ``negate``
 (:class:`ocp.logs.ReadOptions`); ``/fit`` also ``effects`` (comma-separated names). The answer is the
 core result's ``to_dict()`` with the equations checked and not (``equations``) and what the reader
 did (``notes``); ``/check?report=html`` answers the self-contained HTML report. The work runs in a
@@ -87,11 +87,13 @@ def read_form(
     motor: Annotated[int, Form(ge=0, le=15, description="which motor/ESC of a flight log")] = 0,
     resample: Annotated[Literal["auto", "refuse"], Form(description="irregular timestamps: resample (stated in "
                                                                     "the answer) or refuse")] = "auto",
+    negate: Annotated[str | None, Form(max_length=60, description="channels logged with the opposite sign to the "
+                                       "model's, comma-separated (voltage, current, omega, thrust, torque)")] = None,
 ) -> dict[str, Any]:
     """The read options (:class:`ocp.logs.ReadOptions`) of a model-check upload, checked here."""
     with _form_field():
         return parse_read(pole_pairs=pole_pairs, neutral_us=neutral_us, throttle_range_us=throttle_range_us,
-                          electrical=electrical, motor=motor, resample=resample)
+                          electrical=electrical, motor=motor, resample=resample, negate=negate)
 
 
 ReadForm = Annotated[dict[str, Any], Depends(read_form)]
