@@ -2,15 +2,15 @@
 
 Procedure:
 
-1. **Alignment** (:mod:`.align`): the command-to-sensor lag is estimated first and removed; only a lag
-   beyond what logging conventions explain (stated rule there) is called ``input_delay``, and only when it
-   predicts the held-out speed and current better (by ``min_improvement``) than the best lag within them, or
-   halves the alignment search's own residual (the armature equation with free coefficients, which wrong
-   nominal constants do not swamp), or predicts the armature's held-out current better from the logged speed.
-2. Split the log into segments of ``segment_s`` seconds; every ``holdout_every``-th is held out
-   (steady-state sweeps: rows). Competing models are scored by cross-validation (``cross_validate``): each
-   of the ``holdout_every`` classes of segments is held out in turn, the model fitted on the others, so that
-   every row is held out once (evidence at one slow reversal counts wherever it falls).
+1. **Conventions** (:mod:`.signs`, :mod:`.align`): a channel logged with the opposite sign is refused, named; the
+   command-to-sensor lag is estimated and removed; only a lag beyond what logging conventions explain (stated rule
+   there) is called ``input_delay``, and only when it predicts the held-out speed and current better (by
+   ``min_improvement``) than the best lag within them, or halves the alignment search's own residual (the armature
+   equation with free coefficients, which wrong constants do not swamp), or predicts the armature's held-out
+   current better from the logged speed.
+2. Split the log into segments of ``segment_s`` seconds; every ``holdout_every``-th is held out (sweeps: rows).
+   Competing models are scored by cross-validation (``cross_validate``): each class of segments held out in turn,
+   the model fitted on the others (every row held out once: evidence at one slow reversal counts where it falls).
 3. **Regression** (:mod:`.regression`): the nominal model's equation residuals against the columns of
    every candidate -- catalogue effects (shaped ones on a grid; angle-periodic torque with its period
    count from the residual's spectrum against rotor angle) and relative errors of the constants.
@@ -77,6 +77,7 @@ from ocp.identify.inductance import (
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels, read_current
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
 from ocp.identify.select import Selection, select
+from ocp.identify.signs import check_signs
 from ocp.logs import Log, LogKind
 from ocp.model.effects import make_effect
 from ocp.model.plant import DCMotorPlant
@@ -89,13 +90,11 @@ class DiagnoseOptions(BaseModel):
 
     segment_s: float = Field(default=0.5, gt=0)
     holdout_every: int = Field(default=3, ge=2)
-    # competing models are scored by cross-validation: each class of segments held out in turn (every row held out
-    # once), rather than on the one class of held-out segments (evidence at a few slow reversals fell in training)
+    # models scored by cross-validation (each segment class held out in turn), not on one class (item 2 above)
     cross_validate: bool = True
     min_improvement: float = Field(default=0.12, gt=0, lt=1)  # an effect's held-out score must fall by this
-    # [noise units] a model whose every equation is within this of its noise level (1) is done (until session 10,
-    # 1.15: a B error halving a torque equation at 1.149 noise units was not looked at). A constant is named only
-    # for an equation above it; an effect's material fall may show a noise level overestimated (.select's doc).
+    # [noise units] a model with every equation within this of its noise level (1) is done (session 10: not 1.15); a
+    # constant is named only for an equation above it, an effect's material fall may show a noise level overestimated
     noise_floor: float = Field(default=1.0, gt=0)
     max_effects: int = Field(default=3, ge=1, le=10)  # at most this many items in the verdict
     include_params: bool = True  # constants may be named beyond the tolerance (else: calibration only)
@@ -117,8 +116,7 @@ def finite(x: float) -> float | None:
 
 @dataclass(frozen=True)
 class Split:
-    """Training and held-out masks (N,) over log samples; ``folds``: the held-out masks of cross-validation, each
-    segment class in turn (empty: one split)."""
+    """Training and held-out masks (N,); ``folds``: cross-validation's held-out masks (empty: one split)."""
 
     train: np.ndarray
     test: np.ndarray
@@ -265,9 +263,10 @@ def aligned(plant: DCMotorPlant, log: Log, max_logging_skew: float) -> tuple[Ali
     """``log`` realigned by the lag logging conventions explain, for confronting ``plant`` with it (``check``,
     ``fit``), and that alignment: estimated as :func:`diagnose` does, held within the conventions (:func:`.within`: a
     longer lag is an ``input_delay``, which only :func:`diagnose` names), less the delay ``plant`` applies itself. A
-    steady-state sweep is returned as it is."""
+    steady-state sweep is returned as it is. A channel logged with the opposite sign is refused (:mod:`.signs`)."""
     if log.kind is not LogKind.TIME_SERIES:
         return estimate(log), log
+    check_signs(plant, log)
     own, armature = timing(plant, log)
     align = estimate(log, max_logging_skew + own, armature)
     if align.delay:
@@ -285,6 +284,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
 
         return diagnose_points(plant, log, opt)
     effects, pool = _pool(plant, opt)
+    check_signs(plant, log)
     own, armature = timing(plant, log)
     align = estimate(log, opt.max_logging_skew + own if log.kind is LogKind.TIME_SERIES else 0.0, armature)
     seg = min(opt.segment_s, log.n * log.dt / (3 * opt.holdout_every)) if log.kind is LogKind.TIME_SERIES \
