@@ -16,7 +16,7 @@ import pytest
 
 from clients import AsyncClient, InvalidInput
 from clients.cli import main
-from ocp.logs import write_log_csv
+from ocp.logs import negated, read_log, write_log_csv
 from ocp.model.effects import load_plant
 from ocp.model.params import MotorParams
 from tests.service.test_service_support import Server, start_server
@@ -176,6 +176,24 @@ def test_server_errors_name_the_field(server: Server, rig_csv: Path, monkeypatch
     code, _, err = run(["check", str(rig_csv), "--params", "paper-rig", "--columns", '{"thrust": "force"}',
                         "--server", server.url], capsys)
     assert code == 1 and "422" in err and "force: missing column" in err
+
+
+def test_a_negated_current_is_refused_and_read_back_with_negate(server: Server, rig_csv: Path, tmp_path: Path,
+                                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    """The project's own rig log with its current negated: the worker refuses it naming the field (the sign
+    check, :mod:`ocp.identify.signs`); the form field ``negate`` reads it back, and the verdict is the unflipped
+    log's (the local run's, as the other tests here)."""
+    log = read_log(rig_csv)
+    flipped = tmp_path / "flipped.csv"
+    write_log_csv(negated(log, ["current"]), flipped)
+    argv = ["diagnose", str(flipped), "--params", "paper-rig", "--max-effects", "1", "--server", server.url,
+            "--api-key", KEY]
+    code, _, err = run(argv, capsys)
+    assert code == 1 and "current" in err and "opposite sign" in err and "--negate current" in err
+    code, out, err = run([*argv, "--negate", "current", "--json"], capsys)
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["verdict"] == ["brush_drop"] and "negated as asked: current" in d["notes"]
 
 
 def test_async_client_model_check(server: Server, rig_csv: Path, rig: MotorParams) -> None:
