@@ -44,11 +44,13 @@ def _scale(y: np.ndarray, x: np.ndarray) -> float:
 
 
 def scales(plant: DCMotorPlant, log: Log) -> dict[str, float]:
-    """The projections of the module doc: ``mechanical``, ``current``, ``speed``, ``thrust`` (NaN where the log
-    lacks the channel or the terms are empty). The terms are the constants' columns (:func:`.columns.constant_columns`:
-    each the term times its constant's relative error; the armature's ``R`` and ``L`` columns sum to its exact step)."""
+    """The projections of the module doc [-]: ``mechanical``, ``current``, ``speed``, ``thrust`` (NaN where the log
+    lacks the channel or the terms are empty). The terms are the constants' columns (:func:`.columns.constant_columns`,
+    each the term its constant multiplies; the armature's ``R`` and ``L`` columns sum to its exact step)."""
     s = signals(log, plant.params)
     c = constant_columns(plant.params, s)
+    # eq. dc_electrical (V against R i + L i' and k_e w), eq. dc_mechanical (k_t i against J w' + B w + c_tau w|w|),
+    # eq. thrust (F against c_f w|w|): each a scale of about +1 where the signs agree
     beta_i, beta_w = np.linalg.lstsq(np.vstack([c["R"][1] + c["L"][1], c["k"][1]]).T, s.v, rcond=None)[0]
     thrust = "thrust" not in log.absent and bool(np.any(s.f))
     return {"mechanical": _scale(-c["k"][0], c["J"][0] + c["B"][0] + c["c_tau"][0]),

@@ -17,6 +17,7 @@ from clients.cli import main
 from ocp.errors import LogError
 from ocp.identify import check, diagnose, fit
 from ocp.identify.signs import negated as found
+from ocp.identify.signs import scales
 from ocp.logs import ReadOptions, negated, read_log, write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -38,6 +39,8 @@ def test_a_negated_channel_is_refused_naming_it(seed: int) -> None:
     rig, cols = _rig(seed)
     plant = DCMotorPlant(MotorParams(**rig.nominal))
     log = rig_log(cols)
+    # the oracle: a rig drawn with exact nominal constants scales each equation's terms by about one
+    assert all(abs(b - 1.0) < 0.1 for b in scales(plant, log).values())
     assert found(plant, log) == {}
     for ch in CHANNELS:
         bad = negated(log, [ch])
