@@ -81,14 +81,13 @@ def directions(omega: np.ndarray) -> tuple[float, float, float]:
     return float(np.mean(omega > 0.05 * top)), float(np.mean(omega < -0.05 * top)), float(np.mean(w < 0.1 * top))
 
 
-def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False,
-                gain: Sequence[str] = ()) -> list[dict[str, Any]]:
+def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False, gain: bool = False) -> list[dict[str, Any]]:
     """Per coverage gap of ``log`` (:func:`coverage`): ``gap``, why (``text``), the effects and constants it hides
     (``hidden``, catalogue names or ``param:<key>``, those ``named`` left out: a verdict's, shown after all) and
     whether ``design-experiment`` probes it (``design``: a time series); a verdict without them says nothing about
     them. ``rows``: a log checked point by point (a sweep, an ESC rig, a flight log: no time, maybe no armature
     voltage), where only the direction counts: turning one way only, it cannot show a drag or thrust asymmetry
-    (:data:`ROW_GAPS`). ``gain``: the named items that one gain on the command fits as well (:mod:`.gain`): on one
+    (:data:`ROW_GAPS`). ``gain``: one gain on the command fits the named corrections as well (:mod:`.gain`); on one
     voltage magnitude the text says whether the corrections named among :data:`GAIN` are that gain."""
     if rows:
         pos, neg, _ = directions(log.omega)

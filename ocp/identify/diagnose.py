@@ -354,8 +354,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     ambiguous += [r for r in (rival, gain) if r]
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
-                          spectrum_peak(design), opt.tolerance,
-                          blind_spots(log, verdict, gain=str(gain["adopted"]).split(" + ") if gain else ()))
+                          spectrum_peak(design), opt.tolerance, blind_spots(log, verdict, gain=gain is not None))
 
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],
