@@ -17,9 +17,9 @@ Current and speed disagree where ``beta_m < -FLIP``; the armature equation says 
 lower); the command is negated where current and speed agree (``beta_m > FLIP``) and both armature scales are
 below ``-VOLTAGE_FLIP``; the thrust where ``beta_f`` (against the speed taken right way round) is below ``-FLIP``.
 The thresholds were set before looking at logs (a scale of -1 within the 5-50 % constant errors the proving ground
-draws, margins for effects and timing); on the proving ground's 600 logs of seeds 0..199, 14000..14199 and
-30000..30199 (``python bench/sign_conventions.py``) no channel of a log as drawn was called negated, and each
-channel negated was found on 95-100 % of them.
+draws, margins for effects and timing); on the proving ground's 1,000 logs of five 200-seed sets
+(``python bench/sign_conventions.py``) no channel of a log as drawn was called negated, and a negated current or
+speed was found on 995, a thrust on 991, a command on 961.
 """
 
 from __future__ import annotations
