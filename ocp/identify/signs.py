@@ -24,6 +24,8 @@ speed was found on 995, a thrust on 991, a command on 961.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from ocp.errors import LogError
@@ -95,3 +97,20 @@ def check_signs(plant: DCMotorPlant, log: Log) -> None:
                                 + f"; negate it in the file, or read it with negate={list(found)!r} "
                                   f"(CLI --negate {' --negate '.join(found)})")
 
+
+def check_point_signs(plant: DCMotorPlant, log: Log, equations: Sequence[str]) -> None:
+    """The same for a log checked point by point (a sweep, an ESC rig; ``equations`` it checks): only the thrust map,
+    eq. thrust_model, ``F`` against ``c_f w|w|`` over its finite rows, holds a sign there that no constant's error
+    turns (a supply's current is no armature current, a command fraction no voltage). Raises
+    :class:`ocp.errors.LogError` on the thrust, naming the speed as the other suspect."""
+    if "thrust" not in equations:
+        return
+    w, f = log.omega, log.thrust
+    ok = np.isfinite(w) & np.isfinite(f)
+    b = _scale(f[ok], plant.params.c_f * w[ok] * np.abs(w[ok]))
+    if b < -FLIP:
+        raise LogError("thrust", f"the thrust and the speed disagree in sign (F against c_f w|w|: scale {b:.2f}, "
+                                 "about +1 when they agree): one of them is logged with the opposite sign to the "
+                                 "model's (positive speed pushes positive thrust; a load cell that pushes, an encoder "
+                                 "counting the other way); negate it in the file, or read it with negate=['thrust'] "
+                                 "(CLI --negate thrust), or the speed (--negate omega)")

@@ -37,6 +37,7 @@ from ocp.identify.equations import (
     statuses,
 )
 from ocp.identify.estimate import assemble, peak_torque
+from ocp.identify.signs import check_point_signs
 from ocp.logs import Log, LogKind
 from ocp.model.plant import DCMotorPlant
 
@@ -183,6 +184,7 @@ class PointCheck:
 def check_points(plant: DCMotorPlant, log: Log) -> PointCheck:
     """Residuals of every checkable equation, by direction, the direction maps and (sweeps) every point."""
     eqs = checked(log)
+    check_point_signs(plant, log, eqs)
     res = residuals(plant, log, eqs)
     meas = measured_side(log, plant, eqs)
     drive: dict[str, float | None] = {}
@@ -212,6 +214,7 @@ def fit_points(plant: DCMotorPlant, log: Log, names: Sequence[str]) -> FitResult
     from ocp.identify.fit import FitResult, adoption_note
 
     eqs = checked(log)
+    check_point_signs(plant, log, eqs)
     cands = [candidate(n) for n in dict.fromkeys(names)]
     for c in cands:
         if not allowed(c.name, c.channel, log):

@@ -27,6 +27,7 @@ from ocp.identify.candidates import Candidate, all_candidates, candidate
 from ocp.identify.coverage import blind_spots
 from ocp.identify.diagnose import DiagnoseOptions, DiagnoseResult, RankEntry, Round, Score, finite
 from ocp.identify.equations import EquationStatus, allowed, checked, noise, residuals, statuses
+from ocp.identify.signs import check_point_signs
 from ocp.identify.steady import ROUTE, UNITS, direction_maps, fit_candidates, score
 from ocp.logs import Log
 from ocp.model.plant import DCMotorPlant
@@ -205,6 +206,7 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
     """Rank the time-free candidates on the checkable equations, point by point (module doc)."""
     opt = options or DiagnoseOptions()
     eqs = checked(log)
+    check_point_signs(plant, log, eqs)
     if not eqs:
         return PointDiagnosis([], [], plant, {}, ["no equation can be checked on this log"],
                               equations=statuses(log), maps=direction_maps(log), kind=log.kind.value,

@@ -103,6 +103,24 @@ def test_a_sweep_fit_the_log_cannot_show_is_not_adopted(tmp_path: Path) -> None:
     assert res.to_dict()["adopted"] is False and res.calibrated()["notes"]["adopted"] is False
 
 
+def test_a_sweep_whose_thrust_opposes_its_speed_is_refused_naming_the_thrust(tmp_path: Path) -> None:
+    """A stand whose load cell pushes (the thrust column negated): no catalogue effect turns the thrust map's sign,
+    so diagnose, check and fit refuse it on the thrust (before: ``c_f``, a thrust asymmetry and a force offset at
+    78-93 noise units); read back with ``negate``, it is the sweep it was."""
+    th = Thruster(ratio=0.8)
+    rows = thruster_sweep(th)
+    write_csv(dict(rows, **{k: -v for k, v in rows.items() if k.startswith("Force")}), tmp_path / "pushed.csv",
+              title="Thruster at 16 V")
+    plant = load_plant(th.params())
+    log = read_log(tmp_path / "pushed.csv")
+    for op in (lambda: diagnose(plant, log), lambda: check(plant, log), lambda: fit(plant, log, ["thrust_asymmetry"])):
+        with pytest.raises(LogError) as err:
+            op()
+        assert err.value.field == "thrust" and "--negate thrust" in err.value.reason
+    back = read_log(tmp_path / "pushed.csv", options=ReadOptions(negate=("thrust",)))
+    assert diagnose(plant, back).to_dict()["verdict"] == ["thrust_asymmetry"]
+
+
 def test_tyto_series_checks_torque_from_the_cell_and_thrust(tmp_path: Path) -> None:
     cols, _ = tyto_series("1585")
     write_csv(cols, tmp_path / "tyto.csv")
