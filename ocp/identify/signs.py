@@ -93,9 +93,7 @@ def check_signs(plant: DCMotorPlant, log: Log) -> None:
         others = [c for c in found if c != channel]
         raise LogError(channel, f"logged with the opposite sign to the motor model's (positive voltage drives positive "
                                 f"current, speed and thrust): {why}"
-                                + (f"; {', '.join(others)} too" if others else "")
-                                + f"; negate it in the file, or read it with negate={list(found)!r} "
-                                  f"(CLI --negate {' --negate '.join(found)})")
+                                + (f"; {', '.join(others)} too" if others else "") + f"; {_fix(list(found))}")
 
 
 def check_point_signs(plant: DCMotorPlant, log: Log, equations: Sequence[str]) -> None:
@@ -112,5 +110,9 @@ def check_point_signs(plant: DCMotorPlant, log: Log, equations: Sequence[str]) -
         raise LogError("thrust", f"the thrust and the speed disagree in sign (F against c_f w|w|: scale {b:.2f}, "
                                  "about +1 when they agree): one of them is logged with the opposite sign to the "
                                  "model's (positive speed pushes positive thrust; a load cell that pushes, an encoder "
-                                 "counting the other way); negate it in the file, or read it with negate=['thrust'] "
-                                 "(CLI --negate thrust), or the speed (--negate omega)")
+                                 f"counting the other way); {_fix(['thrust'])}, or the speed (--negate omega)")
+
+
+def _fix(channels: list[str]) -> str:
+    """How to read ``channels`` back with the model's sign (:attr:`ocp.logs.ReadOptions.negate`)."""
+    return f"negate it in the file, or read it with negate={channels!r} (CLI --negate {' --negate '.join(channels)})"
