@@ -12,7 +12,7 @@ from typing import Any, cast
 import numpy as np
 
 from ocp.identify.angle import MAX_PERIODS, angle_limits, rotor_angle
-from ocp.logs import Log, LogKind
+from ocp.logs import Log
 
 #: the effects and constants each coverage gap hides (the probes :func:`ocp.identify.design.design` adds)
 GAPS: dict[str, tuple[str, ...]] = {
@@ -68,11 +68,6 @@ def coverage(log: Log) -> dict[str, Any]:
             "ripple_periods": reach, "voltage_spread": levels}
 
 
-def one_magnitude(log: Log) -> bool:
-    """Whether ``log`` is a time series whose command holds one voltage magnitude (:func:`coverage`)."""
-    return log.kind is LogKind.TIME_SERIES and not coverage(log)["voltage_range"]
-
-
 def directions(omega: np.ndarray) -> tuple[float, float, float]:
     """The fractions of the rows (N,) of ``omega`` [rad/s] turning forward and in reverse (beyond 5 % of the top
     speed, the 99th percentile of |w|), and slowly (under 10 % of it)."""
@@ -81,20 +76,21 @@ def directions(omega: np.ndarray) -> tuple[float, float, float]:
     return float(np.mean(omega > 0.05 * top)), float(np.mean(omega < -0.05 * top)), float(np.mean(w < 0.1 * top))
 
 
-def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False, gain: bool = False) -> list[dict[str, Any]]:
+def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False, gain: bool = False,
+                cov: dict[str, Any] | None = None) -> list[dict[str, Any]]:
     """Per coverage gap of ``log`` (:func:`coverage`): ``gap``, why (``text``), the effects and constants it hides
     (``hidden``, catalogue names or ``param:<key>``, those ``named`` left out: a verdict's, shown after all) and
     whether ``design-experiment`` probes it (``design``: a time series); a verdict without them says nothing about
     them. ``rows``: a log checked point by point (a sweep, an ESC rig, a flight log: no time, maybe no armature
     voltage), where only the direction counts: turning one way only, it cannot show a drag or thrust asymmetry
     (:data:`ROW_GAPS`). ``gain``: one gain on the command fits the named corrections as well (:mod:`.gain`); on one
-    voltage magnitude the text says whether the corrections named among :data:`GAIN` are that gain."""
+    voltage magnitude the text says whether the corrections named among :data:`GAIN` are that gain. ``cov``: the
+    log's :func:`coverage`, where the caller has it."""
     if rows:
         pos, neg, _ = directions(log.omega)
-        cov: dict[str, Any] = {"reversal": min(pos, neg) > 0.05}
-        table = ROW_GAPS
+        cov, table = {"reversal": min(pos, neg) > 0.05}, ROW_GAPS
     else:
-        cov, table = coverage(log), GAPS
+        cov, table = cov or coverage(log), GAPS
     taken = [n for n in named if n in GAIN]  # a one-magnitude command's gain, taken up as corrections?
     said = "" if not taken else f"; the corrections named here ({', '.join(taken)}) " + (
         "fit as one gain on it (listed under ambiguous)" if gain else "are not that gain alone (held-out fit)")

@@ -11,18 +11,17 @@ Procedure:
 2. Split the log into segments of ``segment_s`` seconds; every ``holdout_every``-th is held out (sweeps: rows).
    Competing models are scored by cross-validation (``cross_validate``): each class of segments held out in turn,
    the model fitted on the others (every row held out once: evidence at one slow reversal counts where it falls).
-3. **Regression** (:mod:`.regression`): the nominal model's equation residuals against the columns of
-   every candidate -- catalogue effects (shaped ones on a grid; angle-periodic torque with its period
-   count from the residual's spectrum against rotor angle) and relative errors of the constants.
+3. **Regression** (:mod:`.regression`): the nominal model's equation residuals against the columns of every
+   candidate -- catalogue effects (shaped ones on a grid; angle-periodic torque with its period count from the
+   residual's spectrum against rotor angle) and relative errors of the constants.
 4. **Selection** (:mod:`.select`): every model refines all constants within ``tolerance`` of nominal
    (``calibration``); a constant is *named* (``param:<key>`` in the verdict) only when freeing it beyond
    the tolerance wins on held-out data: forward selection while the held-out score is above ``noise_floor``
    and falls beyond sampling noise (an effect: also by ``min_improvement``; a constant's materiality is the
    tolerance). Adopted items that another item, or named constants that one gain on the command (:mod:`.gain`),
    explain equally well (within ``ambiguity_margin``) are reported under ``ambiguous`` with the reason.
-5. The user's plant and each round's adopted model are simulated (free run under the measured voltage,
-   :func:`ocp.identify.predict.free_run`) on the held-out segments: the per-channel errors reported.
-   ``verdict`` is the list of adopted effects and named constants, most important first.
+5. The user's plant and each round's adopted model are free-run (:func:`ocp.identify.predict.free_run`) on the
+   held-out segments: the per-channel errors reported. ``verdict``: adopted effects and named constants, by rank.
 """
 
 from __future__ import annotations
@@ -50,7 +49,7 @@ from ocp.identify.align import (
     within,
 )
 from ocp.identify.candidates import candidate
-from ocp.identify.coverage import blind_spots, one_magnitude
+from ocp.identify.coverage import blind_spots, coverage
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
     KEYS,
@@ -350,11 +349,13 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
                  for a in sel.ambiguous]
     rival = delay_rival(current, unconfirmed.samples, align.samples, noise["current"], opt.ambiguity_margin) \
         if unconfirmed is not None and "param:L" in verdict else None
-    gain = gain_rival(design, sel.final, opt.tolerance, opt.ambiguity_margin, one_magnitude(log))
+    cov = coverage(log)  # (read by the gain's reason and the blind spots)
+    gain = gain_rival(design, sel.final, opt.tolerance, opt.ambiguity_margin, not cov["voltage_range"])
     ambiguous += [r for r in (rival, gain) if r]
+    spots = blind_spots(log, verdict, gain=gain is not None, cov=cov)
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
-                          spectrum_peak(design), opt.tolerance, blind_spots(log, verdict, gain=gain is not None))
+                          spectrum_peak(design), opt.tolerance, spots)
 
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],
