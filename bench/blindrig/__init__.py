@@ -1,0 +1,1 @@
+"""Blind, independent test rig for the thrustshape motor-model checker (own physics, loggers, draws)."""
