@@ -29,6 +29,13 @@ STRIBECK_REACH = 0.5
 #: decaying as ``exp(-|r|^0.5..0.9)`` (proving ground ``--shapes``) was named with a Coulomb friction or a ``B``
 #: beside it; 0.5 offered too took Coulomb frictions (seeds 107, 126)
 STRIBECK_DECAYS = (2.0, 1.0)
+#: a driver dead band's forms offered (:class:`ocp.model.effects.VoltageDeadband`'s ``gap``): every command shifted
+#: by the band (the catalogue's default, a dead time), and a gap (commands inside the band give nothing, those beyond
+#: pass whole: a minimum pulse, an ESC's minimum throttle). With the first alone, no gap of the blind rig
+#: (``bench/blind_check.py``, seeds 0..199) was named: 6 % of the supply (seed 46) came back clean, the shifted form
+#: 11 % better on held-out rows and not significant; with both, 3 of the 5 its command enters (:mod:`.shape_choice`
+#: prefers the first)
+DEAD_BAND_FORMS = (0.0, 1.0)
 #: a command whose magnitude spreads by more than this (relative standard deviation) holds several levels
 #: (:func:`_levels`); a PRBS's quantised two levels spread by 0
 LEVEL_SPREAD = 0.05
@@ -50,16 +57,16 @@ class Column:
     item: str
     key: str
     shape: float = math.nan
-    #: a second shape, fixed per column: Stribeck friction's decay exponent (:data:`STRIBECK_DECAYS`); grid
-    #: neighbours (:func:`.select.fit_model`) share it
-    decay: float = math.nan
+    #: a second shape, fixed per column: Stribeck friction's decay exponent (:data:`STRIBECK_DECAYS`), a dead
+    #: band's form (:data:`DEAD_BAND_FORMS`); grid neighbours (:func:`.select.fit_model`) share it
+    form: float = math.nan
     #: False: zero at the rows where the rotor is at rest (:func:`at_rest`), for a model whose dry friction holds it
     at_rest: bool = True
 
     @property
     def plain(self) -> bool:
         """Whether the column has no second shape, or the catalogue's default one (the first offered)."""
-        return math.isnan(self.decay) or self.decay == STRIBECK_DECAYS[0]
+        return math.isnan(self.form) or (self.item == "stribeck" and self.form == STRIBECK_DECAYS[0])
 
 
 
@@ -389,9 +396,15 @@ def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
     z = np.zeros_like(s.w)
     key = "v_b" if name == "brush_drop" else "v_db"
     v_peak = float(np.max(np.abs(s.v))) or 1.0
-    return [(Column(name, key, b), np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size], s.dt, fc), z]))
-            for b in _grid(0.005 * v_peak, 0.3 * v_peak)
-            if np.any(np.abs(x) < b) or (name == "voltage_deadband" and _levels(x))]
+    widths = _grid(0.005 * v_peak, 0.3 * v_peak)
+    cols = [(Column(name, key, b), np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size], s.dt, fc), z]))
+            for b in widths if np.any(np.abs(x) < b) or (name == "voltage_deadband" and _levels(x))]
+    if name == "voltage_deadband":  # the gap: the held commands inside the band lost whole, those beyond kept
+        inside = [(b, np.abs(x) < b) for b in widths]
+        cols += [(Column(name, key, b, form=DEAD_BAND_FORMS[1]),
+                  np.vstack([z, _low(shifted(np.where(m, x, 0.0) / b, lag)[:s.v.size], s.dt, fc), z]))
+                 for b, m in inside if m.any() and not m.all()]
+    return cols
 
 
 def _levels(x: np.ndarray) -> bool:
@@ -410,7 +423,7 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
     """Columns of one effect (one per shape value for shaped effects; cogging's at ``periods``/rev, turned along a
     drifting angle by :func:`turn_ripple`)."""
     if name == "stribeck":  # on the logged speed's range, the same for the low-passed and the raw rows
-        return [(Column(name, "tau_s", ws, decay=d), _effect(name, {"tau_s": 1.0, "omega_s": ws, "delta": d}, p, s))
+        return [(Column(name, "tau_s", ws, form=d), _effect(name, {"tau_s": 1.0, "omega_s": ws, "delta": d}, p, s))
                 for ws, d in stribeck_bands(log)]
     if name == "coulomb_friction":  # the sign's sharpness on a grid (COULOMB_EDGES)
         w_peak = _peak_speed(log)

@@ -241,10 +241,12 @@ def free_run_errors(plant: DCMotorPlant, log: Log, samples: np.ndarray, noise: d
 
 
 def free_run_fit(start: Estimate, cands: Sequence[Candidate], base: DCMotorPlant, log: Log, samples: np.ndarray,
-                 noise: dict[str, float], segment_s: float, max_nfev: int = 40) -> Estimate:
-    """Refine ``start`` by minimising the free-run errors at ``samples``."""
+                 noise: dict[str, float], segment_s: float, max_nfev: int = 40,
+                 also: Sequence[np.ndarray] = ()) -> Estimate:
+    """Refine ``start`` by minimising the free-run errors at ``samples``; ``also``: more starting points (the best
+    refined is taken)."""
 
     def fun(theta: np.ndarray) -> np.ndarray:
         return free_run_errors(assemble(base, cands, theta), log, samples, noise, segment_s)
 
-    return _solve(fun, base, cands, [start.values], max_nfev=max_nfev, torque=peak_torque(base, log), lm=False)
+    return _solve(fun, base, cands, [start.values, *also], max_nfev=max_nfev, torque=peak_torque(base, log), lm=False)

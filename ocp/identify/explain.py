@@ -56,11 +56,11 @@ def effect_values(design: Design, f: Fitted, item: str) -> dict[str, float]:
         return {**out, "periods": col.shape}
     shape, x = _blend([(c.shape, x_) for c, x_ in picked])
     if item == "stribeck":
-        return {"tau_s": max(x, 0.0), "omega_s": shape, "delta": col.decay}
+        return {"tau_s": max(x, 0.0), "omega_s": shape, "delta": col.form}
     if item == "coulomb_friction":
         return {"tau_c": x, "omega_eps": shape}
     if item == "voltage_deadband":
-        return {"v_db": max(x, 0.0)}
+        return {"v_db": max(x, 0.0), "gap": 0.0 if col.plain else col.form}
     if item == "thrust_lag":
         return {"tau": shape}
     return {col.key: x}
@@ -173,6 +173,10 @@ def explain(item: str, values: dict[str, float], p: MotorParams, design: Design,
     if item == "stribeck":
         offered = ", ".join(f"{d:g}" for d in STRIBECK_DECAYS)
         text += f"; it decays as exp(-|w / omega_s|^{values.get('delta', 2.0):g}) (exponents tried: {offered})."
+    if item == "voltage_deadband":
+        text += ("; a gap: commands inside the band give nothing, those beyond pass whole (a minimum pulse)"
+                 if values.get("gap") else "; every command shifted by the band (a dead time)") + \
+            " (both forms tried)."
     return text
 
 

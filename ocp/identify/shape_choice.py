@@ -2,7 +2,8 @@
 
 A shaped effect (a Stribeck band's speed, a Coulomb friction's edge, a wake lag) has one column per grid value; the
 best by training cost is mixed with the better of its grid neighbours. A second shape fixed per column
-(:attr:`.columns.Column.decay`: Stribeck friction decaying exponentially beside the catalogue's Gaussian) splits the
+(:attr:`.columns.Column.form`: Stribeck friction decaying exponentially beside the catalogue's Gaussian, a dead
+band's gap beside its shift) splits the
 grid into runs that are not neighbours of each other, and the non-default run is preferred only by a margin.
 """
 
@@ -34,4 +35,4 @@ def neighbours(k: int, cols: list[Column]) -> list[int]:
     """The grid neighbours of column ``k`` among ``cols`` (ordered by second shape, then shape): those next to it
     with the same second shape."""
     same = [m for m in (k - 1, k + 1) if 0 <= m < len(cols)]
-    return [m for m in same if cols[m].decay == cols[k].decay or (cols[m].plain and cols[k].plain)]
+    return [m for m in same if cols[m].form == cols[k].form or (cols[m].plain and cols[k].plain)]

@@ -160,26 +160,44 @@ class ForceOffset(EffectBase):
         return thrust + self.f0
 
 
+#: the sharpness of a gap dead band's smooth step (:class:`VoltageDeadband`): its output rises from 2 % to 98 % of
+#: the command between 0.95 and 1.05 times the band (at 4, 6 % to 98 % over 0.8-1.25, a PI loop's command waiting
+#: at 0.9 times the band, where a drive with a minimum pulse puts out nothing, would put out 18 % of it)
+GAP_EDGE = 20.0
+
+
 @dataclass(frozen=True)
 class VoltageDeadband(EffectBase):
     """Driver dead band (H-bridge dead time, PWM minimum pulse): small commands do not reach the motor.
 
-    ``V_a = V - v_db tanh(V / v_db)`` [V]: ~0 for ``|V| << v_db``, ``V - v_db sign(V)`` beyond.
+    Two forms, ``gap`` a fixed shape (never fitted). ``gap = 0`` (the default), every command shifted by the band:
+    ``V_a = V - v_db tanh(V / v_db)`` [V], ~0 for ``|V| << v_db``, ``V - v_db sign(V)`` beyond (a dead time that
+    eats a fixed share of every pulse). ``gap = 1``, commands inside the band give nothing and those beyond pass
+    whole (a minimum pulse width, an ESC's minimum throttle): ``V_a = V s(V^2 / v_db^2)`` with the smooth step
+    ``s(x) = (1 + tanh(GAP_EDGE (x - 1))) / 2``, half the command at ``|V| = v_db``, 2 % of it at 0.95 ``v_db`` and
+    98 % at 1.05 ``v_db``.
     """
 
     v_db: float = 0.0
+    gap: float = 0.0
     name: ClassVar[str] = "voltage_deadband"
     channel: ClassVar[Channel] = "electrical"
-    units: ClassVar[dict[str, str]] = {"v_db": "V"}
+    units: ClassVar[dict[str, str]] = {"v_db": "V", "gap": "1"}
     fitted: ClassVar[tuple[str, ...]] = ("v_db",)
-    bounds: ClassVar[dict[str, tuple[float, float]]] = {"v_db": (0.0, 3.0)}
+    bounds: ClassVar[dict[str, tuple[float, float]]] = {"v_db": (0.0, 60.0)}  # (a 48 V drive's 8 %: 3.8 V)
     guess: ClassVar[dict[str, float]] = {"v_db": 0.1}
     signature: ClassVar[str] = ("voltage residual with the sign of the command (not of the current); "
                                 "no current flows while the command is small")
 
+    def __post_init__(self) -> None:
+        if self.gap not in (0.0, 1.0):
+            raise ParameterError("voltage_deadband.gap", f"must be 0 (shifted) or 1 (gap), got {self.gap:g}")
+
     def drive_voltage(self, voltage: Expr, current: Expr, ops: Ops) -> Expr:
         if self.v_db <= 1e-9:
             return voltage
+        if self.gap:
+            return voltage * 0.5 * (1.0 + ops.tanh(GAP_EDGE * ((voltage / self.v_db) ** 2 - 1.0)))
         return voltage - self.v_db * ops.tanh(voltage / self.v_db)
 
 

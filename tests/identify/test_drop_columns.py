@@ -41,7 +41,9 @@ def test_dead_band_columns_need_rows_inside_the_band() -> None:
     assert effect_columns("voltage_deadband", p, signals(log, p), log, 0) == []
     ramp = _log(np.linspace(-6.0, 6.0, 2000))  # passes through every band
     cols = effect_columns("voltage_deadband", p, signals(ramp, p), ramp, 0)
-    assert len(cols) == 12 and all(c.item == "voltage_deadband" for c, _ in cols)
+    assert all(c.item == "voltage_deadband" for c, _ in cols)
+    # both forms (columns.DEAD_BAND_FORMS) at each of the 12 widths: shifted, and a gap
+    assert sorted(c.form for c, _ in cols if not c.plain) == [1.0] * 12 and sum(c.plain for c, _ in cols) == 12
 
 
 def test_dead_band_column_is_the_low_passed_drop_of_the_held_command() -> None:

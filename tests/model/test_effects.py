@@ -151,3 +151,20 @@ def test_bad_effect_blocks_name_the_key(block: object, key: str, rig: MotorParam
 def test_preset_loads_as_plant_without_effects(rig: MotorParams) -> None:
     plant = load_plant("paper-rig")
     assert plant.params == rig and plant.effects == ()
+
+
+def test_a_gap_dead_band_passes_nothing_inside_and_the_whole_command_beyond() -> None:
+    """The gap form (``gap = 1``) against the hard gap it smooths (``V if |V| >= v_db else 0``), on both backends;
+    the shifted default unchanged (``V - v_db tanh(V / v_db)``); any other form refused, naming the key."""
+    gap, shift = make_effect("voltage_deadband", {"v_db": 2.0, "gap": 1.0}), make_effect("voltage_deadband",
+                                                                                           {"v_db": 2.0})
+    v = np.array([-3.0, -2.2, -1.8, 0.0, 0.5, 1.8, 2.2, 3.0])
+    hard = np.where(np.abs(v) >= 2.0, v, 0.0)
+    assert np.allclose(gap.drive_voltage(v, 0.0, NUMPY), hard, atol=0.04 * np.abs(v).max())
+    xs = ca.SX.sym("v")
+    f = ca.Function("f", [xs], [gap.drive_voltage(xs, 0.0, CASADI)])
+    assert np.allclose([float(f(x)) for x in v], gap.drive_voltage(v, 0.0, NUMPY))
+    assert np.allclose(shift.drive_voltage(v, 0.0, NUMPY), v - 2.0 * np.tanh(v / 2.0))
+    with pytest.raises(ParameterError) as err:
+        make_effect("voltage_deadband", {"v_db": 2.0, "gap": 0.5})
+    assert "voltage_deadband.gap" in str(err.value)

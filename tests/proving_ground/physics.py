@@ -88,10 +88,14 @@ def quasi_static_thrust(t: Truth, w: float) -> float:
 
 
 def drive_voltage(t: Truth, v_cmd: float) -> float:
-    """What the drive puts out [V]: the command clipped to the supply, then the dead zone (hard)."""
+    """What the drive puts out [V]: the command clipped to the supply, then the dead zone (hard): every command
+    shifted by the band, or with ``gap`` set (no case draws it; tests do), nothing inside the band and the whole
+    command beyond it (a minimum pulse width)."""
     v = max(-t.v_max, min(t.v_max, v_cmd))
     if "voltage_deadband" in t.effects:
         d = t.e("voltage_deadband", "v_db")
+        if t.e("voltage_deadband", "gap"):
+            return v if abs(v) >= d else 0.0
         v = math.copysign(max(abs(v) - d, 0.0), v)
     return v
 
