@@ -358,7 +358,7 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
     for a in d.get("ambiguous") or []:
         print(f"ambiguous: {a['adopted']} or {a['alternative']}: {a['reason']}")
     for b in d.get("blind_spots") or []:
-        print(f"this log cannot show {', '.join(b['hidden'])}: {b['text']}"
+        print((f"this log cannot show {', '.join(b['hidden'])}: " if b["hidden"] else "note: ") + b["text"]
               + (" (design-experiment proposes a run that can)" if b.get("design") else ""))
     _print_alignment(d, rule=True)
     cal = d.get("calibration") or {}

@@ -12,6 +12,7 @@ from typing import Any, cast
 import numpy as np
 
 from ocp.identify.angle import MAX_PERIODS, angle_limits, rotor_angle
+from ocp.identify.clipping import clip_spot
 from ocp.logs import Log
 
 #: the effects and constants each coverage gap hides (the probes :func:`ocp.identify.design.design` adds)
@@ -85,7 +86,8 @@ def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False, gain: b
     voltage), where only the direction counts: turning one way only, it cannot show a drag or thrust asymmetry
     (:data:`ROW_GAPS`). ``gain``: one gain on the command fits the named corrections as well (:mod:`.gain`); on one
     voltage magnitude the text says whether the corrections named among :data:`GAIN` are that gain. ``cov``: the
-    log's :func:`coverage`, where the caller has it."""
+    log's :func:`coverage`, where the caller has it. A clipped current (:mod:`.clipping`) is said too, hiding
+    nothing (``hidden`` empty: its rows are left out)."""
     if rows:
         pos, neg, _ = directions(log.omega)
         cov, table = {"reversal": min(pos, neg) > 0.05}, ROW_GAPS
@@ -96,7 +98,9 @@ def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False, gain: b
         "fit as one gain on it (listed under ambiguous)" if gain else "are not that gain alone (held-out fit)")
     spots = [(g, text + (said if g == "voltage_range" else ""), [h for h in hidden if h not in named])
              for g, text, hidden in open_gaps(cov, table)]
-    return [{"gap": g, "text": text, "hidden": hidden, "design": not rows} for g, text, hidden in spots if hidden]
+    clip = None if rows else clip_spot(log.current)  # (no effect hidden: the rows are left out, said here)
+    return [{"gap": g, "text": text, "hidden": hidden, "design": not rows} for g, text, hidden in spots if hidden] + \
+        ([clip] if clip else [])
 
 
 def open_gaps(cov: dict[str, Any], table: dict[str, tuple[str, ...]] = GAPS) -> list[tuple[str, str, tuple[str, ...]]]:

@@ -65,6 +65,7 @@ from ocp.identify.explain import (
     with_band,
 )
 from ocp.identify.gain import gain_rival
+from ocp.identify.holdout import Split, split
 from ocp.identify.inductance import (
     TIMING_MIMICS,
     delay_rival,
@@ -111,23 +112,6 @@ def dynamic(log: Log) -> bool:
 def finite(x: float) -> float | None:
     """JSON-safe float (None for NaN/inf)."""
     return float(x) if math.isfinite(x) else None
-
-
-@dataclass(frozen=True)
-class Split:
-    """Training and held-out masks (N,); ``folds``: cross-validation's held-out masks (empty: one split)."""
-
-    train: np.ndarray
-    test: np.ndarray
-    folds: tuple[np.ndarray, ...] = ()
-
-
-def split(log: Log, segment_s: float, every: int, cross: bool = False) -> Split:
-    """Every ``every``-th segment (row for sweeps) held out; ``cross``: and as folds, each class in turn."""
-    length = 1 if log.kind is LogKind.STEADY_STATE else max(2, round(segment_s / log.dt))
-    cls = (np.arange(log.n) // length) % every
-    test = cls == every - 1
-    return Split(~test, test, tuple(cls == k for k in range(every)) if cross else ())
 
 
 @dataclass(frozen=True)

@@ -31,9 +31,11 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.identify.align import Alignment
 from ocp.identify.candidates import candidate
+from ocp.identify.clipping import clipped, widened
 from ocp.identify.columns import DEAD_BAND_FORMS
 from ocp.identify.diagnose import aligned, diagnose, dynamic, finite
 from ocp.identify.estimate import equation_error_fit, equation_scales, free_run_errors, free_run_fit
+from ocp.identify.holdout import CLIP_MARGIN
 from ocp.identify.predict import (
     CHANNEL_UNITS,
     CHANNELS,
@@ -157,22 +159,22 @@ def with_ripple_count(plant: DCMotorPlant, log: Log, effects: Sequence[str]) -> 
 DEAD_BAND_STARTS = tuple(float(x) for x in np.geomspace(0.01, 0.3, 10))
 
 
-def dead_band_start(plant: DCMotorPlant, log: Log, effects: Sequence[str], noise: dict[str, float],
+def dead_band_start(plant: DCMotorPlant, log: Log, effects: Sequence[str], rows: np.ndarray, noise: dict[str, float],
                     segment_s: float) -> DCMotorPlant:
     """``plant`` with the dead band ``effects`` add (where it has none) at the form (:data:`.columns.DEAD_BAND_FORMS`:
-    shifted, a gap; a fixed shape the fit keeps) and width (:data:`DEAD_BAND_STARTS`) whose free run predicts
-    ``log`` best; else ``plant``. From the catalogue's guess (0.1 V, a small drive's) in the shifted form, a 3.8 V gap
-    was fitted at 0.003 V: a gap's residual moves only with the commands near its edge, and the one-step torque
-    equation (a fast armature's current follows the command within the step) fitted it worse than none though its
-    free run fell from 8.1 to 3.0 noise units (``tests/identify/test_dead_band_gap.py``): the free-run refinement
-    starts from this width too. A dead band the plant has
-    keeps its form and width (a parameter file or a diagnosis gave it)."""
+    shifted, a gap; a fixed shape the fit keeps) and width (:data:`DEAD_BAND_STARTS`) whose free run predicts ``log``
+    best on ``rows`` ((N,) bool); else ``plant``. From the catalogue's guess (0.1 V, a small drive's) in the shifted
+    form, a 3.8 V gap was fitted at 0.003 V: a gap's residual moves only with the commands near its edge, and the
+    one-step torque equation (a fast armature's current follows the command within the step) fitted it worse than
+    none though its free run fell from 8.1 to 3.0 noise units (``tests/identify/test_dead_band_gap.py``): the
+    free-run refinement starts from this width too. A dead band the plant has keeps its form and width (a parameter
+    file or a diagnosis gave it)."""
     if "voltage_deadband" not in effects or any(isinstance(e, VoltageDeadband) for e in plant.effects):
         return plant
-    peak, every = float(np.max(np.abs(log.voltage))), np.ones(log.n, dtype=bool)
+    peak = float(np.max(np.abs(log.voltage)))
     trials = [replace(plant, effects=(*plant.effects, VoltageDeadband(v_db=x * peak, gap=g)))
               for g in DEAD_BAND_FORMS for x in DEAD_BAND_STARTS]
-    return min(trials, key=lambda q: _combined(free_run_errors(q, log, every, noise, segment_s)))
+    return min(trials, key=lambda q: _combined(free_run_errors(q, log, rows, noise, segment_s)))
 
 
 def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptions | None = None) -> FitResult:
@@ -186,10 +188,10 @@ def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptio
     plant = with_ripple_count(plant, log, effects)
     align, log = aligned(plant, log, opt.max_logging_skew)
     cands = [candidate(n) for n in dict.fromkeys(effects)]
-    every = np.ones(log.n, dtype=bool)
+    every = ~widened(clipped(log.current), CLIP_MARGIN)  # (a clipped current's rows: :mod:`.holdout`)
     scales = equation_scales(plant, log, every)
     noise = noise_levels(log)
-    db = dead_band_start(plant, log, effects, noise, opt.segment_s)
+    db = dead_band_start(plant, log, effects, every, noise, opt.segment_s)
     first = [np.array(list(c.values(db).values())) for c in cands]  # the refinement starts there too (its doc)
     also = [np.concatenate(first)] if db is not plant and all(v.size for v in first) else []
     plant = db

@@ -21,11 +21,11 @@ are explained by a linear combination of columns, one set per candidate:
 Where an angle is logged, the torque equation can also be written on the RAW rows (``raw_torque``;
 :func:`.columns.raw_signals`: mean speeds between samples, exact from the angle), judged through the same speed view
 (:func:`speed_view`): a torque ripple locked to the rotor angle is often faster than the low-pass (20-60
-periods/rev) and would be filtered out before it could be seen (:func:`ocp.identify.diagnose.diagnose`
-uses that view wherever an angle is logged). The ripple's columns are its exact
-means over each row (:func:`interval_ripple`), so a ripple faster than the sampling averages out instead
-of aliasing; its period count is the one whose columns, fitted beside the others, best predict held-out rows
-(:func:`.ripple.pick_periods`; :func:`angle_limits` says when the log cannot show it).
+periods/rev) and would be filtered out before it could be seen (:func:`ocp.identify.diagnose.diagnose` uses that
+view wherever an angle is logged). The ripple's columns are its exact means over each row (:func:`interval_ripple`),
+so a ripple faster than the sampling averages out instead of aliasing; its period count is the one whose columns,
+fitted beside the others, best predict held-out rows (:func:`.ripple.pick_periods`; :func:`angle_limits` says when the
+log cannot show it).
 
 Where something holds the rotor (:func:`.columns.held_still`: dry friction holds whatever stays within its level), the
 torque balance holds a torque no column expresses: those rows are cut from the torque equation for every model.
@@ -48,6 +48,7 @@ from scipy import signal
 
 from ocp.identify.align import cutoff_hz
 from ocp.identify.angle import MAX_PERIODS, angle_limits, ripple_independence, speed_noise, tracked_periods
+from ocp.identify.clipping import clipped, widened
 from ocp.identify.columns import (
     DROPS,
     Column,
@@ -83,8 +84,7 @@ CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 NUISANCE_BOUNDS: dict[str, tuple[float, float]] = {"current_lag": (-1.0, math.inf), "switch_phase": (-0.5, 0.5),
                                                    "current_bend": (0.0, 1.0), "speed_lag": (0.0, 2.0)}
 NUISANCES: tuple[str, ...] = tuple(NUISANCE_BOUNDS)
-#: dry friction: set-valued where the rotor is at rest (:func:`.columns.at_rest`); beside it the ripple's columns
-#: are left out there (:func:`.select.fit_model`)
+#: dry friction: set-valued where the rotor is at rest (:func:`.columns.at_rest`); the ripple's beside it left out there
 DRY = frozenset({"coulomb_friction", "stribeck"})
 #: effects found by regression (input_delay is found by the alignment)
 REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")
@@ -262,6 +262,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     if log.kind is LogKind.TIME_SERIES:  # the low-passes' start-up and run-out transients
         m = min(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt)), rows // 6)
         edge[:m] = edge[rows - m:] = True
+        edge |= widened(clipped(log.current[:rows]), m)  # a clipped current and its transient, as the ends (.clipping)
     train, test = train[:rows] & ~edge, test[:rows] & ~edge
     cols = _columns(p, s, raw, log, effects, held)
     # noise level per equation: what the richest fit (one shape per effect) leaves on training rows

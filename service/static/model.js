@@ -217,8 +217,8 @@ function showDiagnosisDetails(res, after) {
   };
   for (const a of res.ambiguous || []) line(`Ambiguous: ${a.adopted} or ${a.alternative} — ${a.reason}`, "m-ambiguous");
   for (const b of res.blind_spots || []) {  // what this log cannot show, whatever the verdict
-    line(`This log cannot show ${b.hidden.join(", ")}: ${b.text}.` + (b.design ? " Design the experiment to show them." : ""),
-         "m-blind");
+    line((b.hidden.length ? `This log cannot show ${b.hidden.join(", ")}: ` : "Note: ") + `${b.text}.` +
+         (b.design ? " Design the experiment to show them." : ""), "m-blind");
   }
   const al = res.alignment;
   if (al) {
