@@ -29,7 +29,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench.modelcheck import case_log, load_case, noise_free
 from ocp.identify.align import estimate, realign
 from ocp.identify.columns import nuisance_columns, raw_signals, signals
-from ocp.identify.regression import rotor_tau, speed_view
+from ocp.identify.regression import speed_view
+from ocp.identify.resolution import rotor_tau
 from ocp.model.params import MotorParams
 from tests.proving_ground.calibration import without
 from tests.proving_ground.physics import load_torque

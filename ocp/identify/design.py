@@ -51,7 +51,7 @@ from ocp.identify.coverage import COMMON_GAIN, coverage, open_gaps
 from ocp.identify.diagnose import DiagnoseResult, aligned, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
 from ocp.identify.predict import CHANNELS, MAX_STEPS_PER_SAMPLE, SUBSTEPS, noise_levels, substeps
-from ocp.identify.regression import ADVISED_SAMPLES, ARMATURE_SAMPLES, advised_rate, slow_armature
+from ocp.identify.resolution import ADVISED_SAMPLES, ARMATURE_SAMPLES, advised_rate, slow_armature
 from ocp.identify.separation import (
     Rival,
     confusion,

@@ -26,7 +26,8 @@ from scipy.optimize import least_squares, lsq_linear
 from ocp.errors import SolverError
 from ocp.identify.candidates import Candidate
 from ocp.identify.predict import CHANNELS, EQUATIONS, free_run, one_step, run_rows
-from ocp.identify.regression import rotor_tau, speed_view
+from ocp.identify.regression import speed_view
+from ocp.identify.resolution import rotor_tau
 from ocp.logs import Log, LogKind
 from ocp.model.plant import DCMotorPlant
 

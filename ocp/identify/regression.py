@@ -65,6 +65,7 @@ from ocp.identify.columns import (
     targets,
 )
 from ocp.identify.footprint import BANDED, Footprints, grams
+from ocp.identify.resolution import rotor_tau, unresolved
 from ocp.identify.ripple import pick_periods, residualizer
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE
@@ -98,9 +99,6 @@ DEGENERATE = 1e-6
 #: a held-out block (:func:`_blocks`) spans at least this many independent torque rows (rotor time constants of
 #: the speed view), so that blocks are nearly independent of each other
 BLOCK_INDEPENDENT = 3.0
-#: the fewest samples per L/R that resolve ``L`` (:func:`unresolved`), and those advised (:func:`advised_rate`): rigs at
-#: 0.01-1.9 samples re-logged under voltage steps had an ``L`` error named in 26 and 36 of 41 (bench/logging_rate.py)
-ARMATURE_SAMPLES, ADVISED_SAMPLES = 2.0, 4.0
 
 
 @dataclass
@@ -219,13 +217,6 @@ def speed_view(y: np.ndarray, dt: float, tau: float) -> np.ndarray:
         return y
     a = math.exp(-dt / tau)
     return np.asarray(signal.filtfilt([1.0 - a], [1.0, -a], y, axis=0, padlen=0), float)
-
-
-def rotor_tau(p: MotorParams, w: np.ndarray) -> float:
-    """Rotor time constant [s] at the logged speeds ``w`` (N,) [rad/s]: ``J / (k_t k_e / R + B + 2 c_tau rms(w))``
-    (nominal)."""
-    rms = float(np.sqrt(np.mean(w * w))) if w.size else 0.0
-    return p.J / (p.k_t * p.k_e / p.R + p.B + 2.0 * p.c_tau * rms)
 
 
 def visible_torque(p: MotorParams, s: Signals, noise: dict[str, float]) -> float:
@@ -420,28 +411,6 @@ def _columns(p: MotorParams, s: Signals, raw: Signals, log: Log, effects: tuple[
 
 def _effect_columns_on(name: str, p: MotorParams, log: Log, s: Signals) -> list[tuple[Column, np.ndarray]]:
     return effect_columns(name, p, s, log, 0)
-
-
-def unresolved(p: MotorParams, log: Log) -> dict[str, str]:
-    """Constants this log cannot resolve from logger artefacts, with the reason: the inductance when the
-    electrical time constant L/R is under two samples (a current filter or a fraction of a sample of
-    command timing then looks the same)."""
-    out = {}
-    if log.kind is LogKind.STEADY_STATE or slow_armature(p, log.dt):
-        out["L"] = (f"L/R = {1e3 * p.L / p.R:.3g} ms is under two samples ({1e3 * log.dt:.3g} ms): the log cannot tell "
-                    "an inductance error from current filtering or sub-sample command timing; logged at "
-                    f"{advised_rate(p) / 1e3:.3g} kHz or faster (voltage steps, any excitation) it can")
-    return out
-
-
-def slow_armature(p: MotorParams, dt: float) -> bool:
-    """Whether samples ``dt`` [s] apart are too few per electrical time constant L/R to resolve ``L``."""
-    return p.L / p.R < ARMATURE_SAMPLES * dt
-
-
-def advised_rate(p: MotorParams) -> float:
-    """The logging rate [Hz] that checks ``L``: :data:`ADVISED_SAMPLES` samples per electrical time constant L/R."""
-    return ADVISED_SAMPLES * p.R / p.L
 
 
 def _mid(cols: list[tuple[Column, np.ndarray]], item: str) -> float:
