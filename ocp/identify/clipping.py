@@ -4,10 +4,12 @@ rigs this project did not build).
 A current sensor ranged for the stall current clips the spikes of a hard reversal; the clipped rows are no armature
 current the equations can use, and the torque residual they leave at every reversal was named an angle ripple, a
 dead band or a ``J`` error (blind rig, ``bench/blind_check.py``, seeds 0..199: its current ADC clips on 30 logs, and
-six of the seven false ripples were among them; five are detected here, and four of those are now right). A clipped channel piles up at its extreme value: rows at exactly its top (or
-bottom) value, many more of them than rows just below it, where a channel that merely peaks touches its extreme
-once, or sits just under it as often as on it. Those rows, and the low-pass's transient around them, are left out
-of every equation; ``diagnose`` says so among the blind spots.
+six of the seven false ripples were among them; five are detected here, and four of those are now right).
+
+A clipped channel piles up at its extreme value: rows at exactly its top (or bottom) value, many more of them than
+rows just below it, where a channel that merely peaks touches its extreme once, or sits just under it as often as
+on it. Those rows, and the low-pass's transient around them, are left out of every equation; ``diagnose`` says so
+among the blind spots.
 """
 
 from __future__ import annotations

@@ -29,12 +29,9 @@ STRIBECK_REACH = 0.5
 #: decaying as ``exp(-|r|^0.5..0.9)`` (proving ground ``--shapes``) was named with a Coulomb friction or a ``B``
 #: beside it; 0.5 offered too took Coulomb frictions (seeds 107, 126)
 STRIBECK_DECAYS = (2.0, 1.0)
-#: a driver dead band's forms offered (:class:`ocp.model.effects.VoltageDeadband`'s ``gap``): every command shifted
-#: by the band (the catalogue's default, a dead time), and a gap (commands inside the band give nothing, those beyond
-#: pass whole: a minimum pulse, an ESC's minimum throttle). With the first alone, no gap of the blind rig
-#: (``bench/blind_check.py``, seeds 0..199) was named: 6 % of the supply (seed 46) came back clean, the shifted form
-#: 11 % better on held-out rows and not significant; with both, 3 of the 5 its command enters (:mod:`.shape_choice`
-#: prefers the first)
+#: a driver dead band's forms (:class:`ocp.model.effects.VoltageDeadband`'s ``gap``): shifted (a dead time, the
+#: default) and a gap (a minimum pulse); with the first alone no gap of the blind rig (``bench/blind_check.py``) was
+#: named, with both 3 of the 5 its command enters (:mod:`.shape_choice` prefers the first)
 DEAD_BAND_FORMS = (0.0, 1.0)
 #: a command whose magnitude spreads by more than this (relative standard deviation) holds several levels
 #: (:func:`_levels`); a PRBS's quantised two levels spread by 0
@@ -399,12 +396,10 @@ def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
     widths = _grid(0.005 * v_peak, 0.3 * v_peak)
     cols = [(Column(name, key, b), np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size], s.dt, fc), z]))
             for b in widths if np.any(np.abs(x) < b) or (name == "voltage_deadband" and _levels(x))]
-    if name == "voltage_deadband":  # the gap: the held commands inside the band lost whole, those beyond kept
-        inside = [(b, np.abs(x) < b) for b in widths]
-        cols += [(Column(name, key, b, form=DEAD_BAND_FORMS[1]),
-                  np.vstack([z, _low(shifted(np.where(m, x, 0.0) / b, lag)[:s.v.size], s.dt, fc), z]))
-                 for b, m in inside if m.any() and not m.all()]
-    return cols
+    gaps = [(b, np.abs(x) < b) for b in widths] if name == "voltage_deadband" else []  # (inside: lost whole)
+    return cols + [(Column(name, key, b, form=DEAD_BAND_FORMS[1]),
+                    np.vstack([z, _low(shifted(np.where(m, x, 0.0) / b, lag)[:s.v.size], s.dt, fc), z]))
+                   for b, m in gaps if m.any() and not m.all()]
 
 
 def _levels(x: np.ndarray) -> bool:

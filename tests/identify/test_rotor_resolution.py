@@ -23,8 +23,8 @@ from ocp.model.params import preset
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
 
-from blindrig.draw import draw_case  # noqa: E402
-from blindrig.logger import run_log  # noqa: E402
+from blindrig.draw import draw_case
+from blindrig.logger import run_log
 
 
 @pytest.mark.parametrize("seed", [25, 29])
