@@ -323,8 +323,8 @@ def _grid(lo: float, hi: float, n: int = GRID) -> np.ndarray:
 
 
 def _peak_speed(log: Log) -> float:
-    """The logged peak speed [rad/s] (1 for a rotor that never turned): the shaped friction grids' scale."""
-    return float(np.max(np.abs(log.omega))) or 1.0
+    """The logged peak speed [rad/s], at least 10: the friction grids' scale (their ends in the catalogue's ranges)."""
+    return max(float(np.max(np.abs(log.omega))), 10.0)  # (a rotor held still crashed diagnose: blind rig 281)
 
 
 def stribeck_bands(log: Log) -> list[tuple[float, float]]:

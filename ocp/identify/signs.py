@@ -86,7 +86,13 @@ def negated(plant: DCMotorPlant, log: Log) -> dict[str, str]:
 
 
 def check_signs(plant: DCMotorPlant, log: Log) -> None:
-    """Raise :class:`ocp.errors.LogError` naming the first channel :func:`negated` finds, with why and the fix."""
+    """Raise :class:`ocp.errors.LogError` naming the first channel :func:`negated` finds, with why and the fix; first,
+    on the command where it is zero on every row (no sign to check, nothing to check the model against: a blind-rig
+    log of a loop that never left zero came back as ``R`` 80 % low at 1e11 noise units)."""
+    v = log.voltage[np.isfinite(log.voltage)]
+    if not np.any(v != 0):
+        raise LogError("voltage", "the command is zero on every row: the log holds nothing the model can be checked "
+                                  "against (log the motor driven; a rotor held still under a voltage checks R and L)")
     found = negated(plant, log)
     if found:
         channel, why = next(iter(found.items()))
