@@ -85,7 +85,7 @@ CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 NUISANCE_BOUNDS: dict[str, tuple[float, float]] = {"current_lag": (-1.0, math.inf), "switch_phase": (-0.5, 0.5),
                                                    "current_bend": (0.0, 1.0), "speed_lag": (0.0, 2.0)}
 NUISANCES: tuple[str, ...] = tuple(NUISANCE_BOUNDS)
-#: dry friction: set-valued where the rotor is at rest (:func:`.columns.at_rest`); the ripple's beside it left out there
+#: dry friction: set-valued where the rotor is at rest (:func:`.columns.at_rest`), where a ripple beside it is left out
 DRY = frozenset({"coulomb_friction", "stribeck"})
 #: effects found by regression (input_delay is found by the alignment)
 REGRESSED = tuple(n for n in CATALOGUE if n != "input_delay")

@@ -16,7 +16,7 @@ from ocp.model.params import MotorParams
 ARMATURE_SAMPLES, ADVISED_SAMPLES = 2.0, 4.0
 #: the fewest samples per rotor time constant (:func:`rotor_tau`) that resolve ``J``: the armature's rule (the blind
 #: rig, ``bench/blind_check.py``, has rotors under two samples that the proving ground hardly draws: a clean 500 Hz
-#: log of a 3.3 ms rotor, 1.98 samples, came back with ``J`` 53 % low; the proving ground's 1,000 logs hold two,
+#: log of a 3.97 ms rotor, 1.98 samples, came back with ``J`` 53 % low; the proving ground's 1,000 logs hold two,
 #: 190 and 30068, neither with ``J`` wrong)
 ROTOR_SAMPLES = ARMATURE_SAMPLES
 
