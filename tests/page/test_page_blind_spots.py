@@ -55,3 +55,23 @@ def test_the_page_says_a_forward_only_esc_sweep_cannot_show_an_asymmetry(page: A
     page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
     text = page.inner_text("#m-blind")
     assert text == "This log cannot show drag_asymmetry, thrust_asymmetry: the log never reverses."
+
+
+def test_the_page_notes_a_clipped_current(page: Any, server: Server, tmp_path: Path) -> None:
+    """A clean proving-ground log with its current clipped at 45 % of its peak (``ocp/identify/clipping.py``): the
+    page notes the clipped rows the diagnosis left out (a note, nothing hidden, no experiment to design)."""
+    from tests.identify.test_clipped_current import _clipped_log
+    from tests.proving_ground import make_case
+
+    log, _ = _clipped_log(64)
+    write_log_csv(log, tmp_path / "clipped.csv")
+    open_tab(page, server, "model")
+    page.set_input_files("#m-log", str(tmp_path / "clipped.csv"))
+    custom_params(page, make_case(64).nominal)
+    page.click("#m-diagnose")
+    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    blind = page.locator("#m-blind")
+    lines = [blind.nth(k).inner_text() for k in range(blind.count())]
+    (note,) = [t for t in lines if "clipped" in t]
+    assert note.startswith("Note: the current is clipped at") and "left out of every equation" in note
+    assert "This log cannot show" not in note and not note.endswith("Design the experiment to show them.")
