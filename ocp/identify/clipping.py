@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ocp.identify.columns import runs
+
 #: at least this many consecutive rows at the extreme value (a clipped spike stays beyond the range for a while; a
 #: coarsely quantised peak of a slow log touched its top level at most twice in a row on the proving ground's 1,000
 #: logs, seed 114: four rows at 100 Hz, none of them clipped)
@@ -24,11 +26,6 @@ CLIP_RUN = 3
 #: whichever is wider) that are not at it: a pile-up
 PILE_UP = 3.0
 NEAR = 0.01
-
-
-def _longest_run(mask: np.ndarray) -> int:
-    edges = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
-    return int(np.max(np.flatnonzero(edges == -1) - np.flatnonzero(edges == 1))) if mask.any() else 0
 
 
 def clipped(x: np.ndarray) -> np.ndarray:
@@ -43,7 +40,7 @@ def clipped(x: np.ndarray) -> np.ndarray:
     for ext in (top, bottom):
         at = x == ext
         below = ok & ~at & (np.abs(x - ext) < near)
-        if _longest_run(at) >= CLIP_RUN and at.sum() >= PILE_UP * below.sum():
+        if max((b - a for a, b in runs(at)), default=0) >= CLIP_RUN and at.sum() >= PILE_UP * below.sum():
             out |= at
     return out
 
