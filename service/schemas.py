@@ -227,9 +227,9 @@ class ExperimentDesignPublic(_Open):
     needed: bool = Field(description="false: not ambiguous and the log covers reversals, low speed, a speed range, "
                                      "rows slow enough for a 64-period angle ripple and a range of voltages")
     reasons: list[str]
-    coverage: dict[str, Any] = Field(description="reversal, low_speed, speed_range, ripple_reach, voltage_range "
-                                     "(bool) and the fractions behind; ripple_periods: the largest angle ripple "
-                                     "count resolved on half the moving rows")
+    coverage: dict[str, Any] = Field(description="reversal, forward, low_speed, speed_range, ripple_reach, "
+                                     "voltage_range (bool) and the fractions behind; ripple_periods: the largest "
+                                     "angle ripple count resolved on half the moving rows")
     rivals: list[dict[str, Any]] = Field(description="[{name, items}] the explanations to separate")
     candidates: list[dict[str, Any]] = Field(description="every excitation: runnable, separation per rival pair")
     separation: float | None = Field(description="the chosen experiment's smallest pairwise separation z "

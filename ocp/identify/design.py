@@ -260,9 +260,9 @@ def rivals_from(plant: DCMotorPlant, log: Log, res: DiagnoseResult, opt: DesignO
         for name in probes:
             if name in present or any(r.name.startswith(name) for r in out):
                 continue
-            if name == "param:B":
-                body = with_constant(res.plant, "B", 0.5)
-                out.append(Rival("param:B (+50 %)", (*res.verdict, name), body))
+            if name.startswith("param:"):  # (a speed range for B, forward rotation for c_tau and c_f)
+                body = with_constant(res.plant, name.removeprefix("param:"), 0.5)
+                out.append(Rival(f"{name} (+50 %)", (*res.verdict, name), body))
             else:
                 values = PROBES[name](scales)
                 out.append(Rival(f"{name} (probe)", (*res.verdict, name), with_effect(res.plant, name, values)))

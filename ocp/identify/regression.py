@@ -64,6 +64,7 @@ from ocp.identify.columns import (
     signals,
     targets,
 )
+from ocp.identify.coverage import unseen
 from ocp.identify.footprint import BANDED, Footprints, grams
 from ocp.identify.resolution import rotor_tau, unresolved
 from ocp.identify.ripple import pick_periods, residualizer
@@ -148,6 +149,8 @@ class Design:
     lag_inductance: float = 0.0
     #: constants the log resolves on one side only (free above nominal, named only below), with the reason
     one_sided: dict[str, str] = field(default_factory=dict)
+    #: constants the log does not exercise, calibrated but never named, with the reason (:func:`.coverage.unseen`)
+    unseen: dict[str, str] = field(default_factory=dict)
     #: the held-out rows cut into blocks (contiguous, each at least a few independent torque rows long,
     #: :func:`_blocks`): per block b and equation e, ``g_blocks[b, e]`` (B, 3, Q, Q), ``h_blocks`` (B, 3, Q),
     #: ``c_blocks`` (B, 3), as ``g_test`` etc. (they sum to them): a paired comparison's scatter between blocks
@@ -322,7 +325,8 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     design = Design([c_ for c_, _ in cols], g_tr, g_te, h_tr, h_te, c_tr, c_te, np.full(3, n_tr), np.full(3, n_te),
                     sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
                     independence, dt=s.dt, g_blocks=gb, h_blocks=hb, c_blocks=cb,
-                    footprint=Footprints(a_all, tw, tests, [j for j, (c_, _) in enumerate(cols) if c_.item in BANDED]))
+                    footprint=Footprints(a_all, tw, tests, [j for j, (c_, _) in enumerate(cols) if c_.item in BANDED]),
+                    unseen=unseen(log))
     if not folds:
         return design
     return replace(design, g_fold=fg, h_fold=fh, c_fold=fc, n_fold=np.array([np.full(3, int(m.sum())) for m in tests]),

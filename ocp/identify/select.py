@@ -1,17 +1,15 @@
 """Competing explanations on held-out evidence, over the Gram matrices of :mod:`.regression`.
 
-A *model* is a set of items: catalogue effects and named constants. Fitting it is a bounded linear
-least-squares problem on the training rows: every constant is always refined (that is calibration),
-within ``+-tolerance`` of nominal unless the model *names* it (then within -80 % .. +300 %); effects
-in the model get their columns (the best shape on a grid by training cost, mixed with a grid neighbour:
-:mod:`.shape_choice`),
-sign-bounded as the catalogue's lower bounds say; effects outside it are zero. A constant the log cannot resolve
-(:attr:`.regression.Design.unresolved`, e.g. ``L`` under a current filter) is a free nuisance (-80 % .. any):
-boxed in, what it stands for would be explained by a wrong item (brush drop, dead band, ``R``).
-Its score is the held-out RMS of the three
-weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at the noise); under
-cross-validation (:attr:`.regression.Design.g_fold`) the model is fitted once per fold on the other folds' rows and
-scored on the fold's, the squared errors pooled (every row held out once); its coefficients are fitted on all rows.
+A *model* is a set of items: catalogue effects and named constants. Fitting it is a bounded linear least-squares problem
+on the training rows: every constant is always refined (that is calibration), within ``+-tolerance`` of nominal unless
+the model *names* it (then within -80 % .. +300 %); effects in the model get their columns (the best shape on a grid by
+training cost, mixed with a grid neighbour: :mod:`.shape_choice`), sign-bounded as the catalogue's lower bounds say;
+effects outside it are zero. A constant the log cannot resolve (:attr:`.regression.Design.unresolved`, e.g. ``L`` under
+a current filter) is a free nuisance (-80 % .. any): boxed in, what it stands for would be explained by a wrong item
+(brush drop, dead band, ``R``); one it does not exercise (:attr:`.regression.Design.unseen`) is never named. Its score
+is the held-out RMS of the three weighted equation residuals, ``sqrt(mean_e MS_e / sigma_e^2)`` (about 1 for a model at
+the noise); under cross-validation (:attr:`.regression.Design.g_fold`) the model is fitted once per fold on the other
+folds' rows and scored on the fold's, the squared errors pooled (each row held out once; coefficients fit on all).
 
 Forward selection adopts, while some equation's held-out RMS is above ``noise_floor``, the best-scoring item
 whose win passes its test; a constant must enter such an equation, or halve the held-out error of one it enters
@@ -55,7 +53,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ocp.identify.boxqp import box_qp
-from ocp.identify.coverage import COMMON_GAIN
+from ocp.identify.coverage import ASYMMETRY, COMMON_GAIN
 from ocp.identify.evidence import (
     IMPLAUSIBLE_FACTOR,
     Fitted,
@@ -97,18 +95,20 @@ ROOM_FALL = 0.5
 
 def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float,
             above: dict[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
-    lo, hi = [], []
+    lo, hi, items = [], [], {design.columns[j].item for j in cols}
     above = design.above if above is None else above
     for j in cols:
         c = design.columns[j]
         if c.item in NUISANCES:
             a, b = NUISANCE_BOUNDS[c.item]
         elif c.item in (*CONSTANTS, COMMON_GAIN):
-            # a constant the log cannot resolve is a free nuisance (never named): boxing it in would leave
-            # what it stands for (a current filter for L) to be explained by a wrong item
-            box = tol + design.slack.get(c.item, 0.0)  # (wider where a nuisance could mimic the error)
-            a, b = (NAMED_BOUNDS[0], np.inf) if c.item in design.unresolved else \
-                NAMED_BOUNDS if c.item in named else (-box, min(box + above.get(c.item, 0.0), IMPLAUSIBLE_FACTOR - 1.0))
+            # unresolved: a free nuisance, never named (boxed, a current filter for L would be explained by a wrong
+            # item); unseen (Design.unseen): never named, held at nominal beside its asymmetry (which then takes the
+            # reverse rows), else calibrated; the box wider where a nuisance mimics the error
+            unseen = c.item in design.unseen
+            box = 0.0 if unseen and ASYMMETRY[c.item] in items else tol + design.slack.get(c.item, 0.0)
+            a, b = (NAMED_BOUNDS[0], np.inf) if c.item in design.unresolved else NAMED_BOUNDS if \
+                c.item in named and not unseen else (-box, min(box + above.get(c.item, 0.0), IMPLAUSIBLE_FACTOR - 1.0))
         elif c.item in SATURATING:  # the drop saturates at its width: amplitude = width (module doc)
             a, b = c.shape / SATURATION_SLACK, c.shape * SATURATION_SLACK
         else:
