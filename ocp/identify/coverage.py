@@ -51,14 +51,13 @@ GAP_TEXT = {"reversal": "the log never reverses", "low_speed": "the log spends n
 
 
 def coverage(log: Log) -> dict[str, Any]:
-    """What the log exercises: both directions (a reversal), forward rotation at all (:func:`unseen`), time at low
-    speed (< 10 % of its top speed),
-    a range of speeds (10th over 90th percentile of |w| below one half), rows slow enough to show an angle
-    ripple of :data:`.angle.MAX_PERIODS` periods/rev (sampled twice a period, ``64 |d theta| < pi``) on at least
-    :data:`RIPPLE_ROWS` of the moving rows (``ripple_rows``; ``ripple_periods``: the largest count resolved on half
-    of them; an angle integrated from the speed where none is logged), and a range of command voltage magnitudes
-    (``voltage_spread``: 10th over 90th percentile of |V| over the rows above 1 % of its peak, below one half): under
-    a two-level command (+-V0, or 0 and V0) a dead band's ``V0 - v_db`` and a brush drop's ``V0 - v_b`` (the current
+    """What the log exercises: both directions (a reversal), forward rotation at all (:func:`unseen`), time at low speed
+    (< 10 % of its top speed), a range of speeds (10th over 90th percentile of |w| below one half), rows slow enough to
+    show an angle ripple of :data:`.angle.MAX_PERIODS` periods/rev (sampled twice a period, ``64 |d theta| < pi``) on at
+    least :data:`RIPPLE_ROWS` of the moving rows (``ripple_rows``; ``ripple_periods``: the largest count resolved on
+    half of them; an angle integrated from the speed where none is logged), and a range of command voltage magnitudes
+    (``voltage_spread``: 10th over 90th percentile of |V| over the rows above 1 % of its peak, below one half): under a
+    two-level command (+-V0, or 0 and V0) a dead band's ``V0 - v_db`` and a brush drop's ``V0 - v_b`` (the current
     following the command's sign) are a gain on the command, which ``k`` and ``R`` take up (proving-ground rigs 0..5
     under random +-0.6 V_max steps: the dead band named on none of six, with four levels on all six)."""
     theta = rotor_angle(log)
@@ -74,9 +73,8 @@ def coverage(log: Log) -> dict[str, Any]:
     levels = float(np.percentile(on, 10) / max(float(np.percentile(on, 90)), 1e-300)) if on.size else 1.0
     return {"reversal": min(pos, neg) > 0.05, "forward": pos >= SEEN_ROWS, "low_speed": low > 0.05,
             "speed_range": spread < 0.5, "ripple_reach": slow >= RIPPLE_ROWS, "voltage_range": levels < 0.5,
-            "forward_fraction": pos,
-            "reverse_fraction": neg, "low_speed_fraction": low, "speed_spread": spread, "ripple_rows": slow,
-            "ripple_periods": reach, "voltage_spread": levels}
+            "forward_fraction": pos, "reverse_fraction": neg, "low_speed_fraction": low, "speed_spread": spread,
+            "ripple_rows": slow, "ripple_periods": reach, "voltage_spread": levels}
 
 
 def unseen(log: Log) -> dict[str, str]:
@@ -97,8 +95,8 @@ def unseen(log: Log) -> dict[str, str]:
     if pos >= SEEN_ROWS or neg < SEEN_ROWS:
         return {}
     why = (f"the rotor never turns forward ({100 * pos:.2g} % of the rows): the forward coefficient is not in this "
-           "log; it is calibrated within the tolerance, never named, and a mismatch beyond it in reverse rotation is "
-           "the asymmetry")
+           "log and is never named (calibrated within the tolerance, or at nominal beside the asymmetry, which takes "
+           "what reverse rotation shows beyond it)")
     return dict.fromkeys(ASYMMETRY, why)
 
 
