@@ -135,5 +135,8 @@ def blind_spots(log: Log, named: Sequence[str] = (), rows: bool = False, gain: b
 
 
 def open_gaps(cov: dict[str, Any], table: dict[str, tuple[str, ...]] = GAPS) -> list[tuple[str, str, tuple[str, ...]]]:
-    """The gaps of ``table`` that ``cov`` (:func:`coverage`) leaves open: each one's name, why, what it hides."""
-    return [(g, GAP_TEXT[g].format(**cov), table[g]) for g in table if not cov[g]]
+    """The gaps of ``table`` that ``cov`` (:func:`coverage`) leaves open: each one's name, why, what it hides. A rotor
+    turning in reverse only shows the asymmetries, against the nominal forward coefficients (:func:`unseen`): its
+    reversal gap does not hide them."""
+    shown = set(ASYMMETRY.values()) if cov.get("forward") is False and cov["reverse_fraction"] >= SEEN_ROWS else set()
+    return [(g, GAP_TEXT[g].format(**cov), tuple(h for h in table[g] if h not in shown)) for g in table if not cov[g]]

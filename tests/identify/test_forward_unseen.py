@@ -62,6 +62,7 @@ def test_a_reverse_drag_is_the_asymmetry_at_its_drawn_size(seed: int) -> None:
     assert d.plant.params.c_tau == pytest.approx(nominal["c_tau"])
     assert "never turns forward" in d.calibration["c_tau"]["unresolved"]
     assert any(s["gap"] == "forward" and "param:c_tau" in s["hidden"] for s in d.blind_spots)
+    assert all("thrust_asymmetry" not in s["hidden"] for s in d.blind_spots)  # (reverse rotation shows it)
 
 
 def test_a_small_reverse_mismatch_is_calibrated_not_named() -> None:
@@ -79,6 +80,7 @@ def test_a_forward_only_log_still_names_the_constant() -> None:
     assert d.verdict == ["param:c_tau"], d.verdict
     assert d.calibration["c_tau"]["relative"] == pytest.approx(0.4, abs=0.03)
     assert not d.calibration["c_tau"]["unresolved"]
+    assert any(s["gap"] == "reversal" and "drag_asymmetry" in s["hidden"] for s in d.blind_spots)
 
 
 @pytest.mark.parametrize("seed", [151, 162])
