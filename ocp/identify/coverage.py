@@ -100,6 +100,20 @@ def unseen(log: Log) -> dict[str, str]:
     return dict.fromkeys(ASYMMETRY, why)
 
 
+def unseen_rivals(unseen_: dict[str, str], verdict: Sequence[str], score: float) -> list[dict[str, Any]]:
+    """Ambiguities (as :func:`ocp.identify.diagnose`'s ``ambiguous``) for each asymmetry ``verdict`` names whose
+    forward coefficient the log does not exercise (``unseen_``, :func:`unseen`): that constant off in both directions
+    fits the log identically (one column on these rows; ``score`` [noise units] both). The asymmetry is the one named:
+    the nominal coefficients are forward rotation's (a propeller's data), and reverse rotation departing from them is
+    the propeller's asymmetry more often than a wrong forward value; a run that turns forward tells them apart (the
+    blind rig's fresh seeds 200..399 drew four such constants and three such asymmetries on reverse-only logs)."""
+    return [{"adopted": effect, "alternative": f"param:{const}", "score": score, "alternative_score": score,
+             "reason": f"the rotor never turns forward: {const} off in both directions and {effect} (reverse rotation "
+                       "only) are one column on these rows and fit the log identically; the asymmetry is named, the "
+                       f"nominal {const} being forward rotation's; a run that turns forward tells them apart"}
+            for const, effect in ASYMMETRY.items() if const in unseen_ and effect in verdict]
+
+
 def directions(omega: np.ndarray) -> tuple[float, float, float]:
     """The fractions of the rows (N,) of ``omega`` [rad/s] turning forward and in reverse (beyond 5 % of the top
     speed, the 99th percentile of |w|), and slowly (under 10 % of it)."""

@@ -49,7 +49,7 @@ from ocp.identify.align import (
     within,
 )
 from ocp.identify.candidates import candidate
-from ocp.identify.coverage import blind_spots, coverage
+from ocp.identify.coverage import blind_spots, coverage, unseen_rivals
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
     KEYS,
@@ -335,7 +335,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         if unconfirmed is not None and "param:L" in verdict else None
     cov = coverage(log)  # (read by the gain's reason and the blind spots)
     gain = gain_rival(design, sel.final, opt.tolerance, opt.ambiguity_margin, not cov["voltage_range"])
-    ambiguous += [r for r in (rival, gain) if r]
+    ambiguous += [r for r in (rival, gain) if r] + unseen_rivals(design.unseen, verdict, sel.final.score)
     spots = blind_spots(log, verdict, gain=gain is not None, cov=cov)
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,

@@ -21,12 +21,17 @@ import pytest
 
 from ocp.identify import diagnose
 from ocp.identify.coverage import SEEN_ROWS, coverage, unseen
+from ocp.identify.design import design
 from ocp.logs import Log, log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.effects import load_plant
+from ocp.optimize.mission import Mission
+from ocp.optimize.solve import optimize
 from tests.proving_ground import make_case
 from tests.proving_ground.cases import _replay
+from tests.proving_ground.experiment import Rig, run_command
 from tests.proving_ground.logger import record
+from tests.rig_log import rig_log
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
 
@@ -63,6 +68,30 @@ def test_a_reverse_drag_is_the_asymmetry_at_its_drawn_size(seed: int) -> None:
     assert "never turns forward" in d.calibration["c_tau"]["unresolved"]
     assert any(s["gap"] == "forward" and "param:c_tau" in s["hidden"] for s in d.blind_spots)
     assert all("thrust_asymmetry" not in s["hidden"] for s in d.blind_spots)  # (reverse rotation shows it)
+
+
+def test_a_wrong_drag_coefficient_is_the_ambiguity_and_a_forward_run_settles_it() -> None:
+    """``c_tau`` 40 % high in both directions, logged in reverse only: one column with the asymmetry, so the verdict
+    names the asymmetry (the nominal value is forward rotation's) and lists ``param:c_tau`` as ambiguous with the
+    reason; the experiment designed for it, optimised within the limits and played on the same rig (the proving
+    ground's own integrator), turns forward and names the constant."""
+    nominal, log = _one_way(3, -1.0, {}, c_tau=1.4)
+    plant = load_plant(nominal)
+    first = diagnose(plant, log)
+    assert first.verdict == ["drag_asymmetry"], first.verdict
+    (amb,) = [a for a in first.ambiguous if a["alternative"] == "param:c_tau"]
+    assert amb["adopted"] == "drag_asymmetry" and "never turns forward" in amb["reason"]
+    case = make_case(3, kind="clean")
+    rig = Rig(dataclasses.replace(case.truth, c_tau=1.4 * case.truth.c_tau), case.logger, case.meta["tau_m"], nominal)
+    proposal = design(plant, log, first)
+    assert proposal.mission is not None and {"param:c_tau", "drag_asymmetry"} <= {
+        i for r in proposal.rivals for i in r.items}
+    res = optimize(Mission.model_validate(proposal.mission))
+    assert res.source == "optimized" and res.path_ok
+    new = rig_log(run_command(rig, res.arrays["t"], res.arrays["voltage"], 10))
+    assert coverage(new)["forward"]
+    second = diagnose(plant, new)
+    assert second.verdict == ["param:c_tau"], second.verdict
 
 
 def test_a_small_reverse_mismatch_is_calibrated_not_named() -> None:
