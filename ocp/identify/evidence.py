@@ -123,6 +123,29 @@ def band_score(design: Design, f: Fitted, j: int, acts: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.maximum(total[live], 0.0) / rows[live]))) if live.any() else math.inf
 
 
+def band_alike(design: Design, item: str, best: Fitted, alt: Fitted, margin: float) -> bool:
+    """Whether ``alt`` fits the rows where ``item``'s band acts within ``margin`` of ``best``, for a banded ``item``
+    (a Stribeck band: its materiality is judged on those rows too, :func:`is_material`); True for any other item.
+    Else the pooled score, which those rows barely move, would call a thrust-equation item its equal."""
+    j = band_of(design, best, (item,))
+    if j is None:
+        return True
+    acts = equations_of(design, (item,))
+    return band_score(design, alt, j, acts) <= band_score(design, best, j, acts) * (1.0 + margin)
+
+
+def acts_alike(design: Design, item: str, best: Fitted, alt: Fitted, margin: float) -> bool:
+    """Whether ``alt`` fits every equation ``item`` enters within that equation's own sampling scatter (two standard
+    errors over its independent rows, ``sqrt(2 / n_e)``, or ``margin``, the wider) of ``best``. An item adopted on
+    one equation's fall (:func:`beyond_scatter`) is not matched by an alternative that leaves that equation as it
+    was, however wide the pooled score's scatter (the torque rows' independence, :func:`scatter`): without this,
+    every item of the pool was listed as its equal (the blind rig, ``bench/blind_check.py``: 10 of 200 logs listed
+    12-15 alternatives, e.g. a thrust lag for a motor constant)."""
+    acts = equations_of(design, (item,)) & (design.n_test > 0) & (best.per_eq > 0)
+    wide = np.maximum(margin, np.sqrt(2.0 / np.maximum(design.n_held * design.independence, 1.0)))
+    return bool(np.all(alt.per_eq[acts] <= best.per_eq[acts] * (1.0 + wide[acts])))
+
+
 def capped_score(design: Design, f: Fitted, acts: np.ndarray) -> float:
     """The held-out score of ``f`` (as :attr:`Fitted.score`) with the equations outside ``acts`` (3,) counted at
     most at the noise level (1 in noise units)."""

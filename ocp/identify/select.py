@@ -57,8 +57,8 @@ from ocp.identify.coverage import ASYMMETRY, COMMON_GAIN
 from ocp.identify.evidence import (
     IMPLAUSIBLE_FACTOR,
     Fitted,
-    band_of,
-    band_score,
+    acts_alike,
+    band_alike,
     beyond_scatter,
     blocks_agree,
     equations_of,
@@ -268,7 +268,7 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
             items.remove(c)
             dropped.append(c)
             current = rest
-    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin), dropped)
+    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin, min_improvement), dropped)
 
 
 def _forward(design: Design, pool: list[str], items: list[str], current: Fitted, tol: float, min_improvement: float,
@@ -411,10 +411,12 @@ def _prefer_effects(design: Design, tried: list[tuple[str, Fitted]], margin: flo
 
 
 def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitted, tol: float,
-               margin: float) -> list[dict[str, object]]:
+               margin: float, min_improvement: float) -> list[dict[str, object]]:
     """Adopted items that another item explains as well on held-out data: within ``margin``, or within the
-    held-out score's own sampling scatter (:func:`.evidence.scatter`), whichever is wider. Where the alternative is a
-    constant off by more than :data:`IMPLAUSIBLE_FACTOR`, the reason says why the effect was preferred."""
+    held-out score's own sampling scatter (:func:`.evidence.scatter`), whichever is wider, on the equations (and a
+    band's rows) the adopted item acts on too, and winning in its place by the test the adopted item passed
+    (:func:`_wins`, from the other adopted items). Where the alternative is a constant off by more than
+    :data:`IMPLAUSIBLE_FACTOR`, the reason says why the effect was preferred."""
     margin = max(margin, scatter(design))
     out = []
     for a, b in itertools.product(items, pool):
@@ -422,23 +424,14 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
             continue
         alt = fit_model(design, [b if i == a else i for i in items], tol)
         na, nb = (f"param:{x}" if x in CONSTANTS else x for x in (a, b))
-        if alt.score <= best.score * (1.0 + margin) and _band_alike(design, a, best, alt, margin):
+        if alt.score <= best.score * (1.0 + margin) and band_alike(design, a, best, alt, margin) \
+                and acts_alike(design, a, best, alt, margin) \
+                and _wins(design, fit_model(design, [i for i in items if i != a], tol), b, alt, min_improvement):
             out.append({"adopted": a, "alternative": b, "score": best.score, "alternative_score": alt.score,
                         "reason": f"replacing {na} by {nb} fits the held-out data as well "
                                   f"({alt.score:.3g} vs {best.score:.3g} noise units, within {100 * margin:.1f} %): "
                                   f"this log cannot tell them apart{_prior_note(design, alt, a, b)}"})
     return out
-
-
-def _band_alike(design: Design, item: str, best: Fitted, alt: Fitted, margin: float) -> bool:
-    """Whether ``alt`` fits the rows where ``item``'s band acts within ``margin`` of ``best``, for a banded ``item``
-    (a Stribeck band: its materiality is judged on those rows too, :func:`.evidence.is_material`); True for any other
-    item. Else the pooled score, which those rows barely move, would call a thrust-equation item its equal."""
-    j = band_of(design, best, (item,))
-    if j is None:
-        return True
-    acts = equations_of(design, (item,))
-    return band_score(design, alt, j, acts) <= band_score(design, best, j, acts) * (1.0 + margin)
 
 
 def _prior_note(design: Design, alt: Fitted, adopted: str, const: str) -> str:
