@@ -37,9 +37,10 @@ best pair of the first round's best single effects starts the rounds again, if i
 alone (:func:`_rescue`): a constant can win the first round with a share of two overlapping effects.
 A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` (beyond its fit's uncertainty,
 :func:`.evidence.implausible_factor`) yields to an effect that fits as well (a prior on constant errors:
-:func:`_prefer_effects`). Then every adopted item is challenged: an
-alternative that swaps it for another item and scores within ``ambiguity_margin`` makes the verdict
-``ambiguous`` (both candidates and the reason are reported) instead of a confident wrong name.
+:func:`_prefer_effects`). Then every adopted item is challenged: an alternative that swaps it for another item,
+scores within ``ambiguity_margin``, fits the item's own equations as well and wins in its place by the item's test
+(:func:`_challenge`) makes the verdict ``ambiguous`` (both candidates and the reason are reported) instead of a
+confident wrong name.
 """
 
 from __future__ import annotations
