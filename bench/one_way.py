@@ -31,22 +31,16 @@ def _logs(seed: int) -> list[tuple[str, list[str], object, dict[str, float], flo
     import numpy as np
 
     from bench.modelcheck import case_log
-    from ocp.logs import log_from_arrays
-    from ocp.logs.timebase import uniform
     from tests.proving_ground import make_case
-    from tests.proving_ground.cases import _replay
-    from tests.proving_ground.logger import record
+    from tests.proving_ground.cases import replay
 
     case = make_case(seed, kind="clean")
     rng = np.random.default_rng([seed, 1018])
     tr = case.truth
 
     def one_way(sign: float, **change: object) -> object:
-        cmds = sign * np.abs(case.columns["voltage"])
-        truth = dataclasses.replace(tr, **change)  # type: ignore[arg-type]
-        cols = record(case.logger, _replay(truth, cmds, case.logger, case.meta["tau_m"]), cmds, rng)
-        t, x, _ = uniform(cols["t"], {k: v for k, v in cols.items() if k != "t"}, resample=True)
-        return log_from_arrays(t, x["voltage"], x["current"], x["thrust"], omega=x["omega"], theta=x.get("theta"))
+        cols = replay(case, sign * np.abs(case.columns["voltage"]), rng, **change)
+        return case_log(dataclasses.replace(case, columns=cols))
 
     which = str(rng.choice(["drag_asymmetry", "thrust_asymmetry"]))
     ratio = float(rng.uniform(0.15, 0.6)) * (1.0 if rng.random() < 0.5 else -1.0)

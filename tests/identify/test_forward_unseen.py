@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from bench.modelcheck import case_log
 from ocp.identify import diagnose
 from ocp.identify.coverage import SEEN_ROWS, coverage, unseen
 from ocp.identify.design import design
@@ -28,9 +29,8 @@ from ocp.model.effects import load_plant
 from ocp.optimize.mission import Mission
 from ocp.optimize.solve import optimize
 from tests.proving_ground import make_case
-from tests.proving_ground.cases import _replay
+from tests.proving_ground.cases import replay
 from tests.proving_ground.experiment import Rig, run_command
-from tests.proving_ground.logger import record
 from tests.rig_log import rig_log
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
@@ -43,10 +43,9 @@ def _one_way(seed: int, sign: float, effects: dict[str, dict[str, float]], c_tau
     """Proving-ground clean case ``seed``'s rig and logger under its commands rectified to ``sign`` (the rotor turns
     one way only), with ``effects`` and its drag coefficient ``c_tau`` times the drawn one; (nominal, log)."""
     case = make_case(seed, kind="clean")
-    cmds = sign * np.abs(case.columns["voltage"])
-    truth = dataclasses.replace(case.truth, effects=effects, c_tau=case.truth.c_tau * c_tau)
-    return case.nominal, _read(record(case.logger, _replay(truth, cmds, case.logger, case.meta["tau_m"]), cmds,
-                                      np.random.default_rng(seed)))
+    cols = replay(case, sign * np.abs(case.columns["voltage"]), np.random.default_rng(seed), effects=effects,
+                  c_tau=case.truth.c_tau * c_tau)
+    return case.nominal, case_log(dataclasses.replace(case, columns=cols))
 
 
 def _read(cols: dict[str, np.ndarray]) -> Log:

@@ -142,6 +142,13 @@ def _replay(x: Truth, cmds: np.ndarray, lg: Logger, tau_m: float) -> np.ndarray:
     return run(x, lambda k, _s: float(cmds[k]), cmds.size, lg.dt, _lag(x, lg), _substeps(x, lg, tau_m))[0]
 
 
+def replay(case: Case, cmds: np.ndarray, rng: np.random.Generator, **change: Any) -> dict[str, np.ndarray]:
+    """Log columns of ``case``'s rig, with ``change`` (:class:`.physics.Truth` fields), recorded by its logger under
+    the commands ``cmds`` (N,) [V] from rest (e.g. a log's commands rectified to one sign: a rotor turning one way)."""
+    truth = replace(case.truth, **change)
+    return record(case.logger, _replay(truth, cmds, case.logger, case.meta["tau_m"]), cmds, rng)
+
+
 def _visible(a: Truth, b: Truth, cmds: np.ndarray, lg: Logger, tau_m: float, sig: np.ndarray) -> bool:
     """Whether replaying ``cmds`` on ``a`` and ``b`` gives logs differing by >= VISIBLE noise levels ``sig`` (3,):
     the channels as logged (:func:`logged`: an encoder's speed, the filtered current), not the rig's instants."""
