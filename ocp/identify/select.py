@@ -420,6 +420,7 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
     :data:`IMPLAUSIBLE_FACTOR`, the reason says why the effect was preferred."""
     margin = max(margin, scatter(design))
     out = []
+    without = functools.cache(lambda a: fit_model(design, [i for i in items if i != a], tol))  # (once per item)
     for a, b in itertools.product(items, pool):
         if b in items:
             continue
@@ -427,7 +428,7 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
         na, nb = (f"param:{x}" if x in CONSTANTS else x for x in (a, b))
         if alt.score <= best.score * (1.0 + margin) and band_alike(design, a, best, alt, margin) \
                 and acts_alike(design, a, best, alt, margin) \
-                and _wins(design, fit_model(design, [i for i in items if i != a], tol), b, alt, min_improvement):
+                and _wins(design, without(a), b, alt, min_improvement):
             out.append({"adopted": a, "alternative": b, "score": best.score, "alternative_score": alt.score,
                         "reason": f"replacing {na} by {nb} fits the held-out data as well "
                                   f"({alt.score:.3g} vs {best.score:.3g} noise units, within {100 * margin:.1f} %): "
