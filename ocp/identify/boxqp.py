@@ -67,8 +67,13 @@ def _free_solution(g: np.ndarray, h: np.ndarray, x: np.ndarray, held: np.ndarray
 
 def _inward(g: np.ndarray, h: np.ndarray, x: np.ndarray, lo: np.ndarray, hi: np.ndarray,
             held: np.ndarray) -> np.ndarray:
-    """(P,) how strongly each held variable's descent points into the box (0: it stays on its bound)."""
+    """(P,) how strongly each held variable's descent points into the box (0: it stays on its bound). A variable
+    boxed to a point (``hi - lo`` within :data:`EDGE`: a constant held at nominal beside its asymmetry, an empty
+    column's ``[0, 1e-150]``) has no room: released, it stepped nowhere and was held again, and where its pull was
+    the strongest the active set cycled on it to ``max_iter`` and never freed a variable that had to move
+    (``tests/identify/test_box_qp.py``; a reverse-only log's fits took 10x the iterations)."""
     grad = g @ x - h  # (half the gradient)
     scale = np.abs(h) + np.abs(g).max(axis=1) * (np.abs(x) + 1.0)
-    pull = np.where(x <= lo, -grad, np.where(x >= hi, grad, 0.0)) / scale
+    room = hi - lo > EDGE * (1.0 + np.minimum(np.abs(lo), np.abs(hi)))
+    pull = np.where(room & (x <= lo), -grad, np.where(room & (x >= hi), grad, 0.0)) / scale
     return np.where(held & (pull > EDGE), pull, 0.0)

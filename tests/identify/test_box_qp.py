@@ -41,3 +41,40 @@ def test_a_box_of_one_point() -> None:
     g, h = np.eye(3), np.array([5.0, -5.0, 0.1])
     lo, hi = np.array([1.0, -1.0, -1.0]), np.array([1.0, 1.0, 1.0])
     assert np.allclose(box_qp(g, h, lo, hi), [1.0, -1.0, 0.1])
+
+
+def test_a_pinned_variable_is_never_released() -> None:
+    """A variable boxed to one point (``lo == hi``: a constant held at nominal beside its asymmetry) whose gradient
+    points out of the box is on both bounds: releasing it stepped nowhere and held it again, and where its pull was
+    the strongest the active set cycled on it to ``max_iter`` and never released the variable that had to move
+    (here the second: the cold start holds it at 0, its minimum is at its upper bound 1)."""
+    g, h = np.eye(3), np.array([5.0, 2.0, 0.5])
+    lo, hi = np.array([0.0, 0.0, -1.0]), np.array([0.0, 1.0, 1.0])
+    assert np.allclose(box_qp(g, h, lo, hi), [0.0, 1.0, 0.5])
+
+
+@pytest.mark.parametrize("seed", range(100))
+def test_box_qp_with_pinned_variables_matches_bvls(seed: int) -> None:
+    """Random problems with some variables pinned (``lo == hi``), against BVLS on the others (the pinned ones
+    substituted)."""
+    rng = np.random.default_rng(1000 + seed)
+    p = int(rng.integers(2, 16))
+    a = rng.normal(size=(p + int(rng.integers(0, 20)), p)) * rng.uniform(0.1, 10.0, p)
+    b = rng.normal(size=a.shape[0]) * 3.0
+    g, h = a.T @ a + 1e-9 * np.eye(p), a.T @ b
+    lo = rng.uniform(-2.0, 0.5, p)
+    hi = lo + rng.uniform(0.0, 2.0, p)
+    pinned = rng.random(p) < 0.3
+    pinned[int(rng.integers(p))] = True
+    hi[pinned] = lo[pinned] = np.where(rng.random(p) < 0.5, 0.0, lo)[pinned]
+    free = ~pinned
+    if not free.any():
+        free[0], pinned[0], hi[0] = True, False, lo[0] + 1.0
+    gf, hf = g[np.ix_(free, free)], h[free] - g[np.ix_(free, pinned)] @ lo[pinned]
+    r = np.linalg.cholesky(gf).T
+    ref = lo.copy()
+    ref[free] = lsq_linear(r, np.linalg.solve(r.T, hf), bounds=(lo[free], hi[free]), method="bvls", tol=1e-14).x
+    for start in (None, np.linalg.solve(g, h), rng.normal(size=p) * 5):
+        x = box_qp(g, h, lo, hi, start)
+        assert np.all(x >= lo) and np.all(x <= hi)
+        assert np.allclose(x, ref, atol=1e-6 * (1.0 + np.abs(ref).max()))
