@@ -124,8 +124,8 @@ def solve(design: Design, cols: Sequence[int], named: set[str], tol: float,
     """Bounded least squares on the training Gram matrices (``min x'Gx - 2h'x``) of columns ``cols`` (``above``:
     the boxes' widening above nominal, :attr:`.regression.Design.above` when None)."""
     idx = np.array(cols, dtype=int)
-    g = design.g_train.sum(axis=0)[np.ix_(idx, idx)]
-    h = design.h_train.sum(axis=0)[idx]
+    g = design.g_train[:, idx][:, :, idx].sum(axis=0)  # (the model's columns first: Q runs to hundreds)
+    h = design.h_train[:, idx].sum(axis=0)
     d = np.sqrt(np.maximum(np.diag(g), 1e-300))
     gs = g / np.outer(d, d) + 1e-10 * np.eye(idx.size)
     lo, hi = _bounds(design, cols, named, tol, above)
