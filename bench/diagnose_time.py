@@ -51,7 +51,8 @@ def main() -> None:
     ratios = []
     for seed in args.seeds:
         csv, params = args.dir / f"case-{seed}.csv", args.dir / f"case-{seed}.params.json"
-        rows = sum(1 for _ in csv.open()) - 1
+        with csv.open() as f:
+            rows = sum(1 for _ in f) - 1
         times: dict[str, list[float]] = {"old": [], "new": []}
         verdicts: dict[str, list[str]] = {}
         for k in range(args.repeats):

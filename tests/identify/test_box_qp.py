@@ -13,6 +13,17 @@ def _objective(g: np.ndarray, h: np.ndarray, x: np.ndarray) -> float:
     return float(x @ g @ x - 2 * h @ x)
 
 
+def _bvls(g: np.ndarray, h: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The oracle: scipy's BVLS on ``|R x - R^-T h|`` (``G = R'R``), the variables boxed to a point (``lo == hi``,
+    which BVLS refuses) substituted at their value."""
+    free = lo < hi
+    ref = lo.copy()
+    gf, hf = g[np.ix_(free, free)], h[free] - g[np.ix_(free, ~free)] @ lo[~free]
+    r = np.linalg.cholesky(gf).T
+    ref[free] = lsq_linear(r, np.linalg.solve(r.T, hf), bounds=(lo[free], hi[free]), method="bvls", tol=1e-14).x
+    return ref
+
+
 @pytest.mark.parametrize("seed", range(300))
 def test_box_qp_matches_bvls(seed: int) -> None:
     rng = np.random.default_rng(seed)
@@ -23,8 +34,7 @@ def test_box_qp_matches_bvls(seed: int) -> None:
     base = rng.uniform(-2.0, 0.5, p)
     lo = np.where(rng.random(p) < 0.3, -np.inf, base)
     hi = np.where(rng.random(p) < 0.3, np.inf, base + rng.uniform(0.0, 2.0, p))
-    r = np.linalg.cholesky(g).T
-    ref = lsq_linear(r, np.linalg.solve(r.T, h), bounds=(lo, hi), method="bvls", tol=1e-14).x
+    ref = _bvls(g, h, lo, hi)
     for start in (None, np.linalg.solve(g, h), rng.normal(size=p) * 5):  # cold, unconstrained, anywhere
         x = box_qp(g, h, lo, hi, start)
         assert np.all(x >= lo) and np.all(x <= hi)
@@ -55,8 +65,7 @@ def test_a_pinned_variable_is_never_released() -> None:
 
 @pytest.mark.parametrize("seed", range(100))
 def test_box_qp_with_pinned_variables_matches_bvls(seed: int) -> None:
-    """Random problems with some variables pinned (``lo == hi``), against BVLS on the others (the pinned ones
-    substituted)."""
+    """Random problems with some variables pinned (``lo == hi``), against BVLS on the others."""
     rng = np.random.default_rng(1000 + seed)
     p = int(rng.integers(2, 16))
     a = rng.normal(size=(p + int(rng.integers(0, 20)), p)) * rng.uniform(0.1, 10.0, p)
@@ -67,13 +76,9 @@ def test_box_qp_with_pinned_variables_matches_bvls(seed: int) -> None:
     pinned = rng.random(p) < 0.3
     pinned[int(rng.integers(p))] = True
     hi[pinned] = lo[pinned] = np.where(rng.random(p) < 0.5, 0.0, lo)[pinned]
-    free = ~pinned
-    if not free.any():
-        free[0], pinned[0], hi[0] = True, False, lo[0] + 1.0
-    gf, hf = g[np.ix_(free, free)], h[free] - g[np.ix_(free, pinned)] @ lo[pinned]
-    r = np.linalg.cholesky(gf).T
-    ref = lo.copy()
-    ref[free] = lsq_linear(r, np.linalg.solve(r.T, hf), bounds=(lo[free], hi[free]), method="bvls", tol=1e-14).x
+    if pinned.all():
+        hi[0] = lo[0] + 1.0
+    ref = _bvls(g, h, lo, hi)
     for start in (None, np.linalg.solve(g, h), rng.normal(size=p) * 5):
         x = box_qp(g, h, lo, hi, start)
         assert np.all(x >= lo) and np.all(x <= hi)
