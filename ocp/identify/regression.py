@@ -73,6 +73,8 @@ from ocp.model.effects import CATALOGUE
 from ocp.model.params import MotorParams
 
 EQS = ("mechanical", "electrical", "thrust")
+#: the lift [of a column's peak] that keeps :func:`speed_view`'s filter out of the subnormal range
+SUBNORMAL_LIFT = 1e-150
 CONSTANTS: tuple[str, ...] = ("J", "B", "c_tau", "c_f", "k", "R", "L")
 #: logger artefacts every model fits and no verdict names: ``current_lag``, the current sensor's lag [samples]
 #: (a firmware filter) in the torque equation, where the true current is ``i + lag dt i'`` (in the armature
@@ -215,11 +217,20 @@ def speed_view(y: np.ndarray, dt: float, tau: float) -> np.ndarray:
     (eq. dc_mechanical ``J w' + D w = tau``, ``tau = J / D`` [s], unit gain at DC, exact for a held input),
     run forward and backward (zero phase, magnitude ``1 / (1 + (w tau)^2)``). The differentiated speed's
     noise (``J w'``, growing with frequency) falls below the speed noise, while a slow torque error keeps
-    what moves the rotor: what a free run shows."""
+    what moves the rotor: what a free run shows.
+
+    A column that is zero away from a few rows (a hat of :func:`.angle.drift_windows`, a step) leaves a tail decaying
+    through the subnormal range, where each operation costs ~100 times more (blind rig 12: a fifth of the viewed
+    values, the filter and the Gram products after it 10-25 times slower). Each column is lifted by
+    :data:`SUBNORMAL_LIFT` of its peak before the filter (its DC gain is one: the lift comes back out) and what is left
+    under a thousand lifts is zero: the same view to within 1e-147 of the column's peak."""
     if dt == 0 or tau <= 2 * dt or y.shape[0] < 20:
         return y
     a = math.exp(-dt / tau)
-    return np.asarray(signal.filtfilt([1.0 - a], [1.0, -a], y, axis=0, padlen=0), float)
+    lift = SUBNORMAL_LIFT * np.max(np.abs(y), axis=0)  # () or (K,)
+    lifted = np.ascontiguousarray((y + lift).T)  # (K, N): the filter runs along contiguous rows (2x faster)
+    z = signal.filtfilt([1.0 - a], [1.0, -a], lifted, axis=-1, padlen=0).T - lift
+    return np.ascontiguousarray(np.where(np.abs(z) < 1e3 * lift, 0.0, z), dtype=float)
 
 
 def visible_torque(p: MotorParams, s: Signals, noise: dict[str, float]) -> float:
