@@ -42,6 +42,7 @@ import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
+from typing import Any, cast
 
 import numpy as np
 from scipy import signal
@@ -172,6 +173,9 @@ class Design:
     #: the banded effects' columns (:data:`.footprint.BANDED`) and the held-out rows where each acts
     #: (:class:`.footprint.Footprints`); None in a fold's design (:meth:`fold`)
     footprint: Footprints | None = None
+    #: what is computed again and again from this design: :meth:`fold`'s designs, :func:`.select.solve`'s fits (keyed
+    #: by their arguments and the boxes' state); a design made by ``replace`` starts with none
+    memo: dict[object, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def index(self, item: str) -> list[int]:
         return [j for j, c in enumerate(self.columns) if c.item == item]
@@ -189,13 +193,16 @@ class Design:
 
     def fold(self, k: int) -> Design:
         """Fold ``k`` as a one-split design: trained on every other row, held out on the fold's (its blocks)."""
+        if ("fold", k) in self.memo:  # (a model's folds are fitted again by every later round's models)
+            return cast(Design, self.memo["fold", k])
         b, o = self.block_fold == k, np.arange(self.folds) != k  # (the other folds summed: no cancellation)
-        return replace(self, g_train=self.g_fold[o].sum(axis=0), h_train=self.h_fold[o].sum(axis=0),
+        self.memo["fold", k] = replace(self, g_train=self.g_fold[o].sum(axis=0), h_train=self.h_fold[o].sum(axis=0),
                        c_train=self.c_fold[o].sum(axis=0), n_train=self.n_fold[o].sum(axis=0),
                        g_test=self.g_fold[k], h_test=self.h_fold[k], c_test=self.c_fold[k], n_test=self.n_fold[k],
                        g_blocks=self.g_blocks[b], h_blocks=self.h_blocks[b], c_blocks=self.c_blocks[b],
                        g_fold=self.g_fold[:0], h_fold=self.h_fold[:0], c_fold=self.c_fold[:0], n_fold=self.n_fold[:0],
                        block_fold=self.block_fold[:0], footprint=None)
+        return cast(Design, self.memo["fold", k])
 
 
 def _noise_residual(t: np.ndarray, rich: list[np.ndarray], fixed: list[np.ndarray], rows: np.ndarray) -> np.ndarray:

@@ -102,3 +102,26 @@ def test_a_fall_counts_alone_only_in_an_equation_the_item_enters() -> None:
     assert beyond_scatter(d, before, after)  # any equation: the torque rows' fall passes
     assert not beyond_scatter(d, before, after, ("force_offset",))  # its own (thrust) equation did not move
     assert beyond_scatter(d, before, after, ("B",))  # an item of the torque equation would have it
+
+
+def test_the_memo_serves_a_fit_again_and_never_across_a_change_of_the_boxes() -> None:
+    """:func:`ocp.identify.select.solve` keeps its fits in the design's memo: the same call gives the same fit (and
+    the folds the same designs); a box widened afterwards (``slack``, ``above``, ``unresolved``, as
+    :mod:`ocp.identify.inductance` and ``diagnose`` do on a built design) gives the fit a fresh design gives, not the
+    stored one; a design made by ``replace`` starts with an empty memo."""
+    from ocp.identify.select import solve
+
+    a, t, folds = _rows(3)
+    d = _design(a, t, folds)
+    tight = solve(d, [0], set(), 0.01)  # B's 3 % error held at the 1 % box
+    assert solve(d, [0], set(), 0.01) is tight and d.fold(1) is d.fold(1)
+    assert tight.x[0] == np.float64(0.01)
+    for change in ({"slack": {"B": 0.5}}, {"above": {"B": 0.5}}, {"unresolved": {"B": "not resolved"}}):
+        d = _design(a, t, folds)
+        assert solve(d, [0], set(), 0.01).x[0] == tight.x[0]
+        for name, value in change.items():
+            getattr(d, name).update(value)
+        fresh = solve(replace(d), [0], set(), 0.01)
+        assert not replace(d).memo
+        assert fresh.x[0] > 0.02  # (the widened box lets B reach its 3 %)
+        assert solve(d, [0], set(), 0.01).x[0] == fresh.x[0]
