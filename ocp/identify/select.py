@@ -121,20 +121,22 @@ def _bounds(design: Design, cols: Sequence[int], named: set[str], tol: float,
 
 
 def solve(design: Design, cols: Sequence[int], named: set[str], tol: float,
-          above: dict[str, float] | None = None) -> Fitted:
+          above: dict[str, float] | None = None, near: Fitted | None = None) -> Fitted:
     """Bounded least squares on the training Gram matrices (``min x'Gx - 2h'x``) of columns ``cols`` (``above``:
-    the boxes' widening above nominal, :attr:`.regression.Design.above` when None). Kept in the design's memo by
-    everything the fit depends on (the same models are fitted again: their shapes and folds by each later round,
-    blind rig 95: 8,568 fits, 4,888 different)."""
+    the boxes' widening above nominal, :attr:`.regression.Design.above` when None). ``near``: the fit of the first
+    columns of ``cols`` alone, where the box QP starts (its bounds mostly bind again: the same minimum in fewer
+    solves). Kept in the design's memo by everything the fit depends on (the same models are fitted again: their
+    shapes and folds by each later round, blind rig 95: 8,568 fits, 4,888 different)."""
     above = design.above if above is None else above
     key = ("solve", tuple(cols), frozenset(named), tol, *(tuple(sorted(d.items())) for d in (above, design.slack)),
            frozenset(design.unresolved), frozenset(design.unseen))
     if key not in design.memo:
-        design.memo[key] = _solve(design, cols, named, tol, above)
+        design.memo[key] = _solve(design, cols, named, tol, above, near)
     return cast(Fitted, design.memo[key])
 
 
-def _solve(design: Design, cols: Sequence[int], named: set[str], tol: float, above: dict[str, float]) -> Fitted:
+def _solve(design: Design, cols: Sequence[int], named: set[str], tol: float, above: dict[str, float],
+           near: Fitted | None) -> Fitted:
     idx = np.array(cols, dtype=int)
     g = design.g_train[:, idx][:, :, idx].sum(axis=0)  # (the model's columns first: Q runs to hundreds)
     h = design.h_train[:, idx].sum(axis=0)
@@ -147,11 +149,13 @@ def _solve(design: Design, cols: Sequence[int], named: set[str], tol: float, abo
         gs = gs + 1e-6 * np.eye(idx.size)
     y = np.linalg.solve(gs, h / d)  # unconstrained first; bounded only when a bound binds
     if not np.all(np.isfinite(y)) or np.any(y < lo * d) or np.any(y > hi * d):  # (near-singular: bounded too)
+        if near is not None:
+            y[:near.x.size] = near.x * d[:near.x.size]
         y = box_qp(gs, h / d, lo * d, hi * d, y)
     x = np.where(d > 1e-9 * _reference(design, idx), y / d, 0.0)  # a column the log leaves empty: 0
     cost = float(design.c_train.sum() - 2 * h @ x + x @ g @ x)
-    ms = np.array([(design.c_test[e] - 2 * design.h_test[e][idx] @ x + x @ design.g_test[e][np.ix_(idx, idx)] @ x)
-                   / max(design.n_test[e], 1) for e in range(3)])
+    gt, ht = design.g_test[:, idx][:, :, idx], design.h_test[:, idx]
+    ms = np.array([(design.c_test[e] - 2 * ht[e] @ x + x @ gt[e] @ x) / max(design.n_test[e], 1) for e in range(3)])
     return Fitted((), tuple(int(j) for j in idx), x, cost, _score(design, ms), np.sqrt(np.maximum(ms, 0.0)))
 
 
@@ -230,11 +234,12 @@ def _shape_columns(design: Design, chosen: list[int], js: list[int], named: set[
     (``mix``) the better of its grid neighbours (both coefficients sign-bounded): the true shape lies between grid
     points, and the residual of one grid column mis-shaped by half a grid step (e.g. a wake lag 30 % off) would be
     explained by a wrong constant instead. (A saturating effect's amplitude is bounded by its width instead.)"""
-    costs = [solve(design, [*chosen, j], named, tol).train_cost for j in js]
+    base = solve(design, chosen, named, tol)
+    costs = [solve(design, [*chosen, j], named, tol, near=base).train_cost for j in js]
     cols = [design.columns[j] for j in js]
     k = preferred(costs, cols)
     pairs = [[js[k], js[m]] for m in neighbours(k, cols) if mix]
-    fits = [(solve(design, [*chosen, *pr], named, tol).train_cost, pr) for pr in pairs]
+    fits = [(solve(design, [*chosen, *pr], named, tol, near=base).train_cost, pr) for pr in pairs]
     return min(fits, key=lambda e: e[0])[1] if fits else [js[k]]
 
 

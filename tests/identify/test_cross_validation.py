@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 import numpy as np
+import pytest
 
 from ocp.identify.evidence import Fitted, beyond_scatter, block_t, ratio_z
 from ocp.identify.regression import Column, Design, _blocks
@@ -125,3 +126,17 @@ def test_the_memo_serves_a_fit_again_and_never_across_a_change_of_the_boxes() ->
         assert not replace(d).memo
         assert fresh.x[0] > 0.02  # (the widened box lets B reach its 3 %)
         assert solve(d, [0], set(), 0.01).x[0] == fresh.x[0]
+
+
+def test_a_fit_started_near_its_first_columns_fit_is_the_same_fit() -> None:
+    """``solve(..., near=...)`` starts the box QP at the fit of the first columns alone (the shape search's base
+    model): the minimum is the one a cold start finds (the bound of B binds in both)."""
+    from ocp.identify.select import solve
+
+    a, t, folds = _rows(5)
+    for tol in (0.01, 0.5):
+        cold = solve(_design(a, t, folds), [0, 1], set(), tol)
+        d = _design(a, t, folds)
+        warm = solve(d, [0, 1], set(), tol, near=solve(d, [0], set(), tol))
+        assert np.allclose(warm.x, cold.x, rtol=1e-12, atol=0) and warm.train_cost == pytest.approx(cold.train_cost)
+    assert cold.x[0] < 0.5 and solve(_design(a, t, folds), [0, 1], set(), 0.01).x[0] == np.float64(0.01)
