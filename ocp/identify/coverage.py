@@ -88,7 +88,7 @@ def unseen(log: Log) -> dict[str, str]:
     reverse only, came back as ``c_tau`` and ``c_f`` errors). They are never named: a model without the asymmetry
     calibrates them within the tolerance (the nominal values' own error, which an asymmetry must not be named for),
     one with it holds them at nominal, the asymmetry taking all of reverse rotation's departure (the two columns are
-    one on these rows: any split would be arbitrary) (:attr:`.regression.Design.unseen`, :func:`.select.solve`)."""
+    one on these rows: any split would be arbitrary) (:attr:`.regression.Design.unseen`, :func:`.lsq.solve`)."""
     if log.kind is not LogKind.TIME_SERIES:
         return {}
     pos, neg, _ = directions(log.omega)

@@ -106,11 +106,11 @@ def test_a_fall_counts_alone_only_in_an_equation_the_item_enters() -> None:
 
 
 def test_the_memo_serves_a_fit_again_and_never_across_a_change_of_the_boxes() -> None:
-    """:func:`ocp.identify.select.solve` keeps its fits in the design's memo: the same call gives the same fit (and
+    """:func:`ocp.identify.lsq.solve` keeps its fits in the design's memo: the same call gives the same fit (and
     the folds the same designs); a box widened afterwards (``slack``, ``above``, ``unresolved``, as
     :mod:`ocp.identify.inductance` and ``diagnose`` do on a built design) gives the fit a fresh design gives, not the
     stored one; a design made by ``replace`` starts with an empty memo."""
-    from ocp.identify.select import solve
+    from ocp.identify.lsq import solve
 
     a, t, folds = _rows(3)
     d = _design(a, t, folds)
@@ -131,7 +131,7 @@ def test_the_memo_serves_a_fit_again_and_never_across_a_change_of_the_boxes() ->
 def test_a_fit_started_near_its_first_columns_fit_is_the_same_fit() -> None:
     """``solve(..., near=...)`` starts the box QP at the fit of the first columns alone (the shape search's base
     model): the minimum is the one a cold start finds (the bound of B binds in both)."""
-    from ocp.identify.select import solve
+    from ocp.identify.lsq import solve
 
     a, t, folds = _rows(5)
     for tol in (0.01, 0.5):

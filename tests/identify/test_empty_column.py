@@ -1,5 +1,5 @@
 """A column is empty (its coefficient set to 0 after the fit: ``L`` far under a sample) only against the columns of its
-own equations (:func:`ocp.identify.select.solve`, session 40).
+own equations (:func:`ocp.identify.lsq.solve`, session 40).
 
 The columns' norms span many decades by their units (a relative ``L`` correction beside an absolute thrust asymmetry
 ``dc_f`` in N s^2/rad^2). Judged against every column, adding a thrust column emptied an ``L`` that a current filter's

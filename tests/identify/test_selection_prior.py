@@ -49,7 +49,7 @@ def test_a_calibration_box_open_above_stops_at_the_implausible_factor() -> None:
     calibrated at most to twice its nominal: one fold of a 10 kHz clean log (6056) put it at 4.5x, and the
     held-out error of that fold made a current offset look needed."""
     from ocp.identify.evidence import IMPLAUSIBLE_FACTOR
-    from ocp.identify.select import _bounds
+    from ocp.identify.lsq import bounds as _bounds
 
     d = _design()
     d.columns[0] = Column("L", "L")
