@@ -58,8 +58,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import optimize, signal
+from scipy import optimize
 
+from ocp.filters import butter2, filtfilt, iir
 from ocp.logs import Log, LogKind
 
 #: finest lag step [samples]; the search range: at least MIN_LAG samples and MIN_LAG_S seconds, at most MAX_LAG
@@ -123,8 +124,8 @@ def smooth(y: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
     wn = 2.0 * cutoff * dt
     if wn >= 0.95 or y.size < 20:
         return y.astype(float)
-    b, a = signal.butter(2, wn)
-    return np.asarray(signal.filtfilt(b, a, y, padlen=min(3 * max(len(a), len(b)), y.size - 1)), float)
+    b, a = butter2(wn)
+    return filtfilt(b, a, y, padlen=min(3 * max(len(a), len(b)), y.size - 1))
 
 
 def shifted(y: np.ndarray, lag: float) -> np.ndarray:
@@ -256,7 +257,7 @@ def _through_armature(x: np.ndarray, tau: float) -> np.ndarray:
     ``p = exp(-1/tau)``, ``tau`` [samples] its ``L/R``, from rest: exact under a zero-order hold (eq.
     dc_electrical)."""
     p = math.exp(-1.0 / max(tau, 1e-3))
-    return np.asarray(signal.lfilter([0.0, 1.0 - p], [1.0, -p], x, axis=0))
+    return np.ascontiguousarray(iir([0.0, 1.0 - p], [1.0, -p], x))
 
 
 def armature_error(log: Log, lag: float, tau: float, train: np.ndarray, test: np.ndarray) -> float:

@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
+from scipy.special import ndtri, stdtrit
 
 from ocp.identify.regression import CONSTANTS, Design
 
@@ -168,7 +168,7 @@ def blocks_agree(design: Design, current: Fitted, item: str, f: Fitted) -> bool:
     if nb < BLOCK_MIN:
         return False
     material = (design.n_test > 0) & (f.per_eq <= (1.0 - BLOCK_FALL) * current.per_eq)
-    return bool(np.any(material & (t >= stats.t.ppf(1.0 - BLOCK_ALPHA, nb - 1))))
+    return bool(np.any(material & (t >= stdtrit(nb - 1, 1.0 - BLOCK_ALPHA))))
 
 
 def ratio_agrees(design: Design, current: Fitted, item: str, f: Fitted) -> bool:
@@ -188,7 +188,7 @@ def ratio_agrees(design: Design, current: Fitted, item: str, f: Fitted) -> bool:
     enters = bool(np.any(design.g_train[0, js, js] > 0)) and design.n_test[0] > 0  # eq. dc_mechanical only
     alpha = BLOCK_ALPHA if item in CONSTANTS else EFFECT_ALPHA
     return enters and bool(nb < 2 or t[0] > 0) and f.per_eq[0] <= (1.0 - BLOCK_FALL) * current.per_eq[0] \
-        and ratio_z(design, current, f)[0] >= stats.norm.ppf(1.0 - alpha)
+        and ratio_z(design, current, f)[0] >= ndtri(1.0 - alpha)
 
 
 def ratio_z(design: Design, before: Fitted, after: Fitted) -> np.ndarray:

@@ -26,9 +26,9 @@ import math
 from dataclasses import dataclass, replace
 
 import numpy as np
-from scipy import signal
 
 from ocp.errors import LogError, SolverError
+from ocp.filters import iir
 from ocp.logs import Log, LogKind
 from ocp.model.effects import measured_current, stateful
 from ocp.model.plant import NUMPY, DCMotorPlant
@@ -221,7 +221,7 @@ def lagged_current(fr: FreeRun, lag: float) -> np.ndarray:
     a = 1.0 / (1.0 + lag)
     c = fr.current.reshape(-1, fr.length)
     out = c.copy()
-    out[:, 1:] = signal.lfilter([a], [1.0, a - 1.0], c[:, 1:], axis=1, zi=(1.0 - a) * c[:, :1])[0]
+    out[:, 1:] = iir([a], [1.0, a - 1.0], c[:, 1:].T, start=c[:, 0]).T  # (from the steady state at the first row)
     return out.reshape(-1)
 
 

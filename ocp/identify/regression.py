@@ -45,8 +45,8 @@ from dataclasses import dataclass, field, replace
 from typing import Any, cast
 
 import numpy as np
-from scipy import signal
 
+from ocp.filters import filtfilt
 from ocp.identify.align import cutoff_hz
 from ocp.identify.angle import MAX_PERIODS, angle_limits, ripple_independence, speed_noise, tracked_periods
 from ocp.identify.clipping import clipped, widened
@@ -173,7 +173,7 @@ class Design:
     #: the banded effects' columns (:data:`.footprint.BANDED`) and the held-out rows where each acts
     #: (:class:`.footprint.Footprints`); None in a fold's design (:meth:`fold`)
     footprint: Footprints | None = None
-    #: what is computed again and again from this design: :meth:`fold`'s designs, :func:`.select.solve`'s fits (keyed
+    #: what is computed again and again from this design: :meth:`fold`'s designs, :func:`.lsq.solve`'s fits (keyed
     #: by their arguments and the boxes' state); a design made by ``replace`` starts with none
     memo: dict[object, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
@@ -235,8 +235,8 @@ def speed_view(y: np.ndarray, dt: float, tau: float) -> np.ndarray:
         return y
     a = math.exp(-dt / tau)
     lift = SUBNORMAL_LIFT * np.max(np.abs(y), axis=0)  # () or (K,)
-    lifted = np.ascontiguousarray((y + lift).T)  # (K, N): the filter runs along contiguous rows (2x faster)
-    z = signal.filtfilt([1.0 - a], [1.0, -a], lifted, axis=-1, padlen=0).T - lift
+    lifted = np.ascontiguousarray((y + lift).T).T  # (N, K), each column contiguous: the filter runs along it
+    z = filtfilt([1.0 - a], [1.0, -a], lifted) - lift
     return np.ascontiguousarray(np.where(np.abs(z) < 1e3 * lift, 0.0, z), dtype=float)
 
 

@@ -14,7 +14,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.stats import norm
+from scipy.special import ndtr
 
 from ocp.identify.predict import CHANNELS, free_run
 from ocp.logs import log_from_arrays
@@ -39,7 +39,7 @@ class Rival:
 def confusion(z: float) -> float:
     """Misclassification probability of the likelihood-ratio test between two Gaussian hypotheses ``z``
     noise standard deviations apart (equal priors): ``Phi(-z/2)``."""
-    return float(norm.cdf(-z / 2.0))
+    return float(ndtr(-z / 2.0))
 
 
 def with_effect(plant: DCMotorPlant, name: str, values: dict[str, float]) -> DCMotorPlant:

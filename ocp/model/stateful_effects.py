@@ -78,21 +78,11 @@ class StatefulBase(EffectBase):
 def _lti_states(a: np.ndarray, b: np.ndarray, u: np.ndarray, dt: float) -> np.ndarray:
     """States (n, N) of ``z' = a z + b u`` under zero-order-held ``u`` (N,), starting at steady state.
 
-    Exact ZOH discretisation, each state filtered by its own transfer function (``lfilter``, C speed).
+    Exact ZOH discretisation, each state filtered by its own transfer function (:mod:`ocp.filters`, compiled).
     """
-    # scipy.signal is ~0.8 s of a cold import, and only identification reaches this: every optimiser worker and
-    # CLI call imports this module, so the import waits until a log is filtered
-    from scipy import signal
+    from ocp.filters import iir, zoh_transfer  # (scipy.linalg: only identification reaches this; workers need not)
 
-    n = a.shape[0]
-    ad, bd, *_ = signal.cont2discrete((a, b.reshape(n, 1), np.eye(n), np.zeros((n, 1))), dt, method="zoh")
-    z = np.empty((n, u.size))
-    for j in range(n):
-        num, den = signal.ss2tf(ad, bd, np.eye(n)[j:j + 1], np.zeros((1, 1)))
-        num = np.atleast_1d(np.squeeze(num))
-        zi = signal.lfilter_zi(num, den) * u[0]
-        z[j] = signal.lfilter(num, den, u, zi=zi)[0]
-    return z
+    return np.vstack([iir(num, den, u, start=u[0]) for num, den in zoh_transfer(a, b, dt)])
 
 
 @dataclass(frozen=True)

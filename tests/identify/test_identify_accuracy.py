@@ -35,16 +35,17 @@ def test_speed_view_has_unit_dc_gain_and_the_rotors_squared_roll_off() -> None:
 
 
 def test_speed_view_keeps_a_narrow_columns_tails_out_of_the_subnormal_range() -> None:
-    """A hat column (nonzero on 200 of 20,000 rows) seen through the plain forward-backward filter leaves tails
-    decaying through the subnormal range (slow arithmetic); :func:`speed_view` gives the same view to within 1e-146 of
-    the column's peak without one subnormal value, column by column as for each alone, and a zero column stays zero."""
-    from scipy import signal
+    """A hat column (nonzero on 200 of 20,000 rows) seen through the plain forward-backward filter
+    (:func:`ocp.filters.filtfilt`, itself held to scipy's in ``tests/test_filters.py``) leaves tails decaying through
+    the subnormal range (slow arithmetic); :func:`speed_view` gives the same view to within 1e-146 of the column's peak
+    without one subnormal value, column by column as for each alone, and a zero column stays zero."""
+    from ocp.filters import filtfilt
 
     dt, tau, n = 1e-3, 0.005, 20_000
     hat = np.clip(1.0 - np.abs(np.arange(n) - 5_000.0) / 100.0, 0.0, None) * 3e-3  # [N m]
     y = np.column_stack([hat, np.zeros(n), np.roll(hat, 9_000)])
     a = math.exp(-dt / tau)
-    plain = signal.filtfilt([1.0 - a], [1.0, -a], y, axis=0, padlen=0)
+    plain = filtfilt([1.0 - a], [1.0, -a], y)
     tiny = np.finfo(float).tiny
 
     def subnormal(x: np.ndarray) -> int:
