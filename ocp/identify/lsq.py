@@ -28,7 +28,9 @@ SATURATION_SLACK = 1.5
 
 
 def bounds(design: Design, cols: Sequence[int], named: set[str], tol: float,
-            above: dict[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+           above: dict[str, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The boxes (lo (P,), hi (P,)) of the columns ``cols`` in a model naming the constants ``named`` (a constant's
+    relative to nominal; ``above``: the widening above nominal, :attr:`.regression.Design.above` when None)."""
     lo, hi, items = [], [], {design.columns[j].item for j in cols}
     above = design.above if above is None else above
     for j in cols:
