@@ -45,6 +45,22 @@ def test_first_order_lags_as_the_identification_uses_them() -> None:
     assert _close(filtfilt([1 - q], [1.0, -q], x), signal.filtfilt([1 - q], [1.0, -q], x, axis=0, padlen=0), 1e-13)
 
 
+def test_the_backward_pass_is_the_filter_run_on_the_reversed_record() -> None:
+    """``iir(..., backward=True)`` (an upper triangular solve) against ``lfilter`` on ``x[::-1]``, reversed back, from
+    rest and from the steady state at the last row; and on a record shorter than the filter's order."""
+    rng = np.random.default_rng(3)
+    x = rng.normal(size=(400, 2))
+    b, a = [0.2, 0.3, -0.1], [1.0, -0.5, 0.1]
+    rev = signal.lfilter(b, a, x[::-1], axis=0)[::-1]
+    assert _close(iir(b, a, x, backward=True), rev, 1e-13)
+    zi = signal.lfilter_zi(b, a)[:, None] * x[-1]
+    assert _close(iir(b, a, x, start=x[-1], backward=True), signal.lfilter(b, a, x[::-1], axis=0, zi=zi)[0][::-1],
+                  1e-13)
+    short = x[:1]
+    want = signal.lfilter(b, a, short, axis=0, zi=signal.lfilter_zi(b, a)[:, None] * short[0])[0]
+    assert _close(iir(b, a, short, start=short[0], backward=True), want, 1e-13)
+
+
 def test_a_constant_from_its_steady_state_stays_constant() -> None:
     """Closed form: from the steady state of a constant, every output is the DC gain times it."""
     b, a = butter2(0.1)
