@@ -193,15 +193,15 @@ class Design:
 
     def fold(self, k: int) -> Design:
         """Fold ``k`` as a one-split design: trained on every other row, held out on the fold's (its blocks)."""
-        if ("fold", k) in self.memo:  # (a model's folds are fitted again by every later round's models)
-            return cast(Design, self.memo["fold", k])
-        b, o = self.block_fold == k, np.arange(self.folds) != k  # (the other folds summed: no cancellation)
-        self.memo["fold", k] = replace(self, g_train=self.g_fold[o].sum(axis=0), h_train=self.h_fold[o].sum(axis=0),
-                       c_train=self.c_fold[o].sum(axis=0), n_train=self.n_fold[o].sum(axis=0),
-                       g_test=self.g_fold[k], h_test=self.h_fold[k], c_test=self.c_fold[k], n_test=self.n_fold[k],
-                       g_blocks=self.g_blocks[b], h_blocks=self.h_blocks[b], c_blocks=self.c_blocks[b],
-                       g_fold=self.g_fold[:0], h_fold=self.h_fold[:0], c_fold=self.c_fold[:0], n_fold=self.n_fold[:0],
-                       block_fold=self.block_fold[:0], footprint=None)
+        if ("fold", k) not in self.memo:  # (kept: a model's folds are fitted again by every later round's models)
+            b, o = self.block_fold == k, np.arange(self.folds) != k  # (the other folds summed: no cancellation)
+            self.memo["fold", k] = replace(
+                self, g_train=self.g_fold[o].sum(axis=0), h_train=self.h_fold[o].sum(axis=0),
+                c_train=self.c_fold[o].sum(axis=0), n_train=self.n_fold[o].sum(axis=0),
+                g_test=self.g_fold[k], h_test=self.h_fold[k], c_test=self.c_fold[k], n_test=self.n_fold[k],
+                g_blocks=self.g_blocks[b], h_blocks=self.h_blocks[b], c_blocks=self.c_blocks[b],
+                g_fold=self.g_fold[:0], h_fold=self.h_fold[:0], c_fold=self.c_fold[:0], n_fold=self.n_fold[:0],
+                block_fold=self.block_fold[:0], footprint=None)
         return cast(Design, self.memo["fold", k])
 
 

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from ocp.identify.evidence import Fitted, beyond_scatter, block_t, ratio_z
+from ocp.identify.lsq import solve
 from ocp.identify.regression import Column, Design, _blocks
 from ocp.identify.select import fit_model
 
@@ -110,8 +111,6 @@ def test_the_memo_serves_a_fit_again_and_never_across_a_change_of_the_boxes() ->
     the folds the same designs); a box widened afterwards (``slack``, ``above``, ``unresolved``, as
     :mod:`ocp.identify.inductance` and ``diagnose`` do on a built design) gives the fit a fresh design gives, not the
     stored one; a design made by ``replace`` starts with an empty memo."""
-    from ocp.identify.lsq import solve
-
     a, t, folds = _rows(3)
     d = _design(a, t, folds)
     tight = solve(d, [0], set(), 0.01)  # B's 3 % error held at the 1 % box
@@ -131,8 +130,6 @@ def test_the_memo_serves_a_fit_again_and_never_across_a_change_of_the_boxes() ->
 def test_a_fit_started_near_its_first_columns_fit_is_the_same_fit() -> None:
     """``solve(..., near=...)`` starts the box QP at the fit of the first columns alone (the shape search's base
     model): the minimum is the one a cold start finds (the bound of B binds in both)."""
-    from ocp.identify.lsq import solve
-
     a, t, folds = _rows(5)
     for tol in (0.01, 0.5):
         cold = solve(_design(a, t, folds), [0, 1], set(), tol)
