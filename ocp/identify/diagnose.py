@@ -81,6 +81,7 @@ from ocp.identify.signs import check_signs
 from ocp.logs import Log, LogKind
 from ocp.model.effects import make_effect
 from ocp.model.plant import DCMotorPlant
+from ocp.parallel import one_blas_thread
 
 
 class DiagnoseOptions(BaseModel):
@@ -260,8 +261,14 @@ def aligned(plant: DCMotorPlant, log: Log, max_logging_skew: float) -> tuple[Ali
 def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None,
              progress: Callable[[float], None] | None = None) -> DiagnoseResult:
     """Say which effects are missing and which constants are wrong (module doc). ``progress(fraction)``
-    is called as the work advances (for progress bars)."""
-    opt = options or DiagnoseOptions()
+    is called as the work advances (for progress bars). Independent pieces run in threads, BLAS in one
+    (:mod:`ocp.parallel`)."""
+    with one_blas_thread():
+        return _diagnose(plant, log, options or DiagnoseOptions(), progress)
+
+
+def _diagnose(plant: DCMotorPlant, log: Log, opt: DiagnoseOptions,
+              progress: Callable[[float], None] | None) -> DiagnoseResult:
     if not dynamic(log):  # sweeps, ESC rigs and flight logs: point by point, never a time effect (issue #13)
         from ocp.identify.steady_diagnose import diagnose_points
 

@@ -19,6 +19,7 @@ from ocp.identify.angle import MAX_PERIODS
 from ocp.identify.columns import Column, Signals, effect_columns, ripple_phase, turn_ripple
 from ocp.logs import Log
 from ocp.model.params import MotorParams
+from ocp.parallel import ordered
 
 #: the harmonics of a ripple's count fitted beside its fundamental (:class:`ocp.model.stateful_effects.Cogging`)
 HARMONICS = (2, 3)
@@ -63,15 +64,20 @@ def pick_periods(p: MotorParams, raw: Signals, log: Log, target: np.ndarray, ric
         e = resid[test] - sc[test] @ x
         return float(e @ e), x
 
+    def trial(n: int) -> list[tuple[float, np.ndarray, list[tuple[Column, np.ndarray]], np.ndarray | None]]:
+        """Count ``n``'s ripple (and, along a drifting integrated angle, the ripple with its phase tracked): the
+        held-out squared residual each leaves, its coefficients, its columns and phasors."""
+        ripple = effect_columns("cogging", p, raw, log, n)
+        phase = ripple_phase(raw, log, n, ripple, resid, train, view)
+        return [(*held_out(unviewed), unviewed, turned) for unviewed, turned in
+                (((ripple, None),) if phase is None else ((ripple, None), (turn_ripple(ripple, phase), phase)))]
+
     total = float(resid[test] @ resid[test])
     shares = np.full(MAX_PERIODS, -math.inf)
     best: tuple[float, int, list[tuple[Column, np.ndarray]], float, np.ndarray | None] = (math.inf, 0, [], 0.0, None)
-    for n in range(1, MAX_PERIODS + 1):  # a drifting integrated angle: also the ripple with its phase tracked
-        ripple = effect_columns("cogging", p, raw, log, n)
-        phase = ripple_phase(raw, log, n, ripple, resid, train, view)
-        for unviewed, turned in ((ripple, None),) if phase is None else ((ripple, None),
-                                                                         (turn_ripple(ripple, phase), phase)):
-            left, x = held_out(unviewed)
+    counts = range(1, MAX_PERIODS + 1)
+    for n, tried in zip(counts, ordered(trial, counts), strict=True):  # (in order: the first best count wins ties)
+        for left, x, unviewed, turned in tried:
             shares[n - 1] = max(shares[n - 1], (total - left) / total if total > 0 else 0.0)
             if left < best[0]:
                 best = (left, n, unviewed, math.hypot(*x), turned)
