@@ -18,14 +18,16 @@ from scipy.linalg.lapack import dtbtrs
 
 
 def iir(b: np.ndarray | list[float], a: np.ndarray | list[float], x: np.ndarray,
-        start: float | np.ndarray | None = None, backward: bool = False) -> np.ndarray:
+        start: float | np.ndarray | None = None, backward: bool = False, overwrite: bool = False) -> np.ndarray:
     """``x`` (N,) or (N, K) filtered along axis 0 by ``b(z) / a(z)`` (coefficients of ``z^0, z^-1, ...``): from rest
     (``start`` None: every earlier input and output zero), or from the steady state of a constant input ``start``
     (a scalar, or (K,) per column: every earlier input that value, every earlier output its DC gain times it; what
     ``lfilter`` with ``zi = lfilter_zi(b, a) * start`` does). ``backward``: the same filter run from the last row to
     the first (``lfilter`` on ``x[::-1]``, reversed back; ``start`` then stands for the rows after the last), an upper
     triangular solve, no copy reversed. Same shape as ``x``, float (a 2-D result in Fortran order: each column
-    contiguous, as the solve leaves it)."""
+    contiguous, as the solve leaves it). ``overwrite``: ``x`` may be used as the result's buffer (it is, when it is a
+    float array whose columns are contiguous); a numerator tap that is zero adds nothing and is skipped (its
+    product's zero could only change the sign of a zero)."""
     den, num = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
     m = max(den.size, num.size) - 1
     num, den = np.pad(num / den[0], (0, m + 1 - num.size)), np.pad(den / den[0], (0, m + 1 - den.size))
@@ -34,17 +36,25 @@ def iir(b: np.ndarray | list[float], a: np.ndarray | list[float], x: np.ndarray,
     n = flat.shape[0]
     if n == 0:
         return y.copy()
-    past_x = np.zeros(flat.shape[1]) if start is None else np.broadcast_to(np.asarray(start, float), flat.shape[1:])
+    past_x = np.zeros(flat.shape[1]) if start is None else \
+        np.array(np.broadcast_to(np.asarray(start, float), flat.shape[1:]))  # (a copy: x may be overwritten)
     past_y = past_x * (num.sum() / den.sum()) if start is not None else past_x
-    rhs = num[0] * flat
+    taps = [k for k in range(1, m + 1) if num[k] != 0.0]
+    if not taps and (overwrite or not np.may_share_memory(flat, x)):  # (flat: x's buffer, or a copy made here)
+        rhs = flat
+        rhs *= num[0]
+    else:
+        rhs = num[0] * flat
     band = np.zeros((m + 1, n))
     for k in range(1, m + 1):  # row n takes x[n -+ k] and y[n -+ k]; those beyond the record are the start's
         if backward:
-            rhs[:n - k] += num[k] * flat[k:]
+            if k in taps:
+                rhs[:n - k] += num[k] * flat[k:]
             rhs[max(n - k, 0):] += num[k] * past_x - den[k] * past_y
             band[m - k, k:] = den[k]  # (upper band storage: the k-th superdiagonal)
         else:
-            rhs[k:] += num[k] * flat[:n - k]
+            if k in taps:
+                rhs[k:] += num[k] * flat[:n - k]
             rhs[:min(k, n)] += num[k] * past_x - den[k] * past_y
             band[k, :n - k] = den[k]
     out, info = dtbtrs(band, rhs, uplo="U" if backward else "L", diag="U", overwrite_b=1)
@@ -53,11 +63,13 @@ def iir(b: np.ndarray | list[float], a: np.ndarray | list[float], x: np.ndarray,
     return np.asarray(out).reshape(y.shape, order="F") if y.ndim > 1 else np.asarray(out)[:, 0]
 
 
-def filtfilt(b: np.ndarray | list[float], a: np.ndarray | list[float], x: np.ndarray, padlen: int = 0) -> np.ndarray:
+def filtfilt(b: np.ndarray | list[float], a: np.ndarray | list[float], x: np.ndarray, padlen: int = 0,
+             overwrite: bool = False) -> np.ndarray:
     """``x`` (N,) or (N, K) filtered forward and backward along axis 0 (zero phase, the magnitude squared), as
     ``scipy.signal.filtfilt(b, a, x, axis=0, padtype="odd", padlen=padlen)``: the record extended by ``padlen``
     samples at each end by odd reflection about its end values, each pass started at the steady state of its first
-    input, the extension cut off after. (N, K) results are in Fortran order, as :func:`iir` leaves them."""
+    input, the extension cut off after. (N, K) results are in Fortran order, as :func:`iir` leaves them.
+    ``overwrite``: ``x`` may be used as the result's buffer (:func:`iir`)."""
     y = np.asarray(x, dtype=float)
     if padlen > 0:
         if padlen >= y.shape[0]:
@@ -65,8 +77,8 @@ def filtfilt(b: np.ndarray | list[float], a: np.ndarray | list[float], x: np.nda
         head = 2.0 * y[:1] - y[padlen:0:-1]
         tail = 2.0 * y[-1:] - y[-2:-padlen - 2:-1]
         y = np.concatenate([head, y, tail])
-    y = iir(b, a, y, start=y[0])
-    y = iir(b, a, y, start=y[-1], backward=True)
+    y = iir(b, a, y, start=y[0], overwrite=overwrite or padlen > 0)  # (padded: a copy made here)
+    y = iir(b, a, y, start=y[-1], backward=True, overwrite=True)  # (the forward pass's result: its own buffer)
     return y[padlen:y.shape[0] - padlen]
 
 

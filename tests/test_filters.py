@@ -87,3 +87,24 @@ def test_a_pad_as_long_as_the_record_is_refused() -> None:
         filtfilt([1.0], [1.0, -0.5], np.ones(5), padlen=5)
     with pytest.raises(ValueError, match="cut-off"):
         butter2(1.0)
+
+
+@pytest.mark.parametrize("order", ["C", "F"])
+def test_the_input_is_left_alone_unless_it_may_be_overwritten(order: str) -> None:
+    """``iir``/``filtfilt`` without ``overwrite`` never change ``x`` (a first-order filter, all its numerator's later
+    taps zero, is the case that filters in place); with it, the same result, ``x``'s buffer reused where its columns
+    are contiguous."""
+    x = np.asarray(np.random.default_rng(5).standard_normal((400, 3)), order=order)
+    keep = x.copy()
+    q = 0.93
+    want = signal.filtfilt([1 - q], [1.0, -q], x, axis=0, padlen=0)
+    assert _close(filtfilt([1 - q], [1.0, -q], x), want, 1e-13) and np.array_equal(x, keep)
+    assert _close(iir([1 - q], [1.0, -q], x, start=x[0]), signal.lfilter([1 - q], [1.0, -q], x, axis=0,
+                                                                            zi=signal.lfilter_zi([1 - q], [1.0, -q])
+                                                                            * x[:1])[0], 1e-13)
+    assert np.array_equal(x, keep)
+    got = filtfilt([1 - q], [1.0, -q], x, overwrite=True)
+    assert _close(got, want, 1e-13)
+    assert np.shares_memory(got, x) == (order == "F")
+    one = keep[:, 0].copy()
+    assert _close(filtfilt([1 - q], [1.0, -q], one, overwrite=True), want[:, 0], 1e-13)

@@ -81,8 +81,8 @@ def drift_windows(t: np.ndarray, periods: int, sigma_w: float, dt: float) -> np.
     pieces = min(_most_pieces(span), math.ceil(rate * span / DRIFT_VAR))
     if rate * span <= DRIFT_VAR or pieces < 1:
         return np.ones((t.size, 1))
-    knots = np.linspace(t[0], t[-1], pieces + 1)
-    return np.clip(1.0 - np.abs(t[:, None] - knots[None, :]) / (knots[1] - knots[0]), 0.0, None)
+    knots = np.linspace(t[0], t[-1], pieces + 1)  # (built (K, M): each hat contiguous, as the speed view filters it)
+    return np.clip(1.0 - np.abs(knots[:, None] - t[None, :]) / (knots[1] - knots[0]), 0.0, None).T
 
 
 def _span(t: np.ndarray) -> float:
@@ -119,7 +119,9 @@ def track_phase(z: np.ndarray, h: np.ndarray, resid: np.ndarray, train: np.ndarr
     its phase does): a window fitted to noise turns the phase, it cannot add amplitude; knots are fitted on
     training rows only, so the held-out rows between them judge the tracking."""
     k = h.shape[1]
-    a = np.hstack([z.imag[:, None] * h, z.real[:, None] * h])  # (M, 2K)
+    a = np.empty((2 * k, h.shape[0])).T  # (M, 2K), each column contiguous (the view filters along them)
+    np.multiply(z.imag[:, None], h, out=a[:, :k])
+    np.multiply(z.real[:, None], h, out=a[:, k:])
     a = view(a) if view is not None else a  # (one call over all columns: rows first)
     at = a[train]
     x = np.linalg.lstsq(at.T @ at, at.T @ resid[train], rcond=1e-12)[0]  # (normal equations: 2K columns, many rows)

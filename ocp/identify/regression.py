@@ -235,9 +235,12 @@ def speed_view(y: np.ndarray, dt: float, tau: float) -> np.ndarray:
         return y
     a = math.exp(-dt / tau)
     lift = SUBNORMAL_LIFT * np.max(np.abs(y), axis=0)  # () or (K,)
-    lifted = np.ascontiguousarray((y + lift).T).T  # (N, K), each column contiguous: the filter runs along it
-    z = filtfilt([1.0 - a], [1.0, -a], lifted) - lift
-    return np.ascontiguousarray(np.where(np.abs(z) < 1e3 * lift, 0.0, z), dtype=float)
+    lifted = np.empty(y.shape[::-1]).T  # (N, K), each column contiguous: the filter runs along it
+    np.add(y, lift, out=lifted)
+    z = filtfilt([1.0 - a], [1.0, -a], lifted, overwrite=True)  # (lifted's buffer, filtered in place)
+    z -= lift
+    np.copyto(z, 0.0, where=np.abs(z) < 1e3 * lift)
+    return np.ascontiguousarray(z)
 
 
 def visible_torque(p: MotorParams, s: Signals, noise: dict[str, float]) -> float:
@@ -296,7 +299,9 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     taper = cut_taper(edge, stuck, raw is not s, tau / s.dt if s.dt > 0 else 0.0)
 
     def view(y: np.ndarray) -> np.ndarray:  # (M,) or (M, K): rows first
-        return speed_view(np.where(_rows(hidden, y), 0.0, y) * _rows(taper, y), s.dt, tau)
+        cut = y * _rows(taper, y)
+        cut[hidden] = 0.0
+        return speed_view(cut, s.dt, tau)
 
     for y in (t, *(a for _, a in cols)):
         y[0] = view(y[0])
