@@ -62,6 +62,7 @@ from scipy import optimize
 
 from ocp.filters import butter2, filtfilt, iir
 from ocp.logs import Log, LogKind
+from ocp.parallel import ordered
 
 #: finest lag step [samples]; the search range: at least MIN_LAG samples and MIN_LAG_S seconds, at most MAX_LAG
 LAG_STEP = 0.125
@@ -188,9 +189,9 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
     # and absorbs any sub-sample lag there)
     bands = np.tanh(v[:, None] / (np.asarray(DEAD_BAND_WIDTHS) * np.std(v) + 1e-12))  # (N, B)
 
-    def curve(lags: np.ndarray) -> np.ndarray:  # (at each lag, the best dead-band width)
-        return np.array([_residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k], shifted(bands, lag)[k])
-                         for lag in lags])
+    def curve(lags: np.ndarray) -> np.ndarray:  # (at each lag, the best dead-band width; lags in threads)
+        return np.array(list(ordered(
+            lambda lag: _residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k], shifted(bands, lag)[k]), lags)))
 
     lags, res = _search(curve, top)
     samples, sharp = _pick(lags, res)
@@ -243,7 +244,7 @@ def _nominal_curve(log: Log, tau: float, k_e: float, k: np.ndarray) -> Callable[
         coef = np.linalg.lstsq(a, i[rows], rcond=None)[0]
         return float(np.sqrt(np.mean((i[rows] - a @ coef) ** 2)))
 
-    return lambda lags: np.array([one(float(lag)) for lag in lags])
+    return lambda lags: np.array(list(ordered(one, [float(lag) for lag in lags])))
 
 
 def _soft_sign(y: np.ndarray) -> np.ndarray:
@@ -284,7 +285,7 @@ def armature_error(log: Log, lag: float, tau: float, train: np.ndarray, test: np
         return float(np.mean((i[tr] - a[tr] @ coef) ** 2)), float(np.sqrt(np.mean((i[te] - a[te] @ coef) ** 2)))
 
     grid = np.log(ARMATURE_TAUS)
-    k = int(np.argmin([fit(g)[0] for g in grid]))
+    k = int(np.argmin([f[0] for f in ordered(fit, [float(g) for g in grid])]))
     best = optimize.minimize_scalar(lambda g: fit(g)[0], bounds=(grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]),
                                     method="bounded", options={"xatol": 1e-3})
     return fit(float(best.x))[1]
