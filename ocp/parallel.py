@@ -1,6 +1,8 @@
 """Independent pieces of one computation run on the machine's cores, in threads: NumPy's array operations and LAPACK
 release the interpreter lock, so pieces that are array work overlap (the ripple's period search: each count's columns,
-their view and fit, :func:`ocp.identify.ripple.pick_periods`).
+their view and fit, :func:`ocp.identify.ripple.pick_periods`). A piece must be NumPy/SciPy array work on arrays it
+does not share for writing: no CasADi call (creating CasADi matrices, which a Function's call does for its results, is
+not thread-safe: casadi/casadi#3518), no solver.
 
 * :func:`threads`: how many, read at each call from ``$THRUSTSHAPE_THREADS`` (a positive integer; ``1`` runs every
   piece in the calling thread), else the cores this process may run on, at most :data:`MAX_THREADS`.
