@@ -328,7 +328,9 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
                       for e in range(3)])
     if noise is not None and s.dt > 0:
         sigma[0] = max(sigma[0], VISIBLE_FRACTION * visible_torque(p, s, noise))
-    a_all = np.stack([a for _, a in cols], axis=2) / sigma[:, None, None]  # (3, N, Q)
+    a_all = np.empty((3, rows, len(cols)))  # (3, N, Q), each column weighted as it is written (no stacked copy)
+    for j, (_, a) in enumerate(cols):
+        np.divide(a, sigma[:, None], out=a_all[:, :, j])
     tw = t / sigma[:, None]
     tests = [m[:rows] & ~edge for m in folds] if folds else [test]
     fg, fh, fc = grams(a_all, tw, tests)  # (one set when not cross-validating: the held-out rows)
