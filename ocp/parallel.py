@@ -27,6 +27,8 @@ from typing import TypeVar
 
 from threadpoolctl import threadpool_limits
 
+from ocp.errors import ParameterError
+
 T = TypeVar("T")
 R = TypeVar("R")
 
@@ -35,16 +37,14 @@ MAX_THREADS = 4
 
 
 def threads() -> int:
-    """Threads for independent pieces: ``$THRUSTSHAPE_THREADS`` if set (a positive integer), else the cores this
-    process may run on, at most :data:`MAX_THREADS`."""
+    """Threads for independent pieces: ``$THRUSTSHAPE_THREADS`` if set (a positive integer; anything else raises
+    :class:`~ocp.errors.ParameterError` naming it), else the cores this process may run on, at most
+    :data:`MAX_THREADS`."""
     text = os.environ.get("THRUSTSHAPE_THREADS", "").strip()
     if text:
-        try:
-            n = int(text)
-        except ValueError:
-            raise ValueError(f"THRUSTSHAPE_THREADS must be a positive integer, not {text!r}") from None
+        n = int(text) if text.isdecimal() else 0
         if n < 1:
-            raise ValueError(f"THRUSTSHAPE_THREADS must be a positive integer, not {n}")
+            raise ParameterError("THRUSTSHAPE_THREADS", f"must be a positive integer, not {text!r}")
         return n
     try:
         cores = len(os.sched_getaffinity(0))

@@ -39,6 +39,9 @@ class Settings(BaseSettings):
     store_busy_timeout_s: Annotated[float, Field(gt=0, le=600)] = 10.0
     #: ``tcp://HOST:PORT`` of a Dask scheduler: batch items run there instead of on local workers
     dask_address: str | None = None
+    #: threads a model check runs its independent pieces in, in its worker (:mod:`ocp.parallel`, which reads
+    #: ``THRUSTSHAPE_THREADS`` itself; declared here so that a bad value stops the server at start, not every check)
+    threads: Annotated[int, Field(ge=1, le=256)] | None = None
     #: bearer token; when set every route except ``/healthz`` requires ``Authorization: Bearer <key>``
     api_key: SecretStr | None = None
 

@@ -9,14 +9,17 @@ import time
 
 import numpy as np
 import pytest
+from pydantic import ValidationError
 from threadpoolctl import threadpool_info
 
+from ocp.errors import ParameterError
 from ocp.identify import diagnose
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from ocp.parallel import MAX_THREADS, one_blas_thread, ordered, threads
+from service.settings import Settings
 from tests.proving_ground import make_case
 
 
@@ -62,10 +65,26 @@ def test_threads_reads_the_environment_at_each_call(monkeypatch: pytest.MonkeyPa
     assert 1 <= threads() <= MAX_THREADS
     monkeypatch.setenv("THRUSTSHAPE_THREADS", "3")
     assert threads() == 3
-    for bad in ("0", "-2", "two", "1.5"):
+    for bad in ("0", "-2", "two", "1.5", "²"):
         monkeypatch.setenv("THRUSTSHAPE_THREADS", bad)
-        with pytest.raises(ValueError, match="THRUSTSHAPE_THREADS"):
+        with pytest.raises(ParameterError) as err:
             threads()
+        assert err.value.field == "THRUSTSHAPE_THREADS" and repr(bad) in err.value.reason
+
+
+def test_a_bad_thread_setting_stops_diagnose_before_any_work(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("THRUSTSHAPE_THREADS", "many")
+    log = log_from_arrays(np.arange(200) * 1e-3, np.ones(200), np.ones(200), np.ones(200), omega=np.ones(200))
+    with pytest.raises(ParameterError, match="THRUSTSHAPE_THREADS"):
+        diagnose(DCMotorPlant(MotorParams(**make_case(1182).nominal)), log)
+
+
+def test_the_server_refuses_to_start_with_a_bad_thread_setting(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("THRUSTSHAPE_THREADS", "0")
+    with pytest.raises(ValidationError, match="threads"):
+        Settings()
+    monkeypatch.setenv("THRUSTSHAPE_THREADS", "3")
+    assert Settings().threads == 3
 
 
 def _blas_threads() -> list[int]:

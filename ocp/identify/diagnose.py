@@ -81,7 +81,7 @@ from ocp.identify.signs import check_signs
 from ocp.logs import Log, LogKind
 from ocp.model.effects import make_effect
 from ocp.model.plant import DCMotorPlant
-from ocp.parallel import one_blas_thread
+from ocp.parallel import one_blas_thread, threads
 
 
 class DiagnoseOptions(BaseModel):
@@ -263,6 +263,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     """Say which effects are missing and which constants are wrong (module doc). ``progress(fraction)``
     is called as the work advances (for progress bars). Independent pieces run in threads, BLAS in one
     (:mod:`ocp.parallel`)."""
+    threads()  # (the setting checked before any work)
     with one_blas_thread():
         return _diagnose(plant, log, options or DiagnoseOptions(), progress)
 
