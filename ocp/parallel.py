@@ -9,21 +9,23 @@ not thread-safe: casadi/casadi#3518), no solver.
 * :func:`ordered`: a function over items, the results yielded in the items' order, so that a caller reducing them
   (a running best, a first minimum) does exactly what a plain loop does; at most ``threads + 1`` pieces are started
   ahead of the one being consumed, so results waiting to be consumed stay few however many items there are.
-* :func:`one_blas_thread`: the BLAS library's own threads held to one while a computation runs that parallelises its
-  pieces itself. On the identifier's products (Gram matrices of a few dozen columns over 10^4-10^5 rows, small least
-  squares) OpenBLAS's threads cost more than they save (blind rig 109, 104,000 rows: 27 s of CPU for 20 s of wall
-  time with them, 15 s and 18.5 s without), and with one BLAS thread a piece's arithmetic, hence its rounding, is the
-  same however many threads run the pieces and however many cores the machine has.
+* :func:`one_blas_thread` (and :func:`own_threads`, the decorator of the entry points that use :func:`ordered`): the
+  BLAS library's own threads held to one while a computation runs that parallelises its pieces itself. On the
+  identifier's products (Gram matrices of a few dozen columns over 10^4-10^5 rows, small least squares) OpenBLAS's
+  threads cost more than they save (blind rig 109, 104,000 rows: 27 s of CPU for 20 s of wall time with them, 15 s and
+  18.5 s without), and with one BLAS thread a piece's arithmetic, hence its rounding, is the same however many threads
+  run the pieces and however many cores the machine has.
 """
 
 from __future__ import annotations
 
+import functools
 import os
 from collections import deque
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import contextmanager
-from typing import TypeVar
+from typing import ParamSpec, TypeVar
 
 from threadpoolctl import threadpool_limits
 
@@ -31,6 +33,7 @@ from ocp.errors import ParameterError
 
 T = TypeVar("T")
 R = TypeVar("R")
+P = ParamSpec("P")
 
 #: the most threads :func:`threads` gives by default (the pieces' arrays compete for memory bandwidth beyond a few)
 MAX_THREADS = 4
@@ -77,3 +80,16 @@ def one_blas_thread() -> Iterator[None]:
     restored after; module doc)."""
     with threadpool_limits(limits=1, user_api="blas"):
         yield
+
+
+def own_threads(fn: Callable[P, R]) -> Callable[P, R]:
+    """``fn``, an entry point whose work runs pieces through :func:`ordered` (the model check's ``check``, ``fit``
+    and ``diagnose``), called with the thread setting checked first (:func:`threads`) and BLAS held to one thread
+    (:func:`one_blas_thread`): the same rounding in each, whatever the cores."""
+    @functools.wraps(fn)
+    def call(*args: P.args, **kwargs: P.kwargs) -> R:
+        threads()
+        with one_blas_thread():
+            return fn(*args, **kwargs)
+
+    return call

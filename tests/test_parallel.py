@@ -4,6 +4,7 @@ giving the same diagnosis to the last bit however many threads run it."""
 
 from __future__ import annotations
 
+import importlib
 import threading
 import time
 
@@ -13,7 +14,7 @@ from pydantic import ValidationError
 from threadpoolctl import threadpool_info
 
 from ocp.errors import ParameterError
-from ocp.identify import diagnose
+from ocp.identify import check, diagnose, fit
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams
@@ -72,11 +73,22 @@ def test_threads_reads_the_environment_at_each_call(monkeypatch: pytest.MonkeyPa
         assert err.value.field == "THRUSTSHAPE_THREADS" and repr(bad) in err.value.reason
 
 
-def test_a_bad_thread_setting_stops_diagnose_before_any_work(monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.mark.parametrize("entry", ["diagnose", "check", "fit"])
+def test_a_bad_thread_setting_stops_the_model_check_before_any_work(entry: str,
+                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
+    """Each entry point whose work runs pieces in threads (:func:`ocp.parallel.own_threads`) names the setting before
+    its first step (``dynamic(log)``, made to fail here if it is reached)."""
+    def started(_: object) -> bool:
+        raise AssertionError(f"{entry} started before the thread setting was checked")
+
+    monkeypatch.setattr(importlib.import_module(f"ocp.identify.{entry}"), "dynamic", started)
     monkeypatch.setenv("THRUSTSHAPE_THREADS", "many")
     log = log_from_arrays(np.arange(200) * 1e-3, np.ones(200), np.ones(200), np.ones(200), omega=np.ones(200))
+    plant = DCMotorPlant(MotorParams(**make_case(1182).nominal))
+    calls = {"diagnose": lambda: diagnose(plant, log), "check": lambda: check(plant, log),
+             "fit": lambda: fit(plant, log, ["coulomb_friction"])}
     with pytest.raises(ParameterError, match="THRUSTSHAPE_THREADS"):
-        diagnose(DCMotorPlant(MotorParams(**make_case(1182).nominal)), log)
+        calls[entry]()
 
 
 def test_the_server_refuses_to_start_with_a_bad_thread_setting(monkeypatch: pytest.MonkeyPatch) -> None:

@@ -50,6 +50,7 @@ from ocp.identify.predict import (
 from ocp.identify.steady import PointCheck, check_points
 from ocp.logs import Log, LogKind
 from ocp.model.plant import DCMotorPlant
+from ocp.parallel import own_threads
 
 SPEED_BANDS = (0.0, 0.1, 0.4, 0.7, 1.0001)
 
@@ -158,9 +159,10 @@ def _correlations(res: Residuals, log: Log, max_lag: int) -> dict[str, Any]:
     return out
 
 
+@own_threads
 def check(plant: DCMotorPlant, log: Log, options: CheckOptions | None = None) -> CheckResult | PointCheck:
     """Free-run and one-step errors of ``plant`` on ``log`` (realigned first, module doc), broken down by operating
-    condition."""
+    condition. The alignment's lags run in threads, BLAS in one (:func:`ocp.parallel.own_threads`)."""
     opt = options or CheckOptions()
     if not dynamic(log):  # issue #13 hook: sweeps, ESC rigs, flight logs: equation by equation, point by point
         return check_points(plant, log)

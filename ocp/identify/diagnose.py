@@ -81,7 +81,7 @@ from ocp.identify.signs import check_signs
 from ocp.logs import Log, LogKind
 from ocp.model.effects import make_effect
 from ocp.model.plant import DCMotorPlant
-from ocp.parallel import one_blas_thread, threads
+from ocp.parallel import own_threads
 
 
 class DiagnoseOptions(BaseModel):
@@ -258,18 +258,13 @@ def aligned(plant: DCMotorPlant, log: Log, max_logging_skew: float) -> tuple[Ali
     return align, realign(log, align.samples - own, armature[0] / log.dt)
 
 
+@own_threads
 def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = None,
              progress: Callable[[float], None] | None = None) -> DiagnoseResult:
     """Say which effects are missing and which constants are wrong (module doc). ``progress(fraction)``
     is called as the work advances (for progress bars). Independent pieces run in threads, BLAS in one
-    (:mod:`ocp.parallel`)."""
-    threads()  # (the setting checked before any work)
-    with one_blas_thread():
-        return _diagnose(plant, log, options or DiagnoseOptions(), progress)
-
-
-def _diagnose(plant: DCMotorPlant, log: Log, opt: DiagnoseOptions,
-              progress: Callable[[float], None] | None) -> DiagnoseResult:
+    (:func:`ocp.parallel.own_threads`)."""
+    opt = options or DiagnoseOptions()
     if not dynamic(log):  # sweeps, ESC rigs and flight logs: point by point, never a time effect (issue #13)
         from ocp.identify.steady_diagnose import diagnose_points
 

@@ -49,6 +49,7 @@ from ocp.identify.predict import (
 from ocp.logs import Log
 from ocp.model.effects import Cogging, VoltageDeadband, plant_to_mapping
 from ocp.model.plant import DCMotorPlant
+from ocp.parallel import own_threads
 
 
 class FitOptions(BaseModel):
@@ -177,8 +178,10 @@ def dead_band_start(plant: DCMotorPlant, log: Log, effects: Sequence[str], rows:
     return min(trials, key=lambda q: _combined(free_run_errors(q, log, rows, noise, segment_s)))
 
 
+@own_threads
 def fit(plant: DCMotorPlant, log: Log, effects: Sequence[str], options: FitOptions | None = None) -> FitResult:
-    """Add ``effects`` (catalogue names or ``"param:<key>"``) to ``plant`` and fit them to ``log``."""
+    """Add ``effects`` (catalogue names or ``"param:<key>"``) to ``plant`` and fit them to ``log``. The alignment's
+    lags run in threads, BLAS in one (:func:`ocp.parallel.own_threads`)."""
     opt = options or FitOptions()
     if not dynamic(log):  # issue #13 hook: sweeps, ESC rigs, flight logs are fitted point by point
         from ocp.identify.steady import fit_points
