@@ -26,7 +26,7 @@ def box_qp(g: np.ndarray, h: np.ndarray, lo: np.ndarray, hi: np.ndarray, start: 
     a bound held there at first (zeros if None); ``max_iter``: 0 for ``10 P + 10``; past it, the last feasible
     iterate."""
     p = h.size
-    x = np.clip(np.zeros(p) if start is None else start if np.all(np.isfinite(start)) else np.nan_to_num(start), lo, hi)
+    x = np.clip(np.zeros(p) if start is None else np.nan_to_num(start), lo, hi)
     held = (x <= lo) | (x >= hi)
     room = hi - lo > EDGE * (1.0 + np.minimum(np.abs(lo), np.abs(hi)))  # (a variable boxed to a point never moves)
     scale = np.abs(g).max(axis=1)
