@@ -11,13 +11,11 @@ if [ ! -x "$VENV/bin/python" ]; then
 fi
 # (UV_LINK_MODE=copy: uv's cache and a venv under /tmp may be on different file systems, where it warns of hard links)
 venv_install() {
-  if "$VENV/bin/python" -m pip install -q --disable-pip-version-check uv \
-      && UV_LINK_MODE=copy "$VENV/bin/python" -m uv pip install -q --compile-bytecode --python "$VENV/bin/python" -e ".[$1]"; then
-    "$VENV/bin/python" -m compileall -q ocp service clients >/dev/null
-    return 0
+  if ! { "$VENV/bin/python" -m pip install -q --disable-pip-version-check uv \
+      && UV_LINK_MODE=copy "$VENV/bin/python" -m uv pip install -q --compile-bytecode --python "$VENV/bin/python" -e ".[$1]"; }; then
+    echo "venv.sh: uv could not install; pip does" >&2
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip
+    "$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[$1]"
   fi
-  echo "venv.sh: uv could not install; pip does" >&2
-  "$VENV/bin/python" -m pip install -q --disable-pip-version-check --upgrade pip
-  "$VENV/bin/python" -m pip install -q --disable-pip-version-check -e ".[$1]"
   "$VENV/bin/python" -m compileall -q ocp service clients >/dev/null
 }
