@@ -18,21 +18,26 @@ BANDED = frozenset({"stribeck"})
 FOOTPRINT = 0.1
 
 
+#: rows a Gram product copies out of the weighted columns at a time (:func:`grams`): the copy of a set of rows is
+#: bounded (~80 MB at 100 columns) however long the log
+ROWS_AT_ONCE = 1 << 15
+
+
 def grams(a_all: np.ndarray, tw: np.ndarray, rows: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Per set of rows (K masks or index arrays over N): from the weighted columns ``a_all`` (3, N, Q) and targets
-    ``tw`` (3, N), the Gram matrices ``A'A`` (K, 3, Q, Q), ``A'r`` (K, 3, Q) and ``r'r`` (K, 3) per equation."""
-    q = a_all.shape[2]
-    if not rows:
-        return np.zeros((0, 3, q, q)), np.zeros((0, 3, q)), np.zeros((0, 3))
-    g, h, c = [], [], []
-    for m in rows:  # (BLAS products, not einsum's loops: 17x faster on a 100k-row log's ~100 columns)
-        a, t = a_all[:, m], tw[:, m]
-        at = a.transpose(0, 2, 1)
-        prod = at @ a
-        g.append(0.5 * (prod + prod.transpose(0, 2, 1)))  # (exactly symmetric, as the sums are)
-        h.append((at @ t[:, :, None])[:, :, 0])
-        c.append(np.einsum("en,en->e", t, t))
-    return np.stack(g), np.stack(h), np.stack(c)
+    """Per set of rows (K masks or index arrays over N): from the weighted columns ``a_all`` (3, Q, N) (a column's
+    rows contiguous) and targets ``tw`` (3, N), the Gram matrices ``A'A`` (K, 3, Q, Q), ``A'r`` (K, 3, Q) and ``r'r``
+    (K, 3) per equation, summed over pieces of at most :data:`ROWS_AT_ONCE` rows."""
+    q = a_all.shape[1]
+    g, h, c = np.zeros((len(rows), 3, q, q)), np.zeros((len(rows), 3, q)), np.zeros((len(rows), 3))
+    for k, m in enumerate(rows):
+        at_rows = np.flatnonzero(m) if m.dtype == bool else m
+        for lo in range(0, at_rows.size, ROWS_AT_ONCE):  # (BLAS products, not einsum's loops: 17x faster)
+            piece = at_rows[lo:lo + ROWS_AT_ONCE]
+            at, t = a_all[:, :, piece], tw[:, piece]
+            g[k] += at @ at.transpose(0, 2, 1)
+            h[k] += (at @ t[:, :, None])[:, :, 0]
+            c[k] += np.einsum("en,en->e", t, t)
+    return 0.5 * (g + g.transpose(0, 1, 3, 2)), h, c  # (exactly symmetric, as the sums are)
 
 
 class Footprints:
@@ -42,14 +47,14 @@ class Footprints:
     (not a copy: the build's own arrays, alive as long as the design) and the indices of the rows where a band acts."""
 
     def __init__(self, a_all: np.ndarray, tw: np.ndarray, tests: list[np.ndarray], bands: list[int]) -> None:
-        """``a_all`` (3, N, Q) weighted columns, ``tw`` (3, N) weighted targets, ``tests`` K held-out masks (N,)
+        """``a_all`` (3, Q, N) weighted columns, ``tw`` (3, N) weighted targets, ``tests`` K held-out masks (N,)
         (disjoint: folds, or one split's held-out rows), ``bands`` the banded columns' indices."""
-        held = np.full(a_all.shape[1], -1)
+        held = np.full(a_all.shape[2], -1)
         for k, m in enumerate(tests):
             held[m] = k
         acts = {}
         for j in bands:
-            mag = np.abs(a_all[:, :, j])
+            mag = np.abs(a_all[:, j])
             top = mag.max(axis=1, keepdims=True)
             acts[j] = np.any((mag >= FOOTPRINT * top) & (top > 0), axis=0) & (held >= 0)
         rows = np.flatnonzero(np.any(list(acts.values()), axis=0)) if acts else np.zeros(0, dtype=int)

@@ -328,9 +328,16 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
                       for e in range(3)])
     if noise is not None and s.dt > 0:
         sigma[0] = max(sigma[0], VISIBLE_FRACTION * visible_torque(p, s, noise))
-    a_all = np.empty((3, rows, len(cols)))  # (3, N, Q), each column weighted as it is written (no stacked copy)
-    for j, (_, a) in enumerate(cols):
-        np.divide(a, sigma[:, None], out=a_all[:, :, j])
+    # (3, Q, N), each column weighted as it is written and let go of after: a column's rows are contiguous, so the
+    # columns are not held twice
+    items, arrays = [c for c, _ in cols], [a for _, a in cols]
+    del cols, rich, fixed, k_col, resid, y
+    if ripple:
+        del unviewed, cogging
+    a_all = np.empty((3, len(items), rows))
+    for j in range(len(arrays)):
+        np.divide(arrays[j], sigma[:, None], out=a_all[:, j])
+        arrays[j] = np.empty(0)
     tw = t / sigma[:, None]
     tests = [m[:rows] & ~edge for m in folds] if folds else [test]
     fg, fh, fc = grams(a_all, tw, tests)  # (one set when not cross-validating: the held-out rows)
@@ -347,10 +354,10 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
                                                     1.0 if raw is not s else float(independence[1]))
     per_fold = [_blocks(m, math.ceil(BLOCK_INDEPENDENT / float(independence.min()))) for m in tests]
     gb, hb, cb = grams(a_all, tw, [b for bs in per_fold for b in bs])
-    design = Design([c_ for c_, _ in cols], g_tr, g_te, h_tr, h_te, c_tr, c_te, np.full(3, n_tr), np.full(3, n_te),
+    design = Design(items, g_tr, g_te, h_tr, h_te, c_tr, c_te, np.full(3, n_tr), np.full(3, n_te),
                     sigma, periods, [float(v) for v in spectrum], unresolved(p, log), angle, raw is not s,
                     independence, dt=s.dt, g_blocks=gb, h_blocks=hb, c_blocks=cb,
-                    footprint=Footprints(a_all, tw, tests, [j for j, (c_, _) in enumerate(cols) if c_.item in BANDED]),
+                    footprint=Footprints(a_all, tw, tests, [j for j, c_ in enumerate(items) if c_.item in BANDED]),
                     unseen=unseen(log))
     if not folds:
         return design

@@ -33,6 +33,7 @@ def _rows(seed: int, level: float) -> tuple[np.ndarray, np.ndarray, list[np.ndar
 
 
 def _design(a: np.ndarray, t: np.ndarray, folds: list[np.ndarray]) -> Design:
+    a = a.transpose(0, 2, 1).copy()  # (3, Q, N): the design's layout, a column's rows contiguous
     g, h, c = (x.sum(axis=0) for x in grams(a, t, folds))
     fg, fh, fc = grams(a, t, folds)
     return Design([Column("B", "B"), Column("stribeck", "tau_s", 0.25)], g, g, h, h, c, c, np.full(3, N),
