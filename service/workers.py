@@ -36,7 +36,6 @@ from multiprocessing.connection import Connection
 from typing import Any, Literal, Protocol, cast
 
 import ocp.errors as errors
-from ocp.memory import large_arrays_to_the_os
 from service.dispatch import Dispatcher
 from service.errors import QueueFull, TaskFailed, TaskTimeout
 
@@ -110,7 +109,6 @@ def user_error(name: str, field: str, reason: str) -> errors.ThrustshapeError:
 
 def _worker_main(conn: Connection, preload: Sequence[str], niceness: int = 0) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server decides when workers stop
-    large_arrays_to_the_os()  # (a long log's columns are freed as the model check goes: ocp.memory)
     if niceness:
         with contextlib.suppress(OSError):
             os.nice(niceness)

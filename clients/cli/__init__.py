@@ -22,7 +22,6 @@ from collections.abc import Sequence
 
 from clients.cli.help import Parser, VersionAction, error_json
 from ocp.errors import ThrustshapeError
-from ocp.memory import large_arrays_to_the_os
 
 #: command modules, in help order; each has ``register(subparsers) -> None``
 COMMAND_MODULES: tuple[str, ...] = ("clients.cli.core", "clients.cli.optimize", "clients.cli.gallery",
@@ -66,7 +65,6 @@ def _pipe_closed() -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    large_arrays_to_the_os()  # (a long log's columns are freed as the model check goes: ocp.memory)
     parser = build_parser()
     Parser.json_errors = "--json" in (sys.argv[1:] if argv is None else argv)
     args = parser.parse_args(argv)
