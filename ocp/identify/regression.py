@@ -46,6 +46,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from ocp import memory
 from ocp.filters import filtfilt
 from ocp.identify.align import cutoff_hz
 from ocp.identify.angle import MAX_PERIODS, angle_limits, ripple_independence, speed_noise, tracked_periods
@@ -328,16 +329,21 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
                       for e in range(3)])
     if noise is not None and s.dt > 0:
         sigma[0] = max(sigma[0], VISIBLE_FRACTION * visible_torque(p, s, noise))
-    # (3, Q, N), each column weighted as it is written and let go of after: a column's rows are contiguous, so the
-    # columns are not held twice
+    # (3, Q, N), each column weighted as it is written and let go of after (a column's rows contiguous): the columns
+    # are not held twice
     items, arrays = [c for c, _ in cols], [a for _, a in cols]
     del cols, rich, fixed, k_col, resid, y
     if ripple:
         del unviewed, cogging
     a_all = np.empty((3, len(items), rows))
+    dropped = 0
     for j in range(len(arrays)):
         np.divide(arrays[j], sigma[:, None], out=a_all[:, j])
+        dropped += arrays[j].nbytes
         arrays[j] = np.empty(0)
+        if dropped >= memory.GIVE_BACK_BYTES:  # (the heap would keep the dropped columns resident: ocp.memory)
+            memory.give_back()
+            dropped = 0
     tw = t / sigma[:, None]
     tests = [m[:rows] & ~edge for m in folds] if folds else [test]
     fg, fh, fc = grams(a_all, tw, tests)  # (one set when not cross-validating: the held-out rows)
