@@ -32,6 +32,7 @@ from ocp.filters import iir
 from ocp.logs import Log, LogKind
 from ocp.model.effects import measured_current, stateful
 from ocp.model.plant import NUMPY, DCMotorPlant
+from ocp.parallel import threads
 from ocp.simulate.zoh import SUBSTEPS, rk4, segment_simulator, steps_per_sample
 
 CHANNELS: tuple[str, ...] = ("omega", "current", "thrust")
@@ -194,7 +195,9 @@ def free_run(plant: DCMotorPlant, log: Log, segment_s: float = 0.5) -> FreeRun:
         raise SolverError("plant", f"too stiff to free-run: {per_sample} RK4 steps a sample of {log.dt:.3g} s "
                                    f"(at most {MAX_STEPS_PER_SAMPLE}); a sharp effect (brush contact, Stribeck band)?")
     read = measured_states(plant)
-    sim = segment_simulator(plant, per_sample, length, starts.size, read)  # built once per plant and shape
+    # built once per plant and shape; the segments run in CasADi's threads, inside the one call (ocp.parallel's
+    # pieces may not call CasADi)
+    sim = segment_simulator(plant, per_sample, length, starts.size, read, threads())
     inputs = np.vstack([log.voltage, x_obs[list(read)]])  # (1 + R, N): the command, the states read from the log
     u_blocks = np.concatenate([inputs[:, s:s + length - 1] for s in starts], axis=1)
     traj = np.asarray(sim(x_obs[:, starts], u_blocks, log.dt / per_sample))

@@ -202,22 +202,25 @@ def steps_per_sample(plant: Plant, dt: float, x0: Sequence[float] | np.ndarray, 
 
 
 @lru_cache(maxsize=8)
-def _segments(plant: Any, per_sample: int, length: int, n_segments: int, read: tuple[int, ...]) -> ca.Function:
+def _segments(plant: Any, per_sample: int, length: int, n_segments: int, read: tuple[int, ...],
+              workers: int) -> ca.Function:
     step = step_function(plant)
     x, u, dt = ca.SX.sym("x", len(plant.state_names)), ca.SX.sym("u", 1 + len(read)), ca.SX.sym("dt")
     xk = ca.vertcat(*[u[1 + read.index(j)] if j in read else x[j] for j in range(x.numel())]) if read else x
     for _ in range(per_sample):
         xk = step(xk, u[0], dt)  # an SX call inlines the step's expression
     sample = ca.Function("zoh_sample", [x, u, dt], [xk])
-    return sample.mapaccum(length - 1).map(n_segments)
+    runs = sample.mapaccum(length - 1)
+    return runs.map(n_segments, "thread", workers) if workers > 1 else runs.map(n_segments)
 
 
 def segment_simulator(plant: Plant, per_sample: int, length: int, n_segments: int,
-                      read: tuple[int, ...] = ()) -> ca.Function:
+                      read: tuple[int, ...] = (), workers: int = 1) -> ca.Function:
     """``(x0 (nx, B), u (1 + R, B*(length-1)), dt) -> states (nx, B*(length-1))``: ``n_segments`` runs of
     ``length`` uniform samples, each sample ``per_sample`` steps of ``dt`` [s] (the sample period / per_sample)
     under its held input ``u[0]``; the states ``read`` (R indices) are set at each sample's start to the rows
     ``u[1:]`` (states a log measures, read instead of simulated: :func:`ocp.identify.predict.free_run`). Built
     once per plant, shape and reading, in the CasADi virtual machine (a fit simulates many candidate plants once
-    each, where building C would cost more than it saves)."""
-    return _segments(cast(Hashable, plant), int(per_sample), int(length), int(n_segments), tuple(read))
+    each, where building C would cost more than it saves). ``workers`` > 1: the segments are run by that many of
+    CasADi's own threads inside the one call (each segment's arithmetic, hence its numbers, the same)."""
+    return _segments(cast(Hashable, plant), int(per_sample), int(length), int(n_segments), tuple(read), int(workers))

@@ -40,6 +40,11 @@ def test_a_read_state_is_set_from_its_input_at_every_sample(rig: MotorParams) ->
     np.testing.assert_allclose(np.asarray(sim(x0, np.vstack([u, starts]), dt / per)), free, rtol=1e-12, atol=1e-12)
     shifted = np.asarray(sim(x0, np.vstack([u, starts + math.pi / 12]), dt / per))
     assert np.max(np.abs(shifted[0] - free[0])) > 0.01
+    # the segments run by CasADi's threads: bitwise the serial run's numbers (each segment's arithmetic is its own)
+    threaded = segment_simulator(plant, per, length, segs, (4,), workers=2)
+    assert threaded is not sim
+    assert np.array_equal(np.asarray(threaded(x0, np.vstack([u, starts]), dt / per)),
+                          np.asarray(sim(x0, np.vstack([u, starts]), dt / per)))
 
 
 def test_refitting_a_ripple_makes_the_free_run_error_fall(monkeypatch: pytest.MonkeyPatch) -> None:
