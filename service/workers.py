@@ -107,8 +107,23 @@ def user_error(name: str, field: str, reason: str) -> errors.ThrustshapeError:
     return cls(field, reason)
 
 
+#: added to a worker's ``oom_score_adj`` (Linux; at most 1000): when memory runs out, the kernel kills a worker, which
+#: the pool replaces and whose request fails alone, before the server that holds every other request
+OOM_SCORE_RAISE = 500
+
+
+def _first_to_go_when_memory_runs_out() -> None:
+    """Raise this process's ``oom_score_adj`` by :data:`OOM_SCORE_RAISE` (any process may raise its own; not on a
+    system without it)."""
+    with contextlib.suppress(OSError, ValueError), open("/proc/self/oom_score_adj", "r+") as f:
+        now = int(f.read())
+        f.seek(0)
+        f.write(str(min(1000, now + OOM_SCORE_RAISE)))
+
+
 def _worker_main(conn: Connection, preload: Sequence[str], niceness: int = 0) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server decides when workers stop
+    _first_to_go_when_memory_runs_out()
     if niceness:
         with contextlib.suppress(OSError):
             os.nice(niceness)

@@ -40,6 +40,26 @@ def slow_build(payload: dict[str, object]) -> dict[str, object]:
     return {"pid": os.getpid(), "cached": cached, "built": sorted(_BUILT)}
 
 
+def oom_score_adj(payload: dict[str, object]) -> dict[str, int]:
+    with open("/proc/self/oom_score_adj") as f:
+        return {"adj": int(f.read())}
+
+
+@pytest.mark.skipif(not os.path.exists("/proc/self/oom_score_adj"), reason="Linux's OOM killer")
+def test_workers_go_before_the_server_when_memory_runs_out() -> None:
+    """A worker's ``oom_score_adj`` is the server's + 500 (at most 1000): a request that exhausts memory costs its
+    own worker (replaced, as a worker that dies is), not the server."""
+    async def scenario() -> int:
+        pool = WorkerPool(1, queue_size=1, retry_after=1, preload=())
+        try:
+            return int((await pool.run(oom_score_adj, {}, timeout=60))["adj"])
+        finally:
+            pool.close()
+
+    own = oom_score_adj({})["adj"]
+    assert own < 1000 and asyncio.run(scenario()) == min(1000, own + 500)
+
+
 def test_deadline_during_build_keeps_the_worker_and_its_build() -> None:
     """A call whose deadline runs out while its worker builds a solver is answered at its deadline (phase
     ``build``); the worker is not killed: it finishes the build, skips the abandoned solve and serves the next
