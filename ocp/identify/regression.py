@@ -331,16 +331,17 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
         sigma[0] = max(sigma[0], VISIBLE_FRACTION * visible_torque(p, s, noise))
     # (3, Q, N), each column weighted as it is written and let go of after (a column's rows contiguous): the columns
     # are not held twice
-    items, arrays = [c for c, _ in cols], [a for _, a in cols]
+    items, arrays = [c for c, _ in cols], [a for _, a in reversed(cols)]
     del cols, rich, fixed, k_col, resid, y
     if ripple:
         del unviewed, cogging
     a_all = np.empty((3, len(items), rows))
     dropped = 0
-    for j in range(len(arrays)):
-        np.divide(arrays[j], sigma[:, None], out=a_all[:, j])
-        dropped += arrays[j].nbytes
-        arrays[j] = np.empty(0)
+    for j in range(len(items)):
+        column = arrays.pop()
+        np.divide(column, sigma[:, None], out=a_all[:, j])
+        dropped += column.nbytes
+        del column
         if dropped >= memory.GIVE_BACK_BYTES:  # (the heap would keep the dropped columns resident: ocp.memory)
             memory.give_back()
             dropped = 0
