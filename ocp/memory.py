@@ -4,11 +4,11 @@ glibc's ``malloc`` serves a block under its mmap threshold from the heap, and th
 each mapped block freed, up to 32 MiB: once a few large arrays have come and gone, every array under 32 MiB lives on
 the heap, and a freed one's pages stay resident unless they lie at the heap's top. The model check on a long log
 makes columns of 3 x N doubles by the hundred (12 MB at N = 500,000) and drops each once it is written into the
-design (:func:`ocp.identify.regression.build`); kept by the heap, the dropped columns were resident beside the array
+design (:func:`ocp.identify.footprint.weighted`); kept by the heap, the dropped columns were resident beside the array
 they were written into: a 500,000-row log peaked at 2.7 GB where about 1.7 GB was live. :func:`give_back` returns
-the heap's free pages (``malloc_trim``); the builder calls it after every :data:`GIVE_BACK_BYTES` dropped. Fixing the
-threshold low instead (``mallopt``) was tried: arrays above it are mapped and page-faulted afresh each time, and blind
-log 34 (183k rows) took 25 % longer.
+the heap's free pages (``malloc_trim``); the design's writer calls it after every :data:`GIVE_BACK_BYTES` dropped.
+Fixing the threshold low instead (``mallopt``) was tried: arrays above it are mapped and page-faulted afresh each
+time, and blind log 34 (183k rows) took 25 % longer.
 """
 
 from __future__ import annotations

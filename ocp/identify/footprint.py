@@ -4,12 +4,15 @@ A Stribeck band acts near zero speed only, a few per cent of a log's rows; the w
 rows it cannot touch dilute, would hide a fall that is material where it acts (:func:`.evidence.is_material`,
 :func:`.evidence.band_score`). :class:`Footprints` keeps, for each banded column of a design
 (:class:`.regression.Design`), the held-out rows where it acts, and builds their Gram matrices per fold the first
-time a model is scored there; and the Gram matrices of any sets of rows (:func:`grams`), the design's own.
+time a model is scored there; the design's weighted columns themselves (:func:`weighted`), and the Gram matrices of
+any sets of rows (:func:`grams`), the design's own.
 """
 
 from __future__ import annotations
 
 import numpy as np
+
+from ocp import memory
 
 #: effects whose columns act on a band of the rows only (a Stribeck band: near zero speed), their materiality also
 #: judged on that band (:attr:`.regression.Design.footprint`, :func:`.evidence.is_material`)
@@ -21,6 +24,25 @@ FOOTPRINT = 0.1
 #: rows a Gram product copies out of the weighted columns at a time (:func:`grams`): the copy of a set of rows is
 #: bounded (~80 MB at 100 columns) however long the log
 ROWS_AT_ONCE = 1 << 15
+
+
+def weighted(columns: list[np.ndarray], sigma: np.ndarray) -> np.ndarray:
+    """The design's weighted columns ``a_all`` (3, Q, N), a column's rows contiguous: each of the Q ``columns``
+    (3, N) divided by the equations' noise levels ``sigma`` (3,). The list is emptied as the array fills, each column
+    dropped once written and the heap's free pages handed back every :data:`ocp.memory.GIVE_BACK_BYTES`, so that a
+    long log's columns are not held twice (:mod:`ocp.memory`)."""
+    a_all = np.empty((3, len(columns), columns[0].shape[1] if columns else 0))
+    columns.reverse()
+    dropped = 0
+    for j in range(a_all.shape[1]):
+        column = columns.pop()
+        np.divide(column, sigma[:, None], out=a_all[:, j])
+        dropped += column.nbytes
+        del column
+        if dropped >= memory.GIVE_BACK_BYTES:
+            memory.give_back()
+            dropped = 0
+    return a_all
 
 
 def grams(a_all: np.ndarray, tw: np.ndarray, rows: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -46,7 +46,6 @@ from typing import Any, cast
 
 import numpy as np
 
-from ocp import memory
 from ocp.filters import filtfilt
 from ocp.identify.align import cutoff_hz
 from ocp.identify.angle import MAX_PERIODS, angle_limits, ripple_independence, speed_noise, tracked_periods
@@ -67,7 +66,7 @@ from ocp.identify.columns import (
     targets,
 )
 from ocp.identify.coverage import unseen
-from ocp.identify.footprint import BANDED, Footprints, grams
+from ocp.identify.footprint import BANDED, Footprints, grams, weighted
 from ocp.identify.resolution import rotor_tau, unresolved
 from ocp.identify.ripple import pick_periods, residualizer
 from ocp.logs import Log, LogKind
@@ -329,22 +328,11 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
                       for e in range(3)])
     if noise is not None and s.dt > 0:
         sigma[0] = max(sigma[0], VISIBLE_FRACTION * visible_torque(p, s, noise))
-    # (3, Q, N), each column weighted as it is written and let go of after (a column's rows contiguous): the columns
-    # are not held twice
-    items, arrays = [c for c, _ in cols], [a for _, a in reversed(cols)]
-    del cols, rich, fixed, k_col, resid, y
+    items, arrays = [c for c, _ in cols], [a for _, a in cols]
+    del cols, rich, fixed, k_col, resid, y  # (the columns' only references are now in arrays, which weighted empties)
     if ripple:
         del unviewed, cogging
-    a_all = np.empty((3, len(items), rows))
-    dropped = 0
-    for j in range(len(items)):
-        column = arrays.pop()
-        np.divide(column, sigma[:, None], out=a_all[:, j])
-        dropped += column.nbytes
-        del column
-        if dropped >= memory.GIVE_BACK_BYTES:  # (the heap would keep the dropped columns resident: ocp.memory)
-            memory.give_back()
-            dropped = 0
+    a_all = weighted(arrays, sigma)
     tw = t / sigma[:, None]
     tests = [m[:rows] & ~edge for m in folds] if folds else [test]
     fg, fh, fc = grams(a_all, tw, tests)  # (one set when not cross-validating: the held-out rows)
