@@ -61,13 +61,15 @@ def _lifespan(settings: Settings, tasks: TaskSet) -> Any:
         preload = ("ocp.reference.analytic", "ocp.reference.fallback", "ocp.optimize.mission", "service.tasks",
                    *tasks.extra_preload)
         pool = WorkerPool(settings.workers, settings.queue_size, settings.retry_after_s, preload=preload,
-                          build_limit=settings.solver_build_limit_s, niceness=settings.solver_niceness)
+                          build_limit=settings.solver_build_limit_s, niceness=settings.solver_niceness,
+                          memory_mib=settings.worker_memory_mb)
         # the analytic fallback runs in its own processes: killable, and never queued behind the solves
         fallback_pool = WorkerPool(settings.fallback_workers, settings.queue_size + settings.workers,
                                    settings.retry_after_s,
                                    preload=("ocp.reference.analytic", "ocp.reference.fallback",
                                             "ocp.reference.fallback_answer", "service.tasks",
-                                            *(("ocp.optimize.problem",) if tasks.batch_key else ())))
+                                            *(("ocp.optimize.problem",) if tasks.batch_key else ())),
+                                   memory_mib=settings.worker_memory_mb)
         dask = await DaskRunner.connect(settings.dask_address) if settings.dask_address else None
         runner: Runner = dask if dask is not None else pool
         logged = cast(Runner, TaskLog(runner, tasks))  # one log line per batch item, like every request's task

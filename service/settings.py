@@ -42,6 +42,10 @@ class Settings(BaseSettings):
     #: threads a model check runs its independent pieces in, in its worker (:mod:`ocp.parallel`, which reads
     #: ``THRUSTSHAPE_THREADS`` itself; declared here so that a bad value stops the server at start, not every check)
     threads: Annotated[int, Field(ge=1, le=256)] | None = None
+    #: data memory each worker process may map [MiB] (RLIMIT_DATA: reserved address space, ~1.7x the resident peak;
+    #: an idle worker maps ~220 MiB); a request that needs more is answered 422 naming this setting, its worker going
+    #: on. None: no cap (a worker that runs the machine out of memory is the kernel's first choice to kill)
+    worker_memory_mb: Annotated[int, Field(ge=1024, le=1 << 30)] | None = None
     #: bearer token; when set every route except ``/healthz`` requires ``Authorization: Bearer <key>``
     api_key: SecretStr | None = None
 

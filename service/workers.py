@@ -36,6 +36,7 @@ from multiprocessing.connection import Connection
 from typing import Any, Literal, Protocol, cast
 
 import ocp.errors as errors
+from service import limits
 from service.dispatch import Dispatcher
 from service.errors import QueueFull, TaskFailed, TaskTimeout
 
@@ -80,11 +81,14 @@ def report_phase(stage: str) -> None:
 
 
 def execute(fn: TaskFn, payload: Payload) -> Outcome:
-    """Run ``fn(payload)`` and turn every exception into data (runs inside a worker)."""
+    """Run ``fn(payload)`` and turn every exception into data (runs inside a worker). Memory refused under the
+    worker's cap (:func:`service.limits.cap_memory`) is the request's fault: a user error naming the cap."""
     try:
         return "ok", fn(payload)
     except errors.ThrustshapeError as exc:
         return "user-error", (type(exc).__name__, exc.field, exc.reason)
+    except MemoryError:
+        return "user-error", ("ThrustshapeError", "request", limits.over_memory())
     except Exception as exc:  # a worker must answer, whatever the task did
         return "crash", f"{type(exc).__name__}: {exc}"
 
@@ -107,23 +111,11 @@ def user_error(name: str, field: str, reason: str) -> errors.ThrustshapeError:
     return cls(field, reason)
 
 
-#: added to a worker's ``oom_score_adj`` (Linux; at most 1000): when memory runs out, the kernel kills a worker, which
-#: the pool replaces and whose request fails alone, before the server that holds every other request
-OOM_SCORE_RAISE = 500
-
-
-def _first_to_go_when_memory_runs_out() -> None:
-    """Raise this process's ``oom_score_adj`` by :data:`OOM_SCORE_RAISE` (any process may raise its own; not on a
-    system without it)."""
-    with contextlib.suppress(OSError, ValueError), open("/proc/self/oom_score_adj", "r+") as f:
-        now = int(f.read())
-        f.seek(0)
-        f.write(str(min(1000, now + OOM_SCORE_RAISE)))
-
-
-def _worker_main(conn: Connection, preload: Sequence[str], niceness: int = 0) -> None:
+def _worker_main(conn: Connection, preload: Sequence[str], niceness: int = 0, memory_mib: int | None = None) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # the server decides when workers stop
-    _first_to_go_when_memory_runs_out()
+    limits.first_to_go_when_memory_runs_out()
+    if memory_mib:
+        limits.cap_memory(memory_mib)
     if niceness:
         with contextlib.suppress(OSError):
             os.nice(niceness)
@@ -149,8 +141,8 @@ def _worker_main(conn: Connection, preload: Sequence[str], niceness: int = 0) ->
 class _Worker:
     """One solver process and the parent's end of its pipe; used by one thread at a time."""
 
-    def __init__(self, ctx: Any, preload: Sequence[str], niceness: int = 0) -> None:
-        self._ctx, self._preload, self._niceness = ctx, tuple(preload), niceness
+    def __init__(self, ctx: Any, preload: Sequence[str], niceness: int = 0, memory_mib: int | None = None) -> None:
+        self._ctx, self._preload, self._niceness, self._memory_mib = ctx, tuple(preload), niceness, memory_mib
         self._ready = False
         self.builds = 0  # solver builds this worker reported (its processes' lifetimes added up)
         self.conn: Connection
@@ -159,7 +151,8 @@ class _Worker:
 
     def _spawn(self) -> None:
         parent, child = self._ctx.Pipe()
-        self.proc = self._ctx.Process(target=_worker_main, args=(child, self._preload, self._niceness),
+        self.proc = self._ctx.Process(target=_worker_main,
+                                      args=(child, self._preload, self._niceness, self._memory_mib),
                                       daemon=True,
                                       name="thrustshape-worker")
         self.proc.start()
@@ -270,18 +263,20 @@ class WorkerPool:
 
     def __init__(self, workers: int, queue_size: int, retry_after: int,
                  preload: Sequence[str] = ("ocp.reference.analytic", "ocp.reference.fallback", "ocp.optimize.mission"),
-                 build_limit: float = 0.0, niceness: int = 0, affinity_slots: int = 8) -> None:
+                 build_limit: float = 0.0, niceness: int = 0, affinity_slots: int = 8,
+                 memory_mib: int | None = None) -> None:
         """``build_limit`` [s]: how long a worker whose caller's deadline ran out during a reported build
         (:func:`report_phase`) may go on building before it is killed (0: killed at the deadline).
         ``niceness``: added to the processes' nice value (a pool of long solves yields the CPU to a pool of
         short, deadline-bound fallbacks). ``affinity_slots``: affinity keys remembered per worker (as many as
-        a worker process caches programs, :data:`ocp.optimize.collocation.CACHE_SIZE`)."""
+        a worker process caches programs, :data:`ocp.optimize.collocation.CACHE_SIZE`). ``memory_mib``: each
+        process's data memory cap (:func:`service.limits.cap_memory`; None: none)."""
         self.size = workers
         self.build_limit = build_limit
         self.capacity = workers + queue_size
         self.retry_after = retry_after
         self._ctx = mp.get_context("spawn")
-        self._workers = [_Worker(self._ctx, preload, niceness) for _ in range(workers)]
+        self._workers = [_Worker(self._ctx, preload, niceness, memory_mib) for _ in range(workers)]
         self._threads = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="thrustshape-call")
         self._dispatch: Dispatcher[_Worker] = Dispatcher(self._workers, slots=affinity_slots)
         self._pending = 0

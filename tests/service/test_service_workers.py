@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import sys
 import threading
 import time
 from collections.abc import Iterator
@@ -13,7 +14,8 @@ from collections.abc import Iterator
 import httpx
 import pytest
 
-from ocp.errors import MissionError
+from ocp.errors import MissionError, ThrustshapeError
+from service.settings import Settings
 from service.tasks import available_tasks
 from service.workers import QueueFull, TaskFailed, TaskTimeout, WorkerPool, report_phase
 from tests.service.test_service_support import Server, _burn, die, digest, hang, mission, spin, start_server
@@ -58,6 +60,45 @@ def test_workers_go_before_the_server_when_memory_runs_out() -> None:
 
     own = oom_score_adj({})["adj"]
     assert own < 1000 and asyncio.run(scenario()) == min(1000, own + 500)
+
+
+def allocate(payload: dict[str, object]) -> dict[str, int]:
+    """Touch ``payload["mib"]`` MiB of doubles."""
+    import numpy as np
+
+    a = np.ones(int(str(payload["mib"])) << 17)
+    return {"pid": os.getpid(), "n": int(a.size)}
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="Linux's RLIMIT_DATA")
+def test_a_task_over_the_worker_memory_cap_is_a_user_error_and_the_worker_goes_on() -> None:
+    """With ``memory_mib`` a task allocating past the cap is answered as a user error (field ``request``, naming the
+    cap and its setting) by the same worker, which then serves the next call; without the cap the same task runs
+    (the control: the cap, not the machine, refused it)."""
+    async def scenario(cap: int | None) -> list[object]:
+        pool = WorkerPool(1, queue_size=1, retry_after=1, preload=(), memory_mib=cap)
+        try:
+            first = await pool.run(allocate, {"mib": 64}, timeout=60)
+            try:
+                big: object = await pool.run(allocate, {"mib": 1536}, timeout=60)
+            except ThrustshapeError as exc:
+                big = exc
+            again = await pool.run(allocate, {"mib": 64}, timeout=60)
+            return [first["pid"], big, again["pid"]]
+        finally:
+            pool.close()
+
+    pid, refused, after = asyncio.run(scenario(768))
+    assert isinstance(refused, ThrustshapeError) and refused.field == "request"
+    assert "768 MiB, THRUSTSHAPE_WORKER_MEMORY_MB" in refused.reason and after == pid
+    _, ran, _ = asyncio.run(scenario(None))
+    assert isinstance(ran, dict) and ran["n"] == 1536 << 17
+
+
+def test_the_memory_cap_setting_is_checked() -> None:
+    with pytest.raises(ValueError, match="worker_memory_mb"):
+        Settings(worker_memory_mb=100)
+    assert Settings(worker_memory_mb=2048).worker_memory_mb == 2048
 
 
 def test_deadline_during_build_keeps_the_worker_and_its_build() -> None:
