@@ -39,8 +39,7 @@ def iir(b: np.ndarray | list[float], a: np.ndarray | list[float], x: np.ndarray,
     past_x = np.zeros(flat.shape[1]) if start is None else \
         np.array(np.broadcast_to(np.asarray(start, float), flat.shape[1:]))  # (a copy: x may be overwritten)
     past_y = past_x * (num.sum() / den.sum()) if start is not None else past_x
-    taps = [k for k in range(1, m + 1) if num[k] != 0.0]
-    if not taps and (overwrite or not np.may_share_memory(flat, x)):  # (flat: x's buffer, or a copy made here)
+    if not num[1:].any() and (overwrite or not np.may_share_memory(flat, x)):  # (flat: x's buffer, or a copy made here)
         rhs = flat
         rhs *= num[0]
     else:
@@ -48,12 +47,12 @@ def iir(b: np.ndarray | list[float], a: np.ndarray | list[float], x: np.ndarray,
     band = np.zeros((m + 1, n))
     for k in range(1, m + 1):  # row n takes x[n -+ k] and y[n -+ k]; those beyond the record are the start's
         if backward:
-            if k in taps:
+            if num[k] != 0.0:
                 rhs[:n - k] += num[k] * flat[k:]
             rhs[max(n - k, 0):] += num[k] * past_x - den[k] * past_y
             band[m - k, k:] = den[k]  # (upper band storage: the k-th superdiagonal)
         else:
-            if k in taps:
+            if num[k] != 0.0:
                 rhs[k:] += num[k] * flat[:n - k]
             rhs[:min(k, n)] += num[k] * past_x - den[k] * past_y
             band[k, :n - k] = den[k]
