@@ -5,7 +5,8 @@ does not share for writing: no CasADi call (creating CasADi matrices, which a Fu
 not thread-safe: casadi/casadi#3518), no solver.
 
 * :func:`threads`: how many, read at each call from ``$THRUSTSHAPE_THREADS`` (a positive integer; ``1`` runs every
-  piece in the calling thread), else the cores this process may run on, at most :data:`MAX_THREADS`.
+  piece in the calling thread), else the cores this process may run on, at most :data:`MAX_THREADS`. A free run's
+  segments take the same count of CasADi's own threads, inside one call (:func:`ocp.identify.predict.free_run`).
 * :func:`ordered`: a function over items, the results yielded in the items' order, so that a caller reducing them
   (a running best, a first minimum) does exactly what a plain loop does; at most ``threads + 1`` pieces are started
   ahead of the one being consumed, so results waiting to be consumed stay few however many items there are.
