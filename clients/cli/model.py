@@ -375,7 +375,7 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
         print(f"angle-periodic torque: best fit at {ap['periods']} periods/rev, "
               f"amplitude {_g(ap['amplitude'], '.3g')} N m, explaining {_g(100 * ap['share'], '.0f')} % of the "
               f"held-out torque residual (median over 1..64: {_g(100 * ap['median_share'], '.0f')} %)"
-              + ("" if "cogging" in d["verdict"] else "; not named: it does not win on held-out data"))
+              + ("" if "cogging" in d["verdict"] else f"; not named: {ap['unnamed']}"))
         if ap.get("rivals"):
             tracked = ap.get("max_tracked_periods")
             why = (f"beyond {tracked} periods/rev the integrated angle drifts faster than a ripple's phase can be "

@@ -61,6 +61,7 @@ from ocp.identify.explain import (
     plant_of,
     relative,
     spectrum_peak,
+    stall_torque,
     units,
     with_band,
 )
@@ -294,8 +295,9 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
                                functools.partial(_free_error, sp=sp, noise=noise, seg=seg), opt.min_improvement,
                                opt.max_logging_skew)
 
+    stall = stall_torque(plant.params, log.voltage)
     design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align, held,
-                           judged)
+                           judged, stall)
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:
@@ -342,20 +344,21 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     spots = blind_spots(log, verdict, gain=gain is not None, cov=cov)
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
-                          spectrum_peak(design), opt.tolerance, spots)
+                          spectrum_peak(design, stall), opt.tolerance, spots)
 
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],
              noise: dict[str, float], opt: DiagnoseOptions, delayed: bool,
              progress: Callable[[float], None] | None, align: Alignment,
-             held: tuple[np.ndarray, float] | None = None,
-             judged: Callable[[Design, Fitted], bool] | None = None) -> tuple[Design, Selection]:
+             held: tuple[np.ndarray, float] | None = None, judged: Callable[[Design, Fitted], bool] | None = None,
+             stall: float = math.inf) -> tuple[Design, Selection]:
     """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
     ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
     search residual) or was found only with the nominal armature (:attr:`.align.Alignment.nominal`: it assumed
     ``L``), ``L`` is judged beside the timing error it cannot be told from (:func:`.inductance.open_timing`).
     A measured one: ``L`` named only where ``judged`` (:func:`.inductance.inductance_wins`) says it predicts
-    the held-out free run better than the timing that mimics it; else it is unresolved, the selection redone."""
+    the held-out free run better than the timing that mimics it; else it is unresolved, the selection redone. No
+    model is adopted with a dry friction or a ripple beyond ``stall`` [N m] (:func:`.explain.stall_torque`)."""
     design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True, held=held,
                    folds=list(sp.folds) or None)
     if log.kind is LogKind.TIME_SERIES:
@@ -366,7 +369,7 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
         filter_headroom(design, plant, log)
     if progress is not None:
         progress(0.2)
-    ok = functools.partial(physical, design)
+    ok = functools.partial(physical, design, stall=stall)
     sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
                  opt.ambiguity_margin, None if progress is None else (lambda f: progress(0.2 + 0.6 * f)), ok)
     why = None

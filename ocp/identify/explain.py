@@ -30,6 +30,8 @@ BRUSH_SLOPE = 20.0
 #: 1e-4 of the peak speed, :data:`.columns.COULOMB_EDGES`), a rotor mode a free run or the optimiser would have to
 #: resolve at thousands of steps a sample; smoothed so, the stiffest mode is within 21 x the mechanical one
 FRICTION_SLOPE = 20.0
+#: angles per period a ripple's peaks are read on (:func:`rest_torque`; under 1e-4 relative error up to a 3rd harmonic)
+RIPPLE_GRID = 720
 SIGNATURE = {**PARAM_SIGNATURE, "k": "torque residual proportional to the current and voltage residual "
                                      "proportional to the speed, in the ratio of k_t to k_e"}
 
@@ -99,17 +101,49 @@ def params_of(p: MotorParams, design: Design, f: Fitted) -> MotorParams:
     return MotorParams(**data)
 
 
-def physical(design: Design, f: Fitted) -> bool:
+def physical(design: Design, f: Fitted, stall: float = math.inf) -> bool:
     """Whether every effect of ``f`` has catalogue parameters within their physical range (the catalogue accepts
-    them; a fit may put e.g. a Stribeck level of 1.8e4 N m on columns that only a wrong constant explains), and a
-    thrust lag lags by more than logger timing can (:func:`wake_lag`)."""
+    them; a fit may put e.g. a Stribeck level of 1.8e4 N m on columns that only a wrong constant explains), no torque
+    that acts on a rotor at rest (:func:`rest_torque`) beyond ``stall`` [N m], and a thrust lag lags by more than
+    logger timing can (:func:`wake_lag`)."""
     try:
         for item in f.items:
             if item not in CONSTANTS:
-                make_effect(item, effect_values(design, f, item))
+                values = effect_values(design, f, item)
+                make_effect(item, values)
+                if rest_torque(item, values) > stall:
+                    return False
     except ParameterError:
         return False
     return "thrust_lag" not in f.items or wake_lag(design, f)
+
+
+def stall_torque(p: MotorParams, voltage: np.ndarray) -> float:
+    """The most torque [N m] the motor exerts under the logged command ``voltage`` (N,) [V]: at rest under the largest
+    command, ``k_t max|V| / R`` (eq. dc_electrical at zero speed with the current settled; the drive torque of eq.
+    dc_mechanical). A dry friction stronger than that holds the rotor at rest under every command of the log; an angle
+    ripple stronger than that holds it in any of its wells (the tilted washboard keeps stable rest points while the
+    ripple's peak exceeds the drive): a rotor come to rest there could not start again. No motor in use is built so
+    (cogging and friction are a few per cent of a motor's stall torque), and a fit that needs one is taken as
+    unphysical, like a catalogue parameter out of range (:func:`physical`; a rotor that never rests may cross a larger
+    ripple on its inertia, but the motor could not start). The blind rig's fresh seeds 200..399 had ripples of over 25
+    times it named (276; and 352, a clean log: a 57-period ripple of 15 N m with a 56 N m second harmonic on a motor
+    of 0.39 N m); the largest right ripple named on the proving ground's seeds 0..199 and the blind rig's 0..399 was
+    0.26 times it, the largest right dry friction 0.15 times."""
+    return p.k_t * float(np.max(np.abs(voltage))) / p.R if voltage.size else math.inf
+
+
+def rest_torque(item: str, values: dict[str, float]) -> float:
+    """The torque [N m] an effect with catalogue ``values`` holds a rotor at rest with: a dry friction's breakaway level
+    (Coulomb's ``tau_c``, Stribeck's excess ``tau_s``); an angle ripple's smaller peak of the two directions (eq.
+    cogging over one period, on a grid of :data:`RIPPLE_GRID` angles: what a rotor turning either way must pass); 0
+    for any other effect."""
+    if item == "cogging":
+        x = np.linspace(0.0, 2.0 * np.pi, RIPPLE_GRID, endpoint=False)
+        tau = sum(values.get(f"tau_sin{s}", 0.0) * np.sin(h * x) + values.get(f"tau_cos{s}", 0.0) * np.cos(h * x)
+                  for h, s in ((1, ""), (2, "2"), (3, "3")))
+        return float(min(np.max(tau), -np.min(tau)))
+    return abs(values.get({"coulomb_friction": "tau_c", "stribeck": "tau_s"}.get(item, ""), 0.0))
 
 
 def wake_lag(design: Design, f: Fitted) -> bool:
@@ -186,7 +220,7 @@ def units(item: str) -> dict[str, str]:
     return dict(CATALOGUE[item].units)
 
 
-def spectrum_peak(design: Design) -> dict[str, Any] | None:
+def spectrum_peak(design: Design, stall: float = math.inf) -> dict[str, Any] | None:
     """The angle-periodic torque's period count (the best held-out fit, :mod:`.regression`) and amplitude [N m], the
     fraction of the torque equation's held-out residual it explains and that fraction at 1..64 periods (``shares``,
     the spectrum, and its median), the other counts the held-out rows cannot tell from it (``rivals``, ascending),
@@ -197,7 +231,8 @@ def spectrum_peak(design: Design) -> dict[str, Any] | None:
     columns fit the torque there, and the spectrum is flat (proving ground 23015: 54 periods found for the rig's 48,
     the median count explaining 0.995 of the residual against the best's 0.998). Along an angle integrated from the
     speed, a count beyond those whose phase the tracking follows (``max_tracked_periods``) is decided only where it
-    stands out (:func:`_stands_out`); else every count beyond is a rival: the log cannot tell them apart."""
+    stands out (:func:`_stands_out`); else every count beyond is a rival: the log cannot tell them apart. ``unnamed``:
+    why such a ripple is not named where it is not (beyond ``stall``, :func:`stall_torque`, a ripple is unphysical)."""
     if not design.spectrum or design.periods < 1:
         return None
     s = np.asarray(design.spectrum)
@@ -207,7 +242,11 @@ def spectrum_peak(design: Design) -> dict[str, Any] | None:
     tracked = int(design.angle.get("max_tracked_periods", s.size))  # type: ignore[call-overload]
     if design.periods > tracked and not _stands_out(s, design.periods, tracked):
         rivals = sorted({*rivals, *range(tracked + 1, s.size + 1)} - {design.periods})
-    return {"periods": design.periods, "share": best, "median_share": float(np.median(s)),
+    amp = float(design.angle.get("amplitude", 0.0))  # type: ignore[arg-type]
+    unnamed = (f"its {amp:.3g} N m is more than the motor's stall torque under the log's largest command ({stall:.3g} "
+               "N m): a rotor come to rest in one of its wells could not start again" if amp > stall else
+               "it does not win on held-out data")
+    return {"periods": design.periods, "share": best, "median_share": float(np.median(s)), "unnamed": unnamed,
             "shares": [float(v) for v in s], "rivals": rivals, **design.angle,
             "torque_rows": "raw" if design.raw_torque else "low-passed"}
 

@@ -237,7 +237,7 @@ function showDiagnosisDetails(res, after) {
   }
   const ap = res.angle_periodic;
   if (ap) line(`Angle-periodic torque: best fit at ${ap.periods} periods/rev, ${fmt(ap.amplitude, 3)} N m` +
-               ((res.verdict || []).includes("cogging") ? "" : ", not named (it does not win on held-out data)") +
+               ((res.verdict || []).includes("cogging") ? "" : `, not named (${ap.unnamed})`) +
                ((ap.rivals || []).length ? `; the count is not decided by this log: ${ap.rivals.length} other ` +
                 `count(s) explain the held-out torque as well (${runs(ap.rivals)})` : "") +
                (ap.note ? ` (${ap.note})` : ""), "m-angle");
