@@ -373,13 +373,13 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
     sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
                  opt.ambiguity_margin, None if progress is None else (lambda f: progress(0.2 + 0.6 * f)), ok)
     why = None
-    if "L" in design.slack and "L" in sel.final.items and implausible_factor(design, sel.final, "L") is not None:
-        # beyond a factor two under an open timing: a timing error beyond the conventions (an unconfirmed
-        # delay) is the likelier explanation (the prior of .select)
-        why = (("the command timing is not identifiable in this log (flat alignment residual) and "
-                if not align.identified else "L/R is under two samples and ") +
-               "L would have to be off by more than a factor two: a timing error beyond the "
-               "logging conventions explains the armature equation as well")
+    if "L" in sel.final.items and implausible_factor(design, sel.final, "L") is not None:
+        # beyond a factor two: a timing error (an unconfirmed delay under an open timing; a command skew or a current
+        # filter the alignment did not take) is the likelier explanation (the prior of .select; blind 357)
+        why = ("the command timing is not identifiable in this log (flat alignment residual) and " if not
+               align.identified else "L/R is under two samples and " if "L" in design.slack else "") + \
+              ("L would have to be off by more than a factor two: a timing error of the command or of the current's "
+               "sensor explains the armature equation as well")
     elif judged is not None and "L" in sel.final.items and not judged(design, sel.final):
         why = TIMING_MIMICS
     if why is not None:  # L is unresolved, the selection redone
