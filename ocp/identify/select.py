@@ -212,11 +212,14 @@ def _forward(design: Design, pool: list[str], items: list[str], current: Fitted,
         tried = _prefer_effects(design, tried, margin)
         if progress is not None:
             progress((len(items) + 1) / (max_items + 1))
-        # the best-scoring item whose win passes its test (they differ: materiality, one equation's scatter)
-        win = next((k for k, (c, f) in enumerate(tried) if _wins(design, current, c, f, min_improvement)
-                    and physical(f) and _room(design, current, (c,), noise_floor, f)), None) \
+        # the best-scoring item whose win passes its test (they differ: materiality, one equation's scatter), and
+        # physical: a ripple's win still says what the log leaves (:func:`_slower_first`) where its size is not
+        passes = functools.partial(_passes, design, current, min_improvement=min_improvement, noise_floor=noise_floor)
+        win = next((k for k, (c, f) in enumerate(tried) if passes(c, f)), None) \
             if worst(design, current) > noise_floor else None
         win = _slower_first(design, current, tried, win, min_improvement, physical)
+        if win is not None and not physical(tried[win][1]):
+            win = next((k for k, (c, f) in enumerate(tried) if k > win and passes(c, f) and physical(f)), None)
         if win is not None:
             tried = [tried[win], *tried[:win], *tried[win + 1:]]
         ok = win is not None
@@ -307,6 +310,11 @@ def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement
         or (item == "cogging" and ripple_beyond(design, current, f))
 
 
+def _passes(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float, noise_floor: float) -> bool:
+    """Whether ``item`` (fitted ``f``) wins beside ``current`` (:func:`_wins`) with room for it (:func:`_room`)."""
+    return _wins(design, current, item, f, min_improvement) and _room(design, current, (item,), noise_floor, f)
+
+
 def _slower_first(design: Design, current: Fitted, tried: list[tuple[str, Fitted]], win: int | None,
                   min_improvement: float, physical: Callable[[Fitted], bool]) -> int | None:
     """The round's winner ``win`` (an index into ``tried``, best-scoring first), or, where an angle ripple wins by its
@@ -316,7 +324,9 @@ def _slower_first(design: Design, current: Fitted, tried: list[tuple[str, Fitted
     a slow effect that predicts the held-out rows better is the better explanation of it, and its residual is not
     the fast one the ripple's test assumes (the ambiguity challenge lists the ripple beside it where it fits within
     the margin). Proving ground 14183: Stribeck friction on a 10 kHz tachometer log, named an angle ripple of 20
-    periods/rev, whose columns follow a phase tracked along the speed's integral."""
+    periods/rev, whose columns follow a phase tracked along the speed's integral. The ripple's win counts whatever its
+    fitted size (the caller refuses an unphysical winner after this): on 14183 its harmonics peak beyond the motor's
+    stall torque (:func:`.explain.stall_torque`), and the friction it points to is the right item."""
     if win is None or tried[win][0] != "cogging" or beyond_scatter(design, current, tried[win][1], ("cogging",)) \
             or ratio_agrees(design, current, "cogging", tried[win][1]):
         return win
