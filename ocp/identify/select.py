@@ -212,8 +212,9 @@ def _forward(design: Design, pool: list[str], items: list[str], current: Fitted,
         tried = _prefer_effects(design, tried, margin)
         if progress is not None:
             progress((len(items) + 1) / (max_items + 1))
-        # the best-scoring item whose win passes its test (they differ: materiality, one equation's scatter), and
-        # physical: a ripple's win still says what the log leaves (:func:`_slower_first`) where its size is not
+        # the best-scoring item whose win passes its test (they differ: materiality, one equation's scatter); a
+        # ripple's win points to a slower effect whatever its size (:func:`_slower_first`), and an unphysical
+        # winner then yields to the next physical one that passes
         passes = functools.partial(_passes, design, current, min_improvement=min_improvement, noise_floor=noise_floor)
         win = next((k for k, (c, f) in enumerate(tried) if passes(c, f)), None) \
             if worst(design, current) > noise_floor else None
