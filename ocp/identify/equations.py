@@ -141,10 +141,10 @@ REST_FRACTION = 0.01
 
 def held(plant: DCMotorPlant, log: Log, r: np.ndarray, drive: np.ndarray, volts: np.ndarray) -> np.ndarray:
     """The torque balance's residual ``r`` (N,) [N m] with a sweep's rows at rest (:data:`REST_FRACTION`) set-valued:
-    dry friction holds whatever torque is within its breakaway (the effects' ``breakaway()`` summed), so there the
-    residual is the motor's torque ``drive`` less the load without dry friction, shrunk by that breakaway (a
-    stalled row of a sweep with Stribeck friction, at rest under 8.4 mN m, left a residual no smooth friction
-    explains). On a time series, or without dry friction, ``r`` as it is."""
+    dry friction (or an angle ripple) holds whatever torque is within its breakaway (the effects' ``breakaway()``
+    summed), so there the residual is the motor's torque ``drive`` less the load without them, shrunk by that
+    breakaway (a stalled row of a sweep with Stribeck friction, at rest under 8.4 mN m, left a residual no smooth
+    friction explains). On a time series, or without such an effect, ``r`` as it is."""
     hold = sum(e.breakaway() for e in plant.effects if isinstance(e, EffectBase))
     if log.kind is not LogKind.STEADY_STATE or hold <= 0.0:
         return r

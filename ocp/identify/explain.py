@@ -30,8 +30,6 @@ BRUSH_SLOPE = 20.0
 #: 1e-4 of the peak speed, :data:`.columns.COULOMB_EDGES`), a rotor mode a free run or the optimiser would have to
 #: resolve at thousands of steps a sample; smoothed so, the stiffest mode is within 21 x the mechanical one
 FRICTION_SLOPE = 20.0
-#: angles per period a ripple's peaks are read on (:func:`rest_torque`; under 1e-4 relative error up to a 3rd harmonic)
-RIPPLE_GRID = 720
 SIGNATURE = {**PARAM_SIGNATURE, "k": "torque residual proportional to the current and voltage residual "
                                      "proportional to the speed, in the ratio of k_t to k_e"}
 
@@ -103,15 +101,14 @@ def params_of(p: MotorParams, design: Design, f: Fitted) -> MotorParams:
 
 def physical(design: Design, f: Fitted, stall: float = math.inf) -> bool:
     """Whether every effect of ``f`` has catalogue parameters within their physical range (the catalogue accepts
-    them; a fit may put e.g. a Stribeck level of 1.8e4 N m on columns that only a wrong constant explains), no torque
-    that acts on a rotor at rest (:func:`rest_torque`) beyond ``stall`` [N m], and a thrust lag lags by more than
+    them; a fit may put e.g. a Stribeck level of 1.8e4 N m on columns that only a wrong constant explains), no
+    breakaway (the torque an effect holds a rotor at rest against, ``EffectBase.breakaway``: dry friction, an angle
+    ripple) beyond ``stall`` [N m], and a thrust lag lags by more than
     logger timing can (:func:`wake_lag`)."""
     try:
         for item in f.items:
             if item not in CONSTANTS:
-                values = effect_values(design, f, item)
-                make_effect(item, values)
-                if rest_torque(item, values) > stall:
+                if abs(make_effect(item, effect_values(design, f, item)).breakaway()) > stall:
                     return False
     except ParameterError:
         return False
@@ -131,19 +128,6 @@ def stall_torque(p: MotorParams, voltage: np.ndarray) -> float:
     on a motor of 0.39 N m); the right ripples named on the proving ground's seeds 0..199 and the blind rig's 0..399
     stay under 0.26 times it (their harmonics' amplitudes summed), the right dry frictions under 0.15 times."""
     return p.k_t * float(np.max(np.abs(voltage))) / p.R if voltage.size else math.inf
-
-
-def rest_torque(item: str, values: dict[str, float]) -> float:
-    """The torque [N m] an effect with catalogue ``values`` holds a rotor at rest with: a dry friction's breakaway level
-    (Coulomb's ``tau_c``, Stribeck's excess ``tau_s``); an angle ripple's smaller peak of the two directions (eq.
-    cogging over one period, on a grid of :data:`RIPPLE_GRID` angles: what a rotor turning either way must pass); 0
-    for any other effect."""
-    if item == "cogging":
-        x = np.linspace(0.0, 2.0 * np.pi, RIPPLE_GRID, endpoint=False)
-        tau = sum(values.get(f"tau_sin{s}", 0.0) * np.sin(h * x) + values.get(f"tau_cos{s}", 0.0) * np.cos(h * x)
-                  for h, s in ((1, ""), (2, "2"), (3, "3")))
-        return float(min(np.max(tau), -np.min(tau)))
-    return abs(values.get({"coulomb_friction": "tau_c", "stribeck": "tau_s"}.get(item, ""), 0.0))
 
 
 def wake_lag(design: Design, f: Fitted) -> bool:

@@ -48,7 +48,8 @@ class EffectBase:
         return current
 
     def breakaway(self) -> float:
-        """The torque [N m] this effect holds a rotor at rest against (dry friction: any torque up to it); 0: none."""
+        """The torque [N m] this effect holds a rotor at rest against (dry friction: any torque up to it; an angle
+        ripple: in one of its wells); 0: none."""
         return 0.0
 
     def parameters(self) -> dict[str, float]:

@@ -14,7 +14,11 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ocp.model.effect_base import Channel, EffectBase, require_positive
-from ocp.model.plant import Effect, Expr, Ops
+from ocp.model.plant import NUMPY, Effect, Expr, Ops
+
+#: angles per period a ripple's peaks are read on (:meth:`Cogging.breakaway`; under 1e-4 relative error up to its 3rd
+#: harmonic)
+RIPPLE_GRID = 720
 
 
 @dataclass(frozen=True)
@@ -215,6 +219,14 @@ class Cogging(StatefulBase):
     def bound_load_torque(self, z: Sequence[Expr], omega: Expr, ops: Ops) -> Expr:
         n = self.periods * z[0]
         return sum((s * ops.sin(h * n) + c * ops.cos(h * n) for h, s, c in self.harmonics()), 0.0 * z[0])
+
+    def breakaway(self) -> float:
+        """The torque [N m] the ripple holds a rotor at rest against: the smaller of its peaks in the two directions
+        (eq. cogging over one period, on :data:`RIPPLE_GRID` angles): a drive weaker than that leaves the rotor a
+        stable rest point in a well (the tilted washboard's condition), whichever way it turns."""
+        theta = np.linspace(0.0, 2.0 * np.pi, RIPPLE_GRID, endpoint=False) / self.periods  # [rad] one period
+        tau = np.asarray(self.bound_load_torque([theta], theta, NUMPY), float)
+        return float(min(np.max(tau), -np.min(tau)))
 
     def describe(self) -> str:
         """The effect's sentence (:meth:`EffectBase.describe`) with its count and the amplitude of each harmonic."""

@@ -1,5 +1,5 @@
 """A dry friction or an angle ripple stronger than the motor's stall torque is not named (issue #11: rigs this project
-did not build; :func:`ocp.identify.explain.stall_torque`, :func:`~ocp.identify.explain.rest_torque`).
+did not build; :func:`ocp.identify.explain.stall_torque`, the effects' ``breakaway``).
 
 Oracles: the closed-form peaks of two-harmonic ripples; the blind rig's own integrator (``bench/blindrig``: its own
 physics, written without reading the identifier), whose rotor at rest in a ripple's well stays there when the ripple
@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from ocp.identify import diagnose
-from ocp.identify.explain import rest_torque, stall_torque
+from ocp.identify.explain import stall_torque
 from ocp.logs import read_log
-from ocp.model.effects import load_plant
+from ocp.model.effects import load_plant, make_effect
 from ocp.model.params import load_params
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
@@ -37,13 +37,13 @@ from blindrig.rig import Rig
     ({"tau_sin": 1.0, "tau_cos2": 0.5}, 0.75),  # peaks 0.75 (sin x = 1/2) and -1.5 (x = -pi/2): the smaller holds
 ])
 def test_a_ripple_holds_a_rotor_with_its_smaller_peak(values: dict[str, float], peak: float) -> None:
-    assert rest_torque("cogging", values) == pytest.approx(peak, rel=1e-4)
+    assert make_effect("cogging", {**values, "periods": 7.0}).breakaway() == pytest.approx(peak, rel=1e-4)
 
 
 def test_dry_friction_holds_with_its_level_and_other_effects_hold_nothing() -> None:
-    assert rest_torque("coulomb_friction", {"tau_c": -0.02, "omega_eps": 1.0}) == 0.02
-    assert rest_torque("stribeck", {"tau_s": 0.03, "omega_s": 5.0, "delta": 2.0}) == 0.03
-    assert rest_torque("thrust_lag", {"tau": 0.1}) == 0.0
+    assert abs(make_effect("coulomb_friction", {"tau_c": -0.02, "omega_eps": 1.0}).breakaway()) == 0.02
+    assert make_effect("stribeck", {"tau_s": 0.03, "omega_s": 5.0, "delta": 2.0}).breakaway() == 0.03
+    assert make_effect("thrust_lag", {"tau": 0.1}).breakaway() == 0.0
 
 
 @pytest.mark.parametrize("seed", [12, 95])
@@ -90,4 +90,4 @@ def test_a_right_ripple_is_named_well_within_the_stall_torque(tmp_path: Path) ->
     d = diagnose(plant, log)
     assert sorted(d.verdict) == ["cogging", "param:R"], d.verdict
     cog = next(e for e in d.plant.effects if e.name == "cogging")
-    assert rest_torque("cogging", cog.parameters()) < 0.1 * stall_torque(plant.params, log.voltage)
+    assert cog.breakaway() < 0.1 * stall_torque(plant.params, log.voltage)
