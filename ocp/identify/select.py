@@ -15,12 +15,16 @@ Forward selection adopts, while some equation's held-out RMS is above ``noise_fl
 whose win passes its test; a constant must enter such an equation, or halve the held-out error of one it enters
 (:func:`_room`), an effect may win in any (its material fall shows an equation below the floor was not at its
 noise: the noise level is an estimate; a torque equation at 0.86 noise units that an angle ripple brought to 0.25 on
-a 10 kHz log was never explained while effects too were held to equations above the floor).
+a 10 kHz log was never explained while effects too were held to equations above the floor). Once every equation
+is at or under the floor, an effect still wins where it halves the held-out error of one it enters (:func:`_halves`,
+as a constant's room): the blind rig's seed 227, a brush drop left the torque equation at 0.65 noise units, and an
+18-period ripple took it to 0.23.
 The tests differ by item, so the best-scoring one may fail where the next passes (they are in
 :mod:`.evidence`): the score falls beyond sampling noise (the pooled score's scatter, or one
 equation's own) -- for an effect also by at least ``min_improvement`` (its materiality, on the score with every
 equation the effect does not enter counted at most at its noise level, or for a Stribeck band on the rows it acts
-on); a constant's materiality is the tolerance
+on, or for an angle ripple that wins beyond sampling noise or by the likelihood ratio, on the torque equation alone:
+:func:`.evidence.own_material`); a constant's materiality is the tolerance
 itself (calibration already takes the first ``tol`` of its error, and beyond it the user wants the name), so a
 constant freed beyond it needs only to win beyond sampling noise -- or, the models being nested and scored on the
 same rows, in a paired comparison over held-out blocks or a likelihood ratio (the torque equation's likelihood
@@ -64,6 +68,7 @@ from ocp.identify.evidence import (
     equations_of,
     implausible_factor,
     is_material,
+    own_material,
     ratio_agrees,
     ripple_beyond,
     scatter,
@@ -216,8 +221,9 @@ def _forward(design: Design, pool: list[str], items: list[str], current: Fitted,
         # ripple's win points to a slower effect whatever its size (:func:`_slower_first`), and an unphysical
         # winner then yields to the next physical one that passes
         passes = functools.partial(_passes, design, current, min_improvement=min_improvement, noise_floor=noise_floor)
-        win = next((k for k, (c, f) in enumerate(tried) if passes(c, f)), None) \
-            if worst(design, current) > noise_floor else None
+        above = worst(design, current) > noise_floor  # (else only an effect that halves an equation: _halves)
+        win = next((k for k, (c, f) in enumerate(tried)
+                    if passes(c, f) and (above or (c not in CONSTANTS and _halves(design, current, (c,), f)))), None)
         win = _slower_first(design, current, tried, win, min_improvement, physical)
         if win is not None and not physical(tried[win][1]):
             win = next((k for k, (c, f) in enumerate(tried) if k > win and passes(c, f) and physical(f)), None)
@@ -290,13 +296,21 @@ def _room(design: Design, current: Fitted, items: Sequence[str], noise_floor: fl
     noise, whatever another equation holds (an ``L`` named for an armature equation at its noise beside a thrust
     equation above it: tuning seeds 1134, 7093); but an equation whose held-out error one constant halves was not at
     its noise (the noise level is an estimate: on a 10 kHz encoder log the torque equation read 0.48 noise units
-    beside an angle ripple, and a ``B`` 31 % off took it to 0.11). Effects need no room (module doc): True where
-    ``items`` hold no constant. Single items and pairs (:func:`_pair`) are held to it alike."""
+    beside an angle ripple, and a ``B`` 31 % off took it to 0.11). Effects need no room here (module doc: only once
+    every equation is at the floor, in the forward rounds): True where ``items`` hold no constant. Single items and
+    pairs (:func:`_pair`) are held to it alike."""
     named = [i for i in items if i in CONSTANTS]
     if not named:
         return True
     live = (design.n_test > 0) & equations_of(design, named)
-    return bool(np.any(live & ((current.per_eq > noise_floor) | (after.per_eq <= (1.0 - ROOM_FALL) * current.per_eq))))
+    return bool(np.any(live & (current.per_eq > noise_floor))) or _halves(design, current, named, after)
+
+
+def _halves(design: Design, current: Fitted, items: Sequence[str], after: Fitted) -> bool:
+    """Whether ``after`` (``current`` with ``items``) cuts the held-out RMS of an equation ``items`` enter by
+    :data:`ROOM_FALL`: that equation was not at its noise, whatever its noise units read (:func:`_room`)."""
+    live = (design.n_test > 0) & equations_of(design, items)
+    return bool(np.any(live & (after.per_eq <= (1.0 - ROOM_FALL) * current.per_eq)))
 
 
 def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float) -> bool:
@@ -304,11 +318,13 @@ def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement
     (:func:`.evidence.beyond_scatter`), and for an effect by ``min_improvement`` too (a constant's materiality is the
     tolerance, module doc)."""
     material = item in CONSTANTS or is_material(design, current, f, (item,), min_improvement)
-    if not material:
+    # an angle ripple's fall is material on the torque equation alone where it wins by the tests below (module doc)
+    if not (material or (item == "cogging" and own_material(design, current, f, (item,), min_improvement))):
         return False
-    return beyond_scatter(design, current, f, (item,)) or ratio_agrees(design, current, item, f) \
-        or (item in CONSTANTS and blocks_agree(design, current, item, f)) \
-        or (item == "cogging" and ripple_beyond(design, current, f))
+    if beyond_scatter(design, current, f, (item,)) or ratio_agrees(design, current, item, f):
+        return True
+    return material and ((item in CONSTANTS and blocks_agree(design, current, item, f))
+                         or (item == "cogging" and ripple_beyond(design, current, f)))
 
 
 def _passes(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float, noise_floor: float) -> bool:

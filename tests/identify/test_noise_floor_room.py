@@ -4,6 +4,7 @@ estimate, and an effect's material fall below it shows that it was too high (unt
 held to the equations above the floor, and a 10 kHz log's angle ripple cutting its torque equation from 0.86 to
 0.25 noise units was never named); a constant, named without a material fall, only in an equation above it, or
 one whose held-out RMS it halves (``select.ROOM_FALL``, session 22: noise cannot lose half its error to one constant).
+With every equation within the floor the search stops, but for an effect that halves one it enters (session 50).
 Hand-made regressions (rows independent, residuals in noise units, 4000 rows a third held out)."""
 
 from __future__ import annotations
@@ -67,9 +68,20 @@ def test_a_constant_that_halves_an_equation_within_the_floor_is_named() -> None:
 
 
 def test_the_search_stops_when_every_equation_is_within_the_floor() -> None:
-    d = _design(eq=1, signal=0.8, noise=0.45, other=0.0)  # the armature equation alone, at ~0.92 noise units
+    d = _design(eq=1, signal=0.5, noise=0.8, other=0.0)  # the armature equation alone, at ~0.94 noise units
+    now, fitted = fit_model(d, [], 0.1), fit_model(d, [EFFECT], 0.1)
+    assert 0.12 < 1.0 - fitted.per_eq[1] / now.per_eq[1] < ROOM_FALL
     assert _adopted(d, DiagnoseOptions().noise_floor) == ()
     assert _adopted(d, 0.5) == (EFFECT,)  # (it would win: only the floor stops it)
+
+
+def test_an_effect_that_halves_an_equation_within_the_floor_is_adopted() -> None:
+    """With every equation within the floor, an effect still wins where it halves one it enters (as a constant's
+    room, session 50): the armature equation alone at ~0.92 stated noise units, its true noise 0.45."""
+    d = _design(eq=1, signal=0.8, noise=0.45, other=0.0)
+    now, fitted = fit_model(d, [], 0.1), fit_model(d, [EFFECT], 0.1)
+    assert now.per_eq[1] < 1.0 and 1.0 - fitted.per_eq[1] / now.per_eq[1] > ROOM_FALL
+    assert _adopted(d, DiagnoseOptions().noise_floor) == (EFFECT,)
 
 
 def test_an_equation_just_above_its_noise_is_still_explained() -> None:
