@@ -63,7 +63,7 @@ from ocp.identify.explain import (
     spectrum_peak,
     stall_torque,
     units,
-    with_band,
+    with_fall,
 )
 from ocp.identify.gain import gain_rival
 from ocp.identify.holdout import Split, split
@@ -233,7 +233,7 @@ def _entry(name: str, fit_: Fitted, before: Fitted, significant: bool, plant: DC
     if name in CONSTANTS:
         values = {name: float(getattr(plant.params, KEYS[name][0])) * (1 + relative(design, fit_, name))}
     imp = 1.0 - fit_.score / before.score if before.score > 0 else 0.0
-    text = with_band(explain(name, values, plant.params, design, fit_), design, before, fit_, name)
+    text = with_fall(explain(name, values, plant.params, design, fit_), design, before, fit_, name)
     return RankEntry(item_name(name), imp, significant, values, units(name), heldout, text)
 
 

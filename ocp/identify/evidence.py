@@ -93,7 +93,7 @@ def own_material(design: Design, before: Fitted, after: Fitted, items: Sequence[
     ``items`` enter, alone, by ``min_improvement``: an angle ripple's materiality where it also wins beyond
     sampling noise or by the likelihood ratio (:func:`.select._wins`). Counted at the noise level, the equations it
     cannot enter dilute its fall wherever its own equation reads near or under one noise unit, which is an estimate:
-    the blind rig's seed 368 (5 kHz), an 18-period ripple took the torque equation from 0.68 to 0.19 noise units, a
+    the blind rig's seed 368 (5 kHz), an 18-period ripple took the torque equation from 0.68 to 0.18 noise units, a
     capped score's fall of 8 %."""
     live = equations_of(design, items) & (design.n_test > 0)
     if not live.any():

@@ -249,9 +249,14 @@ def _stands_out(shares: np.ndarray, best: int, tracked: int) -> bool:
     return bool(np.all(others < shares[best - 1] - 3.0 * spread))
 
 
-def with_band(text: str, design: Design, before: Fitted, f: Fitted, item: str) -> str:
-    """``text`` (an item's explanation) with, for a banded effect (a Stribeck band), the fall of the held-out error on
-    the rows its band acts on, where its materiality is judged too (:func:`.evidence.band_fall`)."""
+def with_fall(text: str, design: Design, before: Fitted, f: Fitted, item: str) -> str:
+    """``text`` (an item's explanation) with the fall of the held-out error where the item's materiality is judged
+    too: for a banded effect (a Stribeck band) on the rows its band acts on (:func:`.evidence.band_fall`), for an
+    angle ripple in the torque equation (eq. 0, :func:`.evidence.own_material`)."""
+    if item == "cogging" and design.n_test[0] > 0 and before.per_eq[0] > 0:
+        return text.rstrip(".") + (f". The torque equation's held-out error falls "
+                                   f"{100 * (1.0 - f.per_eq[0] / before.per_eq[0]):.0f} % ({before.per_eq[0]:.2f} -> "
+                                   f"{f.per_eq[0]:.2f} noise units).")
     band = band_fall(design, before, f, item)
     if band is None:
         return text
