@@ -54,15 +54,15 @@ from ocp.identify.evidence import IMPLAUSIBLE_FACTOR, Fitted, implausible_factor
 from ocp.identify.explain import (
     KEYS,
     calibration,
-    effect_values,
     explain,
     item_name,
+    item_values,
     physical,
     plant_of,
-    relative,
     spectrum_peak,
     stall_torque,
     units,
+    verdict_sentence,
     with_fall,
 )
 from ocp.identify.gain import gain_rival
@@ -229,9 +229,7 @@ def _pool(plant: DCMotorPlant, opt: DiagnoseOptions) -> tuple[tuple[str, ...], l
 
 def _entry(name: str, fit_: Fitted, before: Fitted, significant: bool, plant: DCMotorPlant, design: Design,
            heldout: dict[str, float]) -> RankEntry:
-    values = {} if name in CONSTANTS else effect_values(design, fit_, name)
-    if name in CONSTANTS:
-        values = {name: float(getattr(plant.params, KEYS[name][0])) * (1 + relative(design, fit_, name))}
+    values = item_values(design, fit_, name, plant.params)
     imp = 1.0 - fit_.score / before.score if before.score > 0 else 0.0
     text = with_fall(explain(name, values, plant.params, design, fit_), design, before, fit_, name)
     return RankEntry(item_name(name), imp, significant, values, units(name), heldout, text)
@@ -323,7 +321,8 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         rounds.append(Round(before, entries))
         if step.adopted is not None:
             verdict.append(item_name(step.adopted))
-            explanations.append(f"{entries[0].explanation} Held-out error down {100 * entries[0].improvement:.0f} %.")
+            explanations.append(verdict_sentence(step.adopted, step.tried[0][1], step.before, sel.final,
+                                                 plant.params, design))
     for c in sel.dropped:  # (named in a forward step, no longer needed beside the others: not named)
         k = verdict.index(item_name(c))
         del verdict[k]

@@ -249,6 +249,26 @@ def _stands_out(shares: np.ndarray, best: int, tracked: int) -> bool:
     return bool(np.all(others < shares[best - 1] - 3.0 * spread))
 
 
+def item_values(design: Design, f: Fitted, item: str, p: MotorParams) -> dict[str, float]:
+    """An item's fitted values (SI): a constant's corrected value, an effect's catalogue parameters."""
+    if item in CONSTANTS:
+        return {item: float(getattr(p, KEYS[item][0])) * (1 + relative(design, f, item))}
+    return effect_values(design, f, item)
+
+
+def verdict_sentence(item: str, won: Fitted, before: Fitted, final: Fitted, p: MotorParams, design: Design) -> str:
+    """The verdict's sentence for ``item``, adopted by the fit ``won`` over ``before`` in its round: its values in the
+    ``final`` model (those the calibration and the calibrated plant carry; items adopted after it can move them),
+    the evidence of its round. A constant that moved more than a point since its round also gives that round's
+    value: a correction that shifts as others join shares the residual with them."""
+    f = final if item in final.items else won
+    text = with_fall(explain(item, item_values(design, f, item, p), p, design, f), design, before, won, item)
+    if item in CONSTANTS and abs(relative(design, f, item) - (x0 := relative(design, won, item))) > 0.01:
+        v0 = float(getattr(p, KEYS[item][0]))
+        text = text.rstrip(".") + f". When it won its round: {v0 * (1 + x0):.4g} {UNITS[item]} ({100 * x0:+.1f} %)."
+    return f"{text} Held-out error down {100 * (1.0 - won.score / before.score if before.score > 0 else 0.0):.0f} %."
+
+
 def with_fall(text: str, design: Design, before: Fitted, f: Fitted, item: str) -> str:
     """``text`` (an item's explanation) with the fall of the held-out error where the item's materiality is judged
     too: for a banded effect (a Stribeck band) on the rows its band acts on (:func:`.evidence.band_fall`), for an
