@@ -7,8 +7,13 @@ identifier), a wrong ``R`` was named rightly in its round, then a brush drop won
 fifth of the resistance, fitted against what the sensors' lags leave in the armature equation. The held-out free run
 of that model missed the log by several times the one before the drop.
 
-Oracles: the blind rig's fresh seed 564 (its truth file: ``R`` alone, the nominal 35.8 % above the rig's, a 1 kHz ramp
-through zero), regenerated here; and, for the rule itself, a fit moved onto and just inside the box edge.
+Where a later item takes a named constant beyond the prior's factor two without pinning it (to -75 %), it
+compensates it all the same (:func:`ocp.identify.select._sound`).
+
+Oracles: the blind rig's fresh seeds 564 and 473 (their truth files: ``R`` alone, the nominal 35.8 % and 27.4 % above
+the rig's; a 1 kHz ramp through zero, 1 kHz PI tracking) and 165 (a gap dead band of 1.25 V beside ``R``, the nominal
+36.3 % above the rig's, a 1.4 kHz ramp), regenerated here; and, for the rule itself, a fit moved onto and just inside
+the box edge.
 """
 
 from __future__ import annotations
@@ -17,10 +22,12 @@ import dataclasses
 import json
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
 from ocp.identify import diagnose
+from ocp.identify.diagnose import DiagnoseResult
 from ocp.identify.explain import physical, pinned
 from ocp.identify.lsq import NAMED_BOUNDS
 from ocp.logs import read_log
@@ -32,14 +39,28 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
 from blindrig.case import generate
 
 
-def test_a_drop_that_pins_r_at_its_box_is_not_named(tmp_path: Path) -> None:
-    csv, params, truth = generate(564, tmp_path)
-    drawn = json.loads(Path(truth).read_text())["meta"]["calibration_rel_errors"]["R"]  # nominal / rig - 1
-    d = diagnose(load_plant(params), read_log(csv))
+def _blind(seed: int, tmp_path: Path) -> tuple[DiagnoseResult, dict[str, Any]]:
+    csv, params, truth = generate(seed, tmp_path)
+    return diagnose(load_plant(params), read_log(csv)), json.loads(Path(truth).read_text())
+
+
+@pytest.mark.parametrize("seed", [564, 473])
+def test_a_drop_that_takes_r_to_its_box_or_beyond_a_factor_two_is_not_named(seed: int, tmp_path: Path) -> None:
+    d, truth = _blind(seed, tmp_path)
+    drawn = truth["meta"]["calibration_rel_errors"]["R"]  # nominal / rig - 1
     assert d.verdict == ["param:R"], d.verdict
     assert d.calibration["R"]["relative"] == pytest.approx(1.0 / (1.0 + drawn) - 1.0, abs=0.02)
     drop = next(e for r in d.rounds[1:] for e in r.entries if e.name == "brush_drop")
     assert not drop.significant
+
+
+def test_a_dead_band_beside_r_is_named_without_the_drop_that_compensated_r(tmp_path: Path) -> None:
+    d, truth = _blind(165, tmp_path)
+    assert sorted(d.verdict) == ["param:R", "voltage_deadband"], d.verdict
+    assert d.calibration["R"]["relative"] == pytest.approx(
+        1.0 / (1.0 + truth["meta"]["calibration_rel_errors"]["R"]) - 1.0, abs=0.02)
+    band = next(e for r in d.rounds for e in r.entries if e.name == "voltage_deadband" and e.significant)
+    assert band.parameters["v_db"] == pytest.approx(truth["rig"]["deadband"], rel=0.1)
 
 
 @pytest.mark.parametrize(("edge", "inside"), [(0, 0.01), (1, -0.01)])
