@@ -124,10 +124,10 @@ def pinned(design: Design, f: Fitted) -> str | None:
     items beside it that moved it there compensate its bound rather than being measured. ``L`` is left to its own
     rule (beyond a factor two it is unresolved and the selection redone, :func:`.diagnose._explain`). Over the blind
     rig's seeds 0..599 (``bench/blindrig``) nine verdicts named ``R`` at -80 %, every one beside a brush drop that
-    took it there from its round's value (a true ``R`` error of 20-30 %, a dead band, a clean log; on 564 the held-out
-    free run 3.7 times further from the log after the drop); one named ``J`` at -80 % for a true -33 % (54, right by
-    its label, lost to this rule). On the proving ground's seeds 0..199 and 1000..1199 three fits were pinned, all in
-    wrong verdicts (114, 1106, 1174)."""
+    took it there (the truth a wrong ``R`` of 20-30 %, a drop, a dead band, a ``B`` error or a clean log; on 564
+    the held-out free run 3.7 times further from the log after the drop); one named ``J`` at -80 % for a true -33 %
+    (54, right by its label, lost to this rule). On the proving ground's seeds 0..199 and 1000..1199 three fits were
+    pinned, all in wrong verdicts (114, 1106, 1174)."""
     for c in f.items:
         if c in CONSTANTS and c != "L" and c not in design.unresolved:  # (L: diagnose._explain's own rule)
             x = relative(design, f, c)
