@@ -221,7 +221,7 @@ def _forward(design: Design, pool: list[str], items: list[str], current: Fitted,
         # ripple's win points to a slower effect whatever its size (:func:`_slower_first`), and an unphysical
         # winner then yields to the next physical one that passes
         passes = functools.partial(_passes, design, current, min_improvement=min_improvement, noise_floor=noise_floor)
-        sound = functools.partial(_sound, design, current, physical)
+        sound = functools.partial(_sound, physical, _plausible(design, current), design)
         above = worst(design, current) > noise_floor  # (else only an effect that halves an equation: _halves)
         win = next((k for k, (c, f) in enumerate(tried)
                     if passes(c, f) and (above or (c not in CONSTANTS and _halves(design, current, (c,), f)))), None)
@@ -333,15 +333,20 @@ def _passes(design: Design, current: Fitted, item: str, f: Fitted, min_improveme
     return _wins(design, current, item, f, min_improvement) and _room(design, current, (item,), noise_floor, f)
 
 
-def _sound(design: Design, current: Fitted, physical: Callable[[Fitted], bool], f: Fitted) -> bool:
-    """Whether ``f`` is physical and leaves every constant ``current`` names within :data:`IMPLAUSIBLE_FACTOR` of
-    nominal where ``current`` had it within (``L``: :func:`.diagnose._explain`'s own rule): an item whose fit takes
-    a named constant beyond the prior's factor is compensating it, not measured, as a fit that pins a constant at
-    its box (:func:`.explain.pinned`) is. The blind rig's fresh 473 (``R`` 21 % low, named so in its round) then
-    named a 4.6 V brush drop that took ``R`` to -75 %, the held-out free run 12 times further from the log; 165 (a
-    dead band beside a wrong ``R``) named a brush drop beside both that took ``R`` to -75 %."""
-    return physical(f) and all(implausible_factor(design, f, c) is None for c in current.items
-                               if c in CONSTANTS and c != "L" and implausible_factor(design, current, c) is None)
+def _plausible(design: Design, current: Fitted) -> list[str]:
+    """The constants ``current`` names within :data:`IMPLAUSIBLE_FACTOR` of nominal (``L`` aside:
+    :func:`.diagnose._explain`'s own rule), once per round for :func:`_sound`."""
+    return [c for c in current.items if c in CONSTANTS and c != "L" and implausible_factor(design, current, c) is None]
+
+
+def _sound(physical: Callable[[Fitted], bool], plausible: Sequence[str], design: Design, f: Fitted) -> bool:
+    """Whether ``f`` is physical and leaves every ``plausible`` constant the current model names (:func:`_plausible`)
+    within :data:`IMPLAUSIBLE_FACTOR`: an item whose fit takes a named constant beyond the prior's factor is
+    compensating it, not measured, as a fit that pins a constant at its box (:func:`.explain.pinned`) is. The blind
+    rig's fresh 473 (``R`` 21 % low, named so in its round) then named a 4.6 V brush drop that took ``R`` to -75 %,
+    the held-out free run 12 times further from the log; 165 (a dead band beside a wrong ``R``) named a brush drop
+    beside both that took ``R`` to -75 %."""
+    return physical(f) and all(implausible_factor(design, f, c) is None for c in plausible)
 
 
 def _slower_first(design: Design, current: Fitted, tried: list[tuple[str, Fitted]], win: int | None,

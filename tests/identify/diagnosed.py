@@ -1,9 +1,12 @@
 """A proving-ground case diagnosed, with what the last explanation fitted (for tests that read a nuisance's or an
-effect's coefficient): the diagnosis's ``_explain`` is watched for the run."""
+effect's coefficient): the diagnosis's ``_explain`` is watched for the run; and a blind-rig case regenerated and
+diagnosed as a user would (its CSV and parameter file read back)."""
 
 from __future__ import annotations
 
+import json
 import sys
+from pathlib import Path
 from typing import Any
 
 import pytest
@@ -12,6 +15,8 @@ from bench.modelcheck import case_log
 from ocp.identify import DiagnoseResult, diagnose
 from ocp.identify.evidence import Fitted
 from ocp.identify.regression import Design
+from ocp.logs import read_log
+from ocp.model.effects import load_plant
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import make_case
@@ -32,3 +37,15 @@ def diagnosed(seed: int, angle: bool, monkeypatch: pytest.MonkeyPatch) -> tuple[
     case = make_case(seed)
     res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), case_log(case, angle=angle))
     return case, res, seen["design"], seen["sel"].final
+
+
+def blind(seed: int, directory: Path) -> tuple[DiagnoseResult, dict[str, Any]]:
+    """Blind-rig case ``seed`` (``bench/blindrig``: its own integrator, effect formulas and loggers) generated into
+    ``directory``, diagnosed from its files, and its truth file."""
+    bench = str(Path(__file__).resolve().parents[2] / "bench")
+    if bench not in sys.path:
+        sys.path.insert(0, bench)
+    from blindrig.case import generate
+
+    csv, params, truth = generate(seed, directory)
+    return diagnose(load_plant(params), read_log(csv)), json.loads(Path(truth).read_text())

@@ -11,27 +11,20 @@ is the less likely error. The controls: the proving ground's seeds 55 and 103, w
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 import pytest
 
 from bench.modelcheck import case_log
 from ocp.identify import diagnose
-from ocp.logs import read_log
-from ocp.model.effects import load_plant
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
+from tests.identify.diagnosed import blind
 from tests.proving_ground import make_case
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
-
-from blindrig.case import generate
 
 
 def test_an_inductance_beyond_a_factor_two_is_not_named_on_a_clean_log(tmp_path: Path) -> None:
-    csv, params, _ = generate(357, tmp_path)
-    d = diagnose(load_plant(params), read_log(csv))
+    d, _ = blind(357, tmp_path)
     assert d.verdict == [], d.verdict
     cal = d.calibration["L"]
     assert cal["relative"] < -0.5 and not cal["named"]  # (the fit that was named: beyond the factor)

@@ -19,34 +19,18 @@ the box edge.
 from __future__ import annotations
 
 import dataclasses
-import json
-import sys
 from pathlib import Path
-from typing import Any
 
 import pytest
 
-from ocp.identify import diagnose
-from ocp.identify.diagnose import DiagnoseResult
 from ocp.identify.explain import physical, pinned
 from ocp.identify.lsq import NAMED_BOUNDS
-from ocp.logs import read_log
-from ocp.model.effects import load_plant
-from tests.identify.diagnosed import diagnosed
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
-
-from blindrig.case import generate
-
-
-def _blind(seed: int, tmp_path: Path) -> tuple[DiagnoseResult, dict[str, Any]]:
-    csv, params, truth = generate(seed, tmp_path)
-    return diagnose(load_plant(params), read_log(csv)), json.loads(Path(truth).read_text())
+from tests.identify.diagnosed import blind, diagnosed
 
 
 @pytest.mark.parametrize("seed", [564, 473])
 def test_a_drop_that_takes_r_to_its_box_or_beyond_a_factor_two_is_not_named(seed: int, tmp_path: Path) -> None:
-    d, truth = _blind(seed, tmp_path)
+    d, truth = blind(seed, tmp_path)
     drawn = truth["meta"]["calibration_rel_errors"]["R"]  # nominal / rig - 1
     assert d.verdict == ["param:R"], d.verdict
     assert d.calibration["R"]["relative"] == pytest.approx(1.0 / (1.0 + drawn) - 1.0, abs=0.02)
@@ -55,7 +39,7 @@ def test_a_drop_that_takes_r_to_its_box_or_beyond_a_factor_two_is_not_named(seed
 
 
 def test_a_dead_band_beside_r_is_named_without_the_drop_that_compensated_r(tmp_path: Path) -> None:
-    d, truth = _blind(165, tmp_path)
+    d, truth = blind(165, tmp_path)
     assert sorted(d.verdict) == ["param:R", "voltage_deadband"], d.verdict
     assert d.calibration["R"]["relative"] == pytest.approx(
         1.0 / (1.0 + truth["meta"]["calibration_rel_errors"]["R"]) - 1.0, abs=0.02)

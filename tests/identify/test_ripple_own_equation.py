@@ -17,30 +17,18 @@ ripple: tried).
 
 from __future__ import annotations
 
-import sys
 from pathlib import Path
 
 from bench.modelcheck import case_log
 from ocp.identify import diagnose
-from ocp.identify.diagnose import DiagnoseResult
-from ocp.logs import read_log
-from ocp.model.effects import load_plant
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
+from tests.identify.diagnosed import blind
 from tests.proving_ground import make_case
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
-
-from blindrig.case import generate
-
-
-def _blind(seed: int, tmp_path: Path) -> DiagnoseResult:
-    csv, params, _ = generate(seed, tmp_path)
-    return diagnose(load_plant(params), read_log(csv))
 
 
 def test_a_ripple_under_the_torque_noise_level_is_named(tmp_path: Path) -> None:
-    d = _blind(368, tmp_path)
+    d = blind(368, tmp_path)[0]
     assert d.verdict == ["cogging"], d.verdict
     assert d.angle_periodic is not None and d.angle_periodic["periods"] == 18
     entry = d.rounds[0].entries[0]
@@ -49,7 +37,7 @@ def test_a_ripple_under_the_torque_noise_level_is_named(tmp_path: Path) -> None:
 
 
 def test_a_ripple_halving_the_torque_error_is_named_with_every_equation_at_the_floor(tmp_path: Path) -> None:
-    d = _blind(227, tmp_path)
+    d = blind(227, tmp_path)[0]
     assert sorted(d.verdict) == ["brush_drop", "cogging"], d.verdict
     assert d.angle_periodic is not None and d.angle_periodic["periods"] == 18
 
