@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ocp.identify.align import cutoff_hz, shifted, smooth
+from ocp.identify.align import cutoff_hz, smooth
 from ocp.identify.angle import drift_windows, interval_ripple, rotor_angle, speed_noise, track_phase
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE, ThrustLag, make_effect
@@ -20,7 +20,7 @@ from ocp.model.params import MotorParams
 from ocp.model.plant import NUMPY
 
 GRID = 12  # shape values per shaped effect (geometric grid)
-#: saturating voltage drops (:func:`drop_columns`)
+#: saturating voltage drops (their columns: :func:`.drops.drop_columns`)
 DROPS = ("brush_drop", "voltage_deadband")
 #: a Stribeck band is offered only where some row shows at least this share of its level (:func:`effect_columns`)
 STRIBECK_REACH = 0.5
@@ -29,13 +29,6 @@ STRIBECK_REACH = 0.5
 #: decaying as ``exp(-|r|^0.5..0.9)`` (proving ground ``--shapes``) was named with a Coulomb friction or a ``B``
 #: beside it; 0.5 offered too took Coulomb frictions (seeds 107, 126)
 STRIBECK_DECAYS = (2.0, 1.0)
-#: a driver dead band's forms (:class:`ocp.model.effects.VoltageDeadband`'s ``gap``): shifted (a dead time, the
-#: default) and a gap (a minimum pulse); with the first alone no gap of the blind rig (``bench/blind_check.py``) was
-#: named, with both 3 of the 5 its command enters (:mod:`.shape_choice` prefers the first)
-DEAD_BAND_FORMS = (0.0, 1.0)
-#: a command whose magnitude spreads by more than this (relative standard deviation) holds several levels
-#: (:func:`_levels`); a PRBS's quantised two levels spread by 0
-LEVEL_SPREAD = 0.05
 #: Coulomb friction's sign is offered at these smoothing widths ``omega_eps`` (fractions of the logged peak speed, the
 #: grid's ends; the catalogue's 0.5 rad/s at most the upper end): dry friction is a sign, sharp at zero speed, and
 #: its rotor dwells there at speeds far under 0.5 rad/s while the motor torque stays within ``+-tau_c``. The
@@ -55,7 +48,7 @@ class Column:
     key: str
     shape: float = math.nan
     #: a second shape, fixed per column: Stribeck friction's decay exponent (:data:`STRIBECK_DECAYS`), a dead
-    #: band's form (:data:`DEAD_BAND_FORMS`); grid neighbours (:func:`.select.fit_model`) share it
+    #: band's form (:data:`.drops.DEAD_BAND_FORMS`); grid neighbours (:func:`.select.fit_model`) share it
     form: float = math.nan
     #: False: zero at the rows where the rotor is at rest (:func:`at_rest`), for a model whose dry friction holds it
     at_rest: bool = True
@@ -369,51 +362,6 @@ def turn_ripple(cols: list[tuple[Column, np.ndarray]], phase: np.ndarray) -> lis
     return [(c_sin, np.vstack([z.imag, a_sin[1:]])), (c_cos, np.vstack([z.real, a_cos[1:]]))]
 
 
-def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
-                 held: tuple[np.ndarray, float] | None = None) -> list[tuple[Column, np.ndarray]]:
-    """A saturating voltage drop (:data:`DROPS`) per width [V] on a grid, (3, M) at unit amplitude, eq.
-    dc_electrical. A driver dead band (no output below ``v_db``) drops ``clip(V, +-v_db)`` (the command's sign;
-    the catalogue's smooth ``V - v_db tanh(V / v_db)`` is for the optimiser); brushes drop ``v_b`` against the
-    current, and while ``|V - k_e w| < v_b`` no current flows and the drop is ``V - k_e w``:
-    ``clip(V - k_e w, +-v_b)`` (quasi-static). The drop acts on the held command, before the low-pass the
-    equations see: it is formed on the log's command and low-passed like it (clipped after the low-pass, a step of
-    the command, a PRBS edge, passes through the band within a row, not over the low-pass's rise, and leaves a
-    residual at every edge). ``held``: the log's command (N,) [V] before the alignment shifted it by that many
-    samples: the dead band acts on each held level, before the shift mixes two of them in a row. A width no row
-    falls inside is the drop's sign times its width: a brush width so is not offered, nor a dead band's on a
-    command of one magnitude (two levels, a PRBS), where it is a drive gain that no dead band can be told from. Over
-    several magnitudes (steps to random levels) a gain scales with the level and the dead band does not
-    (:func:`_levels`): there it is offered (before session 15 it was not, and a dead band on a steps log was named
-    a brush drop, proving-ground tuning seeds 6043, 6069, 6076, 6155)."""
-    v = log.voltage[:s.v.size] if s.dt > 0 else s.v
-    x, lag = (held[0], held[1]) if held is not None and name == "voltage_deadband" and s.dt > 0 else (v, 0.0)
-    if name == "brush_drop":
-        x = v - p.k_e * s.w
-    fc = cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) if s.dt > 0 else 0.0
-    z = np.zeros_like(s.w)
-    key = "v_b" if name == "brush_drop" else "v_db"
-    v_peak = float(np.max(np.abs(s.v))) or 1.0
-    widths = _grid(0.005 * v_peak, 0.3 * v_peak)
-    cols = [(Column(name, key, b), np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size], s.dt, fc), z]))
-            for b in widths if np.any(np.abs(x) < b) or (name == "voltage_deadband" and _levels(x))]
-    gaps = [(b, np.abs(x) < b) for b in widths] if name == "voltage_deadband" else []  # (inside: lost whole)
-    return cols + [(Column(name, key, b, form=DEAD_BAND_FORMS[1]),
-                    np.vstack([z, _low(shifted(np.where(m, x, 0.0) / b, lag)[:s.v.size], s.dt, fc), z]))
-                   for b, m in gaps if m.any() and not m.all()]
-
-
-def _levels(x: np.ndarray) -> bool:
-    """Whether the magnitudes of ``x`` (M,) spread over more than one level (a relative standard deviation over
-    :data:`LEVEL_SPREAD`): then ``sign(x)`` is no gain on ``x`` (:func:`drop_columns`)."""
-    a = np.abs(x)
-    return bool(np.std(a) > LEVEL_SPREAD * np.mean(a))
-
-
-def _low(y: np.ndarray, dt: float, fc: float) -> np.ndarray:
-    """``y`` (M,) low-passed as :func:`signals` low-passes the log's channels (as it is on a sweep, ``dt`` = 0)."""
-    return smooth(y, dt, fc) if dt > 0 else y
-
-
 def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int) -> list[tuple[Column, np.ndarray]]:
     """Columns of one effect (one per shape value for shaped effects; cogging's at ``periods``/rev, turned along a
     drifting angle by :func:`turn_ripple`)."""
@@ -425,7 +373,7 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
         return [(Column(name, "tau_c", eps), _effect(name, {"tau_c": 1.0, "omega_eps": eps}, p, s))
                 for eps in _grid(COULOMB_EDGES[0] * w_peak, max(0.5, COULOMB_EDGES[1] * w_peak), COULOMB_GRID)]
     if name in DROPS:
-        return drop_columns(name, p, s, log)
+        raise ValueError(f"{name}: a voltage drop's columns are formed on the held command (.drops.drop_columns)")
     if name == "thrust_lag":
         if log.kind is LogKind.STEADY_STATE:
             return []

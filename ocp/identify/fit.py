@@ -32,8 +32,8 @@ from pydantic import BaseModel, ConfigDict, Field
 from ocp.identify.align import Alignment
 from ocp.identify.candidates import candidate
 from ocp.identify.clipping import clipped, widened
-from ocp.identify.columns import DEAD_BAND_FORMS
 from ocp.identify.diagnose import aligned, diagnose, dynamic, finite
+from ocp.identify.drops import DEAD_BAND_FORMS
 from ocp.identify.estimate import equation_error_fit, equation_scales, free_run_errors, free_run_fit
 from ocp.identify.holdout import CLIP_MARGIN
 from ocp.identify.predict import (
@@ -162,7 +162,7 @@ DEAD_BAND_STARTS = tuple(float(x) for x in np.geomspace(0.01, 0.3, 10))
 
 def dead_band_start(plant: DCMotorPlant, log: Log, effects: Sequence[str], rows: np.ndarray, noise: dict[str, float],
                     segment_s: float) -> DCMotorPlant:
-    """``plant`` with the dead band ``effects`` add (where it has none) at the form (:data:`.columns.DEAD_BAND_FORMS`:
+    """``plant`` with the dead band ``effects`` add (where it has none) at the form (:data:`.drops.DEAD_BAND_FORMS`:
     shifted, a gap; a fixed shape the fit keeps) and width (:data:`DEAD_BAND_STARTS`) whose free run predicts ``log``
     best on ``rows`` ((N,) bool); else ``plant``. From the catalogue's guess (0.1 V, a small drive's) in the shifted
     form, a 3.8 V gap was fitted at 0.003 V: a gap's residual moves only with the commands near its edge, and the

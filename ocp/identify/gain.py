@@ -7,7 +7,7 @@ are all ``1/a`` times nominal, and with ``k`` the torque balance of eq. dc_mecha
 :data:`.coverage.COMMON` is exactly that gain, ``a = 1 / (1 + x)``, on any log. Under a command of one voltage
 magnitude (two levels, a PRBS: :func:`.coverage.coverage`, ``voltage_range``) a voltage dead band's ``V0 - v_db``
 and a brush drop's ``V0 - v_b`` act as such a gain too (their columns are not offered there,
-:func:`.columns.drop_columns`); over several magnitudes a scaled command is fitted by a drop beside ``R`` or ``k``.
+:func:`.drops.drop_columns`); over several magnitudes a scaled command is fitted by a drop beside ``R`` or ``k``.
 
 The selection does not offer the gain. Where the verdict names some of these constants or drops,
 :func:`gain_rival` fits the alternative on the same held-out rows: the verdict's other items and one common relative

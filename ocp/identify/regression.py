@@ -56,7 +56,6 @@ from ocp.identify.columns import (
     Signals,
     at_rest,
     constant_columns,
-    drop_columns,
     effect_columns,
     held_still,
     nuisance_columns,
@@ -66,6 +65,7 @@ from ocp.identify.columns import (
     targets,
 )
 from ocp.identify.coverage import unseen
+from ocp.identify.drops import drop_columns
 from ocp.identify.footprint import BANDED, Footprints, grams, weighted
 from ocp.identify.resolution import rotor_tau, unresolved
 from ocp.identify.ripple import pick_periods, residualizer
@@ -265,7 +265,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     ``noise`` (per-sample channel noise, :func:`ocp.identify.predict.noise_levels`) floors the torque
     equation's weight at the smallest torque error a free run would show (:func:`visible_torque`).
     ``raw_torque``: eq. dc_mechanical on the raw rows where an angle is logged (module doc). ``held``: the command
-    (N,) [V] before the alignment shifted it, and the shift [samples] (:func:`.columns.drop_columns`)."""
+    (N,) [V] before the alignment shifted it, and the shift [samples] (:func:`.drops.drop_columns`)."""
     s = signals(log, p)
     use_raw = raw_torque and log.kind is LogKind.TIME_SERIES and log.theta is not None
     raw = raw_signals(log, log.theta) if use_raw and log.theta is not None else s

@@ -2,7 +2,7 @@
 from one that shifts every command (a dead time), on logs of the independent proving ground (``tests/proving_ground``:
 its own physics, a hard gap ``V if |V| >= v_db else 0``, its own logger and PI loop).
 
-Before the gap was offered (:data:`ocp.identify.columns.DEAD_BAND_FORMS`), a gap of 6 % of the supply came back
+Before the gap was offered (:data:`ocp.identify.drops.DEAD_BAND_FORMS`), a gap of 6 % of the supply came back
 clean though the shifted form explained 11 % of the held-out error (``bench/blind_check.py`` seed 46); the rigs here
 were drawn after that change and not used to set anything.
 """

@@ -16,7 +16,8 @@ import numpy as np
 import pytest
 
 from ocp.identify import diagnose
-from ocp.identify.columns import effect_columns, signals
+from ocp.identify.columns import signals
+from ocp.identify.drops import drop_columns
 from ocp.logs import Log, log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams, preset
@@ -38,11 +39,11 @@ def test_dead_band_columns_need_rows_inside_the_band() -> None:
     p = preset("paper-rig")
     prbs = np.where((np.arange(2000) // 37) % 3 == 1, -6.0, 6.0)  # two levels: every width below 6 V saturates
     log = _log(prbs)
-    assert effect_columns("voltage_deadband", p, signals(log, p), log, 0) == []
+    assert drop_columns("voltage_deadband", p, signals(log, p), log) == []
     ramp = _log(np.linspace(-6.0, 6.0, 2000))  # passes through every band
-    cols = effect_columns("voltage_deadband", p, signals(ramp, p), ramp, 0)
+    cols = drop_columns("voltage_deadband", p, signals(ramp, p), ramp)
     assert all(c.item == "voltage_deadband" for c, _ in cols)
-    # both forms (columns.DEAD_BAND_FORMS) at each of the 12 widths: shifted, and a gap
+    # both forms (drops.DEAD_BAND_FORMS) at each of the 12 widths: shifted, and a gap
     assert sorted(c.form for c, _ in cols if not c.plain) == [1.0] * 12 and sum(c.plain for c, _ in cols) == 12
 
 
@@ -52,7 +53,7 @@ def test_dead_band_column_is_the_low_passed_drop_of_the_held_command() -> None:
     v[1000:1400] = np.linspace(-6.0, 6.0, 400)  # a ramp: rows inside the band
     log = _log(v)
     s = signals(log, p)
-    for _, a in effect_columns("voltage_deadband", p, s, log, 0):
+    for _, a in drop_columns("voltage_deadband", p, s, log):
         # linear in the drop: the column is what the low-pass makes of clip(V, +-w) / w, bounded by one
         # (clipped after the low-pass it would follow the low-passed command through the band at every edge)
         assert np.max(np.abs(a[1])) <= 1.0 + 0.1  # (a second-order Butterworth overshoots by ~4 %)
@@ -79,12 +80,12 @@ def test_dead_band_is_offered_over_several_magnitudes_none_inside() -> None:
     levels = np.array([4.0, -6.0, 5.0, -4.5, 6.0, -5.5])
     v = np.repeat(levels, 400)
     log = _log(v)
-    cols = effect_columns("voltage_deadband", p, signals(log, p), log, 0)
+    cols = drop_columns("voltage_deadband", p, signals(log, p), log)
     assert len(cols) == 12
     settled = np.concatenate([np.arange(k * 400 + 100, (k + 1) * 400 - 100) for k in range(levels.size)])
     for _, a in cols:  # closed form: sign(V) on the rows the low-pass has settled on
         np.testing.assert_allclose(a[1][settled], np.sign(v[settled]), atol=1e-6)
-    assert effect_columns("brush_drop", p, signals(log, p), log, 0) != []  # (brushes: rows inside, as before)
+    assert drop_columns("brush_drop", p, signals(log, p), log) != []  # (brushes: rows inside, as before)
 
 
 def test_a_dead_band_on_steps_is_not_named_a_brush_drop() -> None:

@@ -1,0 +1,66 @@
+"""The regression's columns of the saturating voltage drops (:data:`.columns.DROPS`: brush contact, a driver's dead
+band), eq. dc_electrical [V], formed on the command the drive holds over a row (:func:`drop_columns`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ocp.identify.align import cutoff_hz, shifted, smooth
+from ocp.identify.columns import GRID, Column, Signals
+from ocp.logs import Log
+from ocp.model.params import MotorParams
+
+#: a driver dead band's forms (:class:`ocp.model.effects.VoltageDeadband`'s ``gap``): shifted (a dead time, the
+#: default) and a gap (a minimum pulse); with the first alone no gap of the blind rig (``bench/blind_check.py``) was
+#: named, with both 3 of the 5 its command enters (:mod:`.shape_choice` prefers the first)
+DEAD_BAND_FORMS = (0.0, 1.0)
+#: a command whose magnitude spreads by more than this (relative standard deviation) holds several levels
+#: (:func:`_levels`); a PRBS's quantised two levels spread by 0
+LEVEL_SPREAD = 0.05
+
+
+def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
+                 held: tuple[np.ndarray, float] | None = None) -> list[tuple[Column, np.ndarray]]:
+    """A saturating voltage drop (:data:`.columns.DROPS`) per width [V] on a grid, (3, M) at unit amplitude, eq.
+    dc_electrical. A driver dead band (no output below ``v_db``) drops ``clip(V, +-v_db)`` (the command's sign;
+    the catalogue's smooth ``V - v_db tanh(V / v_db)`` is for the optimiser); brushes drop ``v_b`` against the
+    current, and while ``|V - k_e w| < v_b`` no current flows and the drop is ``V - k_e w``:
+    ``clip(V - k_e w, +-v_b)`` (quasi-static). The drop acts on the held command, before the low-pass the
+    equations see: it is formed on the log's command and low-passed like it (clipped after the low-pass, a step of
+    the command, a PRBS edge, passes through the band within a row, not over the low-pass's rise, and leaves a
+    residual at every edge). ``held``: the log's command (N,) [V] before the alignment shifted it by that many
+    samples: the dead band acts on each held level, before the shift mixes two of them in a row. A width no row
+    falls inside is the drop's sign times its width: a brush width so is not offered, nor a dead band's on a
+    command of one magnitude (two levels, a PRBS), where it is a drive gain that no dead band can be told from. Over
+    several magnitudes (steps to random levels) a gain scales with the level and the dead band does not
+    (:func:`_levels`): there it is offered (before session 15 it was not, and a dead band on a steps log was named
+    a brush drop, proving-ground tuning seeds 6043, 6069, 6076, 6155)."""
+    v = log.voltage[:s.v.size] if s.dt > 0 else s.v
+    x, lag = (held[0], held[1]) if held is not None and name == "voltage_deadband" and s.dt > 0 else (v, 0.0)
+    if name == "brush_drop":
+        x = v - p.k_e * s.w
+    fc = cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) if s.dt > 0 else 0.0
+    z = np.zeros_like(s.w)
+    key = "v_b" if name == "brush_drop" else "v_db"
+    v_peak = float(np.max(np.abs(s.v))) or 1.0
+    widths = np.geomspace(0.005 * v_peak, 0.3 * v_peak, GRID)
+    cols = [(Column(name, key, b), np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size], s.dt, fc), z]))
+            for b in widths if np.any(np.abs(x) < b) or (name == "voltage_deadband" and _levels(x))]
+    gaps = [(b, np.abs(x) < b) for b in widths] if name == "voltage_deadband" else []  # (inside: lost whole)
+    return cols + [(Column(name, key, b, form=DEAD_BAND_FORMS[1]),
+                    np.vstack([z, _low(shifted(np.where(m, x, 0.0) / b, lag)[:s.v.size], s.dt, fc), z]))
+                   for b, m in gaps if m.any() and not m.all()]
+
+
+def _levels(x: np.ndarray) -> bool:
+    """Whether the magnitudes of ``x`` (M,) spread over more than one level (a relative standard deviation over
+    :data:`LEVEL_SPREAD`): then ``sign(x)`` is no gain on ``x`` (:func:`drop_columns`)."""
+    a = np.abs(x)
+    return bool(np.std(a) > LEVEL_SPREAD * np.mean(a))
+
+
+def _low(y: np.ndarray, dt: float, fc: float) -> np.ndarray:
+    """``y`` (M,) low-passed as :func:`.columns.signals` low-passes the log's channels (on a sweep, ``dt`` = 0: as it
+    is)."""
+    return smooth(y, dt, fc) if dt > 0 else y
