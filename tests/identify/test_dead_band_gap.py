@@ -5,12 +5,19 @@ its own physics, a hard gap ``V if |V| >= v_db else 0``, its own logger and PI l
 Before the gap was offered (:data:`ocp.identify.drops.DEAD_BAND_FORMS`), a gap of 6 % of the supply came back
 clean though the shifted form explained 11 % of the held-out error (``bench/blind_check.py`` seed 46); the rigs here
 were drawn after that change and not used to set anything.
+
+A gap is offered at widths put where the command's rows are too (:func:`ocp.identify.drops.gap_widths`). On the
+shifted form's geometric grid alone, a gap the command enters only briefly fell between two widths, one with no row
+under it and the next a third beyond it, and was missed: the blind rig's seeds 534 (a 0.93 V gap, a 1 kHz ramp
+from 0.84 V that never reverses: 1.9 % of its rows inside) and 401 (a 1.93 V gap beside a thrust lag, a 500 Hz ramp:
+1.6 % inside), regenerated here with their truth files as oracles.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -18,6 +25,7 @@ import pytest
 from ocp.identify import diagnose, fit
 from ocp.logs import Log, log_from_arrays
 from ocp.model.effects import VoltageDeadband, load_plant
+from tests.identify.diagnosed import blind
 from tests.proving_ground.cases import _nominal, draw_motor
 from tests.proving_ground.excite import pi_loop
 from tests.proving_ground.logger import Logger, record
@@ -73,3 +81,12 @@ def test_fit_takes_the_gap_form() -> None:
     (db,) = [e for e in r.plant.effects if isinstance(e, VoltageDeadband)]
     assert db.gap == 1.0 and abs(db.v_db / band - 1.0) < 0.3, db
     assert r.after["current"] < 0.5 * r.before["current"], (r.before, r.after)
+
+
+@pytest.mark.parametrize("seed", [534, 401])
+def test_a_gap_the_command_enters_briefly_is_named_at_its_width(seed: int, tmp_path: Path) -> None:
+    d, truth = blind(seed, tmp_path)
+    assert truth["rig"]["deadband_mode"] == "zero"  # (the premise: the rig's gap, nothing passed inside)
+    assert sorted(d.verdict) == sorted(truth["labels"]), d.verdict
+    found = next(e for r in d.rounds for e in r.entries if e.name == "voltage_deadband" and e.significant).parameters
+    assert found["gap"] == 1.0 and found["v_db"] == pytest.approx(truth["rig"]["deadband"], rel=0.1), found

@@ -17,7 +17,7 @@ import pytest
 
 from ocp.identify import diagnose
 from ocp.identify.columns import signals
-from ocp.identify.drops import drop_columns
+from ocp.identify.drops import drop_columns, gap_widths
 from ocp.logs import Log, log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams, preset
@@ -43,8 +43,14 @@ def test_dead_band_columns_need_rows_inside_the_band() -> None:
     ramp = _log(np.linspace(-6.0, 6.0, 2000))  # passes through every band
     cols = drop_columns("voltage_deadband", p, signals(ramp, p), ramp)
     assert all(c.item == "voltage_deadband" for c, _ in cols)
-    # both forms (drops.DEAD_BAND_FORMS) at each of the 12 widths: shifted, and a gap
-    assert sorted(c.form for c, _ in cols if not c.plain) == [1.0] * 12 and sum(c.plain for c, _ in cols) == 12
+    # both forms (drops.DEAD_BAND_FORMS): shifted at each of the 12 widths; a gap at those and at up to
+    # drops.GAP_WIDTHS (24) more put where the rows are (drops.gap_widths), from 0.5 % of the rows inside to the share
+    # under the largest shifted width (0.3 of the peak: 30 % of a ramp's rows)
+    plain = sorted(c.shape for c, _ in cols if c.plain)
+    gaps = [c.shape for c, _ in cols if not c.plain]
+    assert len(plain) == 12 and {c.form for c, _ in cols if not c.plain} == {1.0} and set(plain) <= set(gaps)
+    inside = [float(np.mean(np.abs(ramp.voltage) < b)) for b in sorted(set(gaps) - set(plain))]
+    assert 16 <= len(inside) <= 24 and 0.004 <= min(inside) <= 0.01 and 0.25 <= max(inside) <= 0.3
 
 
 def test_dead_band_column_is_the_low_passed_drop_of_the_held_command() -> None:
@@ -99,3 +105,22 @@ def test_a_dead_band_on_steps_is_not_named_a_brush_drop() -> None:
     assert res.verdict == ["voltage_deadband"]
     fitted = res.ranking[0].parameters["v_db"]
     assert fitted == pytest.approx(case.truth.e("voltage_deadband", "v_db"), rel=0.05)
+
+
+def test_gap_widths_sit_just_above_logged_magnitudes_where_the_rows_are() -> None:
+    """A ramp from 0.84 to 7.5 V that never reverses (as the blind rig's 534): the shifted form's geometric widths
+    have none between 0.74 V (no row under it) and 1.07 V (a third of its rows beyond a 0.93 V band); the gap's widths
+    added to them are each the next float above a logged magnitude, with rows under them in a geometric progression
+    (0.5 % of the rows to the share under the largest width, 24 steps), so one is within 2 % of that band."""
+    x = np.linspace(0.84, 7.5, 16000)
+    widths = np.geomspace(0.005 * 7.5, 0.3 * 7.5, 12)
+    got = gap_widths(x, widths)
+    assert np.all(np.diff(got) > 0) and set(widths) <= set(got)  # (the grid's widths kept)
+    b = np.setdiff1d(got, widths)
+    assert np.all(np.isin(np.nextafter(b, -np.inf), x))
+    inside = np.array([np.sum(x < w) for w in b])
+    ratio = inside[1:] / inside[:-1]
+    assert b.size == 24 and inside[0] == 80 and inside[-1] == np.sum(x < widths[-1])
+    np.testing.assert_allclose(ratio, ratio[0], rtol=0.1)  # (geometric, to a row's rounding)
+    assert np.min(np.abs(b / 0.93 - 1.0)) < 0.02
+    assert not any(0.84 < w < 1.068 for w in widths)  # (the premise)
