@@ -52,6 +52,21 @@ def test_a_constant_beyond_the_tolerance_is_named(tmp_path: Path) -> None:
     assert res.calibration["B"]["named"] and res.calibration["B"]["relative"] == pytest.approx(0.43, abs=0.1)
 
 
+def test_a_named_constant_is_quoted_as_the_final_model_carries_it(tmp_path: Path) -> None:
+    """Sweep 55: ``c_f`` 49.9 % off beside a force offset. ``c_f`` won its round at +38.9 % beside a thrust asymmetry
+    the backward step later dropped; the final model, refitted, carries +49.3 %. The calibration table and the
+    verdict's sentence quote that (before session 52 both gave the round's +38.9 %), the sentence the round's value
+    beside it. Oracles: the drawn error, and the plant the diagnosis returns."""
+    sw = make_sweep(55)
+    assert sw.expected == frozenset({"force_offset", "param:c_f"})
+    res = diagnose(_plant(sw), _log(sw, tmp_path))
+    cal = res.calibration["c_f"]
+    assert cal["named"] and cal["fitted"] == pytest.approx(res.plant.params.c_f, rel=1e-12)
+    assert cal["relative"] == pytest.approx(sw.truth.c_f / sw.nominal["c_f"] - 1, abs=0.02)
+    sentence = next(e for e in res.explanations if e.startswith("c_f correction"))
+    assert f"({100 * cal['relative']:+.1f} %)" in sentence and "When it won its round" in sentence
+
+
 def test_the_motor_constant_is_corrected_as_one_where_both_equations_judge_it(tmp_path: Path) -> None:
     """Sweep 173: the propeller drag ``c_tau`` is off. Offered ``k_t`` alone (unphysical in SI, where k_t = k_e), the
     sweep named it: a propeller's current grows as w^2, as its drag does. Where the torque and armature equations are
