@@ -291,11 +291,26 @@ def verdict_sentence(item: str, won: Fitted, before: Fitted, final: Fitted, p: M
     value: a correction that shifts as others join shares the residual with them."""
     f = final if item in final.items else won
     text = with_fall(explain(item, item_values(design, f, item, p), p, design, f), design, before, won, item)
-    if item in CONSTANTS and abs(relative(design, f, item) - (x0 := relative(design, won, item))) > 0.01:
-        v0 = float(getattr(p, KEYS[item][0]))
-        text = text.rstrip(".") + f". When it won its round: {v0 * (1 + x0):.4g} {UNITS[item]} ({100 * x0:+.1f} %)."
+    if item in CONSTANTS:
+        text = text.rstrip(".") + won_at(float(getattr(p, KEYS[item][0])), relative(design, f, item),
+                                         relative(design, won, item), UNITS[item])
     fall = 1.0 - won.score / before.score if before.score > 0 else 0.0
     return f"{text.rstrip('.')}. Held-out error down {100 * fall:.0f} %."
+
+
+#: a constant whose relative error moved more than this since the round it won also gives that round's value
+#: (:func:`won_at`)
+MOVED = 0.01
+
+
+def won_at(nominal: float, x: float, x0: float, unit: str) -> str:
+    """The clause giving a constant's value when it won its round, its relative error ``x0`` (``nominal`` [``unit``]),
+    where its final error ``x`` moved by more than :data:`MOVED` since (a correction that shifts as other items join
+    it shares the residual with them); else empty. Both routes' verdict sentences use it (:func:`verdict_sentence`,
+    :func:`.steady_diagnose._final`)."""
+    if abs(x - x0) <= MOVED:
+        return ""
+    return f". When it won its round: {nominal * (1 + x0):.4g} {unit} ({100 * x0:+.1f} %)"
 
 
 def with_fall(text: str, design: Design, before: Fitted, f: Fitted, item: str) -> str:

@@ -27,6 +27,7 @@ from ocp.identify.candidates import Candidate, all_candidates, candidate
 from ocp.identify.coverage import blind_spots
 from ocp.identify.diagnose import DiagnoseOptions, DiagnoseResult, RankEntry, Round, Score, finite
 from ocp.identify.equations import EquationStatus, allowed, checked, noise, residuals, statuses
+from ocp.identify.explain import won_at
 from ocp.identify.signs import check_point_signs
 from ocp.identify.steady import ROUTE, UNITS, direction_maps, fit_candidates, score
 from ocp.logs import Log
@@ -209,18 +210,18 @@ def _final(plant: DCMotorPlant, final: DCMotorPlant, constants: list[Candidate],
     them, and each named constant's candidate and evidence from its round) as the ``final`` model carries them, in
     place, as the dynamic check quotes them (:func:`.explain.verdict_sentence`): later rounds refit the constants
     chosen before them, and the backward step refits all (a constant it drops goes back to ``plant``'s value). A
-    constant that moved more than a point since its round also gives that round's value. On the proving ground's
-    sweeps 0..199 (``bench/pg_sweeps.py``) 11 tables were more than a point off the final plant, in 9 of them further
-    from the drawn error (55: ``c_f`` +38.9 % in its round, +49.3 % final, +49.9 % drawn)."""
+    constant that moved more than a point since its round also gives that round's value (:func:`.explain.won_at`).
+    On the proving ground's sweeps 0..199 (``bench/pg_sweeps.py``) 11 tables were more than a point off the final
+    plant, in 9 of them further from the drawn error (55: ``c_f`` +38.9 % in its round, +49.3 % final, +49.9 %
+    drawn)."""
     explanations, said, won = text
     for c in constants:
         x0 = calibration[c.param_key]["relative"]
         calibration[c.param_key] = {**_calibrated(plant, final, c, tol), "named": c.name in verdict}
         if c.name in verdict and c.name in won:  # (one the backward step dropped has its sentence replaced)
-            x = calibration[c.param_key]["relative"]
-            moved = (f". When it won its round: {calibration[c.param_key]['nominal'] * (1 + x0):.4g} "
-                     f"{c.units()[c.param_key]} ({100 * x0:+.1f} %)") if abs(x - x0) > 0.01 else ""
-            sentence = _sentence(c.explain(plant, final) + moved, won[c.name][1])
+            cal = calibration[c.param_key]
+            moved = won_at(cal["nominal"], cal["relative"], x0, cal["unit"])
+            sentence = _sentence(c.explain(plant, final).rstrip(".") + moved, won[c.name][1])
             explanations[explanations.index(said[c.name])] = sentence
             said[c.name] = sentence
 
