@@ -205,9 +205,9 @@ def _backward(plant: DCMotorPlant, log: Log, chosen: list[Candidate], verdict: l
 
 def _final(plant: DCMotorPlant, final: DCMotorPlant, constants: list[Candidate], verdict: list[str],
            calibration: dict[str, dict[str, Any]],
-           text: tuple[list[str], dict[str, str], dict[str, tuple[Candidate, str]]], tol: float) -> None:
+           text: tuple[list[str], dict[str, str], dict[str, str]], tol: float) -> None:
     """``calibration`` and the named constants' sentences (``text``: the explanations, each named item's sentence in
-    them, and each named constant's candidate and evidence from its round) as the ``final`` model carries them, in
+    them, and each named constant's evidence from its round) as the ``final`` model carries them, in
     place, as the dynamic check quotes them (:func:`.explain.verdict_sentence`): later rounds refit the constants
     chosen before them, and the backward step refits all (a constant it drops goes back to ``plant``'s value). A
     constant that moved more than a point since its round also gives that round's value (:func:`.explain.won_at`).
@@ -221,7 +221,7 @@ def _final(plant: DCMotorPlant, final: DCMotorPlant, constants: list[Candidate],
         if c.name in verdict and c.name in won:  # (one the backward step dropped has its sentence replaced)
             cal = calibration[c.param_key]
             moved = won_at(cal["nominal"], cal["relative"], x0, cal["unit"])
-            sentence = _sentence(c.explain(plant, final).rstrip(".") + moved, won[c.name][1])
+            sentence = _sentence(c.explain(plant, final).rstrip(".") + moved, won[c.name])
             explanations[explanations.index(said[c.name])] = sentence
             said[c.name] = sentence
 
@@ -245,14 +245,14 @@ def diagnose_points(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | No
     rows = (~test, test)
     current, explanations, rounds = plant, [], []
     said: dict[str, str] = {}  # a named item's sentence in explanations
-    won: dict[str, tuple[Candidate, str]] = {}  # a named constant and its sentence's evidence, from its round
+    won: dict[str, str] = {}  # a named constant's sentence's evidence, from its round
 
     def name_it(name: str, text: str, cand: Candidate | None = None, evidence: str = "") -> None:
         verdict.append(name)
         explanations.append(text)
         said[name] = text
         if cand is not None and cand.is_param:
-            won[name] = (cand, evidence)
+            won[name] = evidence
 
     verdict: list[str] = []
     chosen: list[Candidate] = []
