@@ -68,9 +68,11 @@ from ocp.identify.explain import (
 from ocp.identify.gain import gain_rival
 from ocp.identify.holdout import Split, split
 from ocp.identify.inductance import (
+    FILTER_MIMICS,
     TIMING_MIMICS,
     delay_rival,
     filter_headroom,
+    filter_mimics,
     inductance_wins,
     open_timing,
     timed_inductance,
@@ -287,11 +289,15 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     work = log if delay is not None else aligned  # free runs: the delay, if called, is in the plant
     held = (log.voltage, switched(max(align.samples - own, 0.0), tau))  # (the drive's dead band acts before the shift)
 
-    def judged(design: Design, f: Fitted) -> bool:  # a named L against the timing that mimics it, on free runs
-        return inductance_wins(plant, plant_of(plant, design, f, delay), f.items, log,
-                               None if delay is not None else align.samples - own, tau,
-                               functools.partial(_free_error, sp=sp, noise=noise, seg=seg), opt.min_improvement,
-                               opt.max_logging_skew)
+    def judged(design: Design, f: Fitted) -> str | None:  # why a named L is not (what mimics it, on free runs)
+        final, shift = plant_of(plant, design, f, delay), None if delay is not None else align.samples - own
+        error = functools.partial(_free_error, sp=sp, noise=noise, seg=seg)
+        if not inductance_wins(plant, final, f.items, log, shift, tau, error, opt.min_improvement,
+                               opt.max_logging_skew):
+            return TIMING_MIMICS
+        mimic = "L" in design.one_sided and filter_mimics(plant, final, log, shift, tau,
+                                                           functools.partial(error, channels=("omega",)))
+        return FILTER_MIMICS if mimic else None
 
     stall = stall_torque(plant.params, log.voltage)
     design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align, held,
@@ -349,7 +355,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],
              noise: dict[str, float], opt: DiagnoseOptions, delayed: bool,
              progress: Callable[[float], None] | None, align: Alignment,
-             held: tuple[np.ndarray, float] | None = None, judged: Callable[[Design, Fitted], bool] | None = None,
+             held: tuple[np.ndarray, float] | None = None, judged: Callable[[Design, Fitted], str | None] | None = None,
              stall: float = math.inf) -> tuple[Design, Selection]:
     """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
     ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
@@ -379,12 +385,15 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
                align.identified else "L/R is under two samples and " if "L" in design.slack else "") + \
               ("L would have to be off by more than a factor two: a timing error of the command or of the current's "
                "sensor explains the armature equation as well")
-    elif judged is not None and "L" in sel.final.items and not judged(design, sel.final):
-        why = TIMING_MIMICS
-    if why is not None:  # L is unresolved, the selection redone
+    elif judged is not None and "L" in sel.final.items:
+        why = judged(design, sel.final)
+    if why == FILTER_MIMICS:  # free above nominal, as a filter may raise it; the selection redone
+        design.above["L"], design.one_sided["L"] = math.inf, why
+    elif why is not None:  # L is unresolved, the selection redone
         for box in (design.slack, design.above, design.one_sided):
             box.pop("L", None)
         design.unresolved["L"] = why
+    if why is not None:
         sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
                      opt.ambiguity_margin, physical=ok)
     return design, sel
@@ -428,11 +437,13 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
     return delayed <= (1.0 - opt.min_improvement) * min(conv)
 
 
-def _free_error(p: DCMotorPlant, x: Log, sp: Split, noise: dict[str, float], seg: float) -> float:
-    """Held-out free-run error of ``p`` on ``x`` in speed and current, noise units, about their held-out means (a
-    sensor's constant offset, which every timing shares, decides nothing): what a timing rival is judged by."""
+def _free_error(p: DCMotorPlant, x: Log, sp: Split, noise: dict[str, float], seg: float,
+                channels: tuple[str, ...] = ("omega", "current")) -> float:
+    """Held-out free-run error of ``p`` on ``x`` in speed and current (``channels``), noise units, about their
+    held-out means (a sensor's constant offset, which every timing shares, decides nothing): what a timing rival
+    is judged by."""
     e = score(p, x, sp.test, noise, seg, centred=True, sensor=False).rms
-    return math.hypot(e["omega"] / noise["omega"], e["current"] / noise["current"])
+    return math.hypot(*(e[c] / noise[c] for c in channels))
 
 
 def _allowed(opt: DiagnoseOptions) -> set[str]:

@@ -80,13 +80,13 @@ def applied(design: Design, f: Fitted, const: str) -> float:
     """The relative error of ``const`` the calibrated plant takes: the fitted one, except where the log cannot
     resolve the constant (:attr:`.regression.Design.unresolved`: its column is then a free nuisance, e.g. ``L``
     under two samples taking up a current filter, fitted at 5x or 3e7x nominal) or only one side of it
-    (:attr:`.regression.Design.one_sided`: ``L`` above nominal is the logger's filter or timing): there the
-    nominal value stays. A plant optimised under current limits with a filter's apparent inductance would
+    (:attr:`.regression.Design.one_sided`: ``L`` above nominal, unless named, is the logger's filter or timing):
+    there the nominal value stays. A plant optimised under current limits with a filter's apparent inductance would
     under-predict its current peaks."""
     x = relative(design, f, const)
     if const in design.unresolved:
         return 0.0
-    return min(x, 0.0) if const in design.one_sided else x
+    return min(x, 0.0) if const in design.one_sided and const not in f.items else x
 
 
 def params_of(p: MotorParams, design: Design, f: Fitted) -> MotorParams:

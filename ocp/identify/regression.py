@@ -150,7 +150,7 @@ class Design:
     #: the apparent inductance's relative rise per sample of current lag, ``dt R / L`` (0: not used): a model's
     #: ``L`` box is widened above by the ``current_lag`` that model fits (:func:`.select.fit_model`)
     lag_inductance: float = 0.0
-    #: constants the log resolves on one side only (free above nominal, named only below), with the reason
+    #: constants the log resolves loosely on one side (above nominal: unnamed, they calibrate nothing), with the reason
     one_sided: dict[str, str] = field(default_factory=dict)
     #: constants the log does not exercise, calibrated but never named, with the reason (:func:`.coverage.unseen`)
     unseen: dict[str, str] = field(default_factory=dict)

@@ -22,6 +22,7 @@ import pytest
 
 from ocp.identify import diagnose
 from ocp.identify.align import LAG_STEP, Alignment, spread
+from ocp.identify.inductance import FILTER_MIMICS
 from ocp.logs import Log, log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams
@@ -69,6 +70,38 @@ def test_low_inductance_named_under_two_samples() -> None:
     res = diagnose(DCMotorPlant(p), log)
     assert res.verdict == ["param:L"]
     assert res.calibration["L"]["relative"] == pytest.approx(-0.4, abs=0.1)
+
+
+def test_high_inductance_named_under_two_samples_where_the_speed_shows_it() -> None:
+    """3013: a clean 1 kHz draw, true L/R 1.05 samples, no filter. Told ``L`` 40 % too low (true = 1.4 nominal), the
+    code before session 54 left ``L`` free above nominal under two samples (a filter could raise it): of the 135
+    clean draws 3000..3199 under two samples told so, it named none, this code 14 (``/tmp`` probe, session 54's
+    note). The fitted ``L`` is beyond the box the timing and the measured filter leave, and predicts the held-out
+    speed better than the nominal one (a filter would not), so it is named, and the calibrated plant takes it."""
+    log, p = _told(3013, 0.4)
+    _, _, filt, l_over_r = _clean(3013)
+    assert filt == 0.0 and l_over_r == pytest.approx(1.05, abs=0.02)
+    res = diagnose(DCMotorPlant(p), log)
+    assert res.verdict == ["param:L"]
+    cal = res.calibration["L"]
+    assert cal["relative"] == pytest.approx(0.4, abs=0.2) and cal["applied"] == cal["relative"]
+
+
+def test_filter_raised_inductance_not_named_where_the_speed_denies_it() -> None:
+    """3046 of the ``constant`` draws: ``k`` 14.7 % low, the current read through a 0.56-sample filter at an L/R of
+    0.80 samples (apparent ``L`` 70 % high). The torque equation measured a 0.38-sample lag, too little to box the
+    fitted ``L`` (87 % high); the nominal ``L`` predicts the held-out speed better, so the filter is the likelier
+    cause: ``L`` is not named, and stays nominal in the calibrated plant."""
+    case = make_case(3046, kind="constant")
+    lg = case.logger
+    assert (1.0 - lg.alpha) / lg.alpha == pytest.approx(0.56, abs=0.01) and case.constant_error == {"k": pytest.approx(
+        -0.147, abs=0.001)}
+    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
+    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
+    assert res.verdict == ["param:k"]
+    cal = res.calibration["L"]
+    assert cal["unresolved"] == FILTER_MIMICS and cal["relative"] > 0.5 and cal["applied"] == 0.0
 
 
 def test_right_inductance_under_two_samples_not_named() -> None:
