@@ -16,6 +16,7 @@ nominal constants; its verdict is compared with the truth.
     python bench/modelcheck.py --n 200 --first 2000 --noise-free --json quiet.json   # the same logs without noise
     python bench/modelcheck.py --n 200 --first 2000 --no-angle --json speed.json   # encoders exported without angle
     python bench/modelcheck.py --n 200 --first 2000 --shapes --json shaped.json   # friction/ripple off-catalogue
+    python bench/modelcheck.py --n 200 --first 3000 --kind constant --json c.json   # every draw of one kind
     python bench/modelcheck.py --records a.json --audit --cache DIR --json a+.json   # + the labels' audit (below)
 
 ``--audit``: each label's footprint left after calibration (:mod:`tests.proving_ground.calibration`: the proving
@@ -64,18 +65,23 @@ def generator_stamp() -> str:
     return h.hexdigest()[:12]
 
 
-def load_case(seed: int, cache: str | None, shapes: bool = False) -> Any:
+def _prefix(shapes: bool, kind: str | None) -> str:
+    """A cached file's name prefix: a shaped case or one of a forced kind is another draw than the seed's own."""
+    return ("shaped-" if shapes else "") + (f"{kind}-" if kind else "")
+
+
+def load_case(seed: int, cache: str | None, shapes: bool = False, kind: str | None = None) -> Any:
     """Proving-ground case ``seed``, generated, or read from (and written to) the ``cache`` folder (under the
     generator's :func:`generator_stamp`); ``shapes``: with friction and ripple shapes outside the catalogue
-    (:func:`tests.proving_ground.cases.draw_shape`)."""
+    (:func:`tests.proving_ground.cases.draw_shape`); ``kind``: of this kind (``make_case``'s), not the seed's draw."""
     from tests.proving_ground import make_case
 
     if cache is None:
-        return make_case(seed, shapes=shapes)
-    path = Path(cache) / generator_stamp() / f"{'shaped-' if shapes else ''}case-{seed}.pkl"
+        return make_case(seed, kind, shapes=shapes)
+    path = Path(cache) / generator_stamp() / f"{_prefix(shapes, kind)}case-{seed}.pkl"
     if path.exists():
         return pickle.loads(path.read_bytes())
-    case = make_case(seed, shapes=shapes)
+    case = make_case(seed, kind, shapes=shapes)
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_bytes(pickle.dumps(case))
     return case
@@ -112,17 +118,17 @@ def case_log(case: Any, angle: bool = True) -> Any:
 
 
 def one(seed: int, cache: str | None = None, quiet: bool = False, angle: bool = True,
-        shapes: bool = False) -> dict[str, Any]:
+        shapes: bool = False, kind: str | None = None) -> dict[str, Any]:
     """Generate case ``seed`` (or read it from ``cache``) and diagnose it (``quiet``: its log recorded without
-    noise, :func:`noise_free`; ``angle=False``: without its angle column, :func:`case_log`; ``shapes``: see
-    :func:`load_case`); a JSON-ready record."""
+    noise, :func:`noise_free`; ``angle=False``: without its angle column, :func:`case_log`; ``shapes``, ``kind``:
+    see :func:`load_case`); a JSON-ready record."""
     from ocp.identify import diagnose
     from ocp.identify.coverage import COMMON_GAIN
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
 
     t0 = time.perf_counter()
-    case = load_case(seed, cache, shapes)
+    case = load_case(seed, cache, shapes, kind)
     if quiet:
         case = noise_free(case)
     t1 = time.perf_counter()
@@ -144,7 +150,7 @@ def one(seed: int, cache: str | None = None, quiet: bool = False, angle: bool = 
             "armature": case.nominal["L"] / case.nominal["R"] / case.logger.dt,
             "current_filter": (1.0 - case.logger.alpha) / case.logger.alpha,
             "constant_error": case.constant_error, "t_generate": t1 - t0, "t_diagnose": t2 - t1, "noise_free": quiet,
-            "angle": log.theta is not None, "shapes": shapes}
+            "angle": log.theta is not None, "shapes": shapes, "forced_kind": kind}
 
 
 def audit_stamp() -> str:
@@ -153,16 +159,16 @@ def audit_stamp() -> str:
                            .read_text(encoding="utf-8")).encode()).hexdigest()[:12]
 
 
-def audit(seed: int, cache: str | None, shapes: bool = False) -> dict[str, list[float]]:
+def audit(seed: int, cache: str | None, shapes: bool = False, kind: str | None = None) -> dict[str, list[float]]:
     """Case ``seed``'s labels' footprints after calibration (noise levels (3,) each), read from (and written to)
-    ``cache`` under :func:`audit_stamp` (``shapes``: of :func:`load_case`'s shaped case)."""
+    ``cache`` under :func:`audit_stamp` (``shapes``, ``kind``: of :func:`load_case`'s case)."""
     from tests.proving_ground.calibration import audit as footprints
 
-    path = Path(cache) / generator_stamp() / f"audit-{audit_stamp()}" / f"{'shaped-' if shapes else ''}{seed}.json" \
+    path = Path(cache) / generator_stamp() / f"audit-{audit_stamp()}" / f"{_prefix(shapes, kind)}{seed}.json" \
         if cache else None
     if path is not None and path.exists():
         return dict(json.loads(path.read_text(encoding="utf-8")))
-    out = footprints(load_case(seed, cache, shapes))
+    out = footprints(load_case(seed, cache, shapes, kind))
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(out), encoding="utf-8")
@@ -174,7 +180,7 @@ def audited(r: dict[str, Any], cache: str | None) -> dict[str, Any]:
     calibration, :func:`tests.proving_ground.calibration.required`; the others are optional)."""
     from tests.proving_ground.calibration import required
 
-    fp = audit(r["seed"], cache, bool(r.get("shapes")))
+    fp = audit(r["seed"], cache, bool(r.get("shapes")), r.get("forced_kind"))
     return {**r, "footprints": fp, "required": sorted(required(r["expected"], fp))}
 
 
@@ -276,7 +282,7 @@ def _run(seeds: list[int], args: argparse.Namespace) -> list[dict[str, Any]]:
     with multiprocessing.get_context("spawn").Pool(args.procs) as pool:
         rows = []
         job = functools.partial(one, cache=args.cache, quiet=args.noise_free, angle=not args.no_angle,
-                                shapes=args.shapes)
+                                shapes=args.shapes, kind=args.kind)
         for k, r in enumerate(pool.imap_unordered(job, seeds), 1):
             rows.append(r)
             print(f"\r{k}/{len(seeds)}", end="", file=sys.stderr, flush=True)
@@ -311,6 +317,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--shapes", action="store_true",
                     help="Stribeck friction and ripples shaped unlike the identifier's catalogue (a decay exponent "
                          "0.5-2 for its Gaussian, harmonics at 2 and 3 times a ripple's count; other logs as without)")
+    ap.add_argument("--kind", choices=("clean", "one", "two", "constant", "constant+one"), default=None,
+                    help="every log of this kind (the seed draws the rest; other draws than the seeds' own)")
     ap.add_argument("--records", nargs="+", metavar="JSON", help="print the table of these recorded runs (--json "
                     "files, merged by seed) instead of diagnosing")
     ap.add_argument("--audit", action="store_true", help="audit every label (module doc; slow: ~10 s a label, "

@@ -93,6 +93,21 @@ def test_the_cache_is_keyed_by_the_generator(tmp_path: Path, monkeypatch: pytest
     assert mod.generator_stamp() != first
 
 
+def test_a_forced_kind_is_its_own_draw_in_the_cache(tmp_path: Path) -> None:
+    """``--kind``: seed ``s`` of a forced kind is ``make_case(s, kind)``, not the seed's own draw, and is cached apart
+    from it (a cache written by a run without ``--kind`` must not answer one with it)."""
+    import numpy as np
+
+    from tests.proving_ground import make_case
+
+    mod, seed = _bench(), 3046
+    own, forced = mod.load_case(seed, str(tmp_path)), mod.load_case(seed, str(tmp_path), kind="constant")
+    assert forced.kind == "constant" and own.kind != "constant"
+    again = mod.load_case(seed, str(tmp_path), kind="constant")  # (read back from the cache)
+    assert np.array_equal(again.columns["current"], make_case(seed, "constant").columns["current"])
+    assert sorted(p.name for p in tmp_path.glob("*/*.pkl")) == [f"case-{seed}.pkl", f"constant-case-{seed}.pkl"]
+
+
 def test_noise_free_records_the_same_run_without_noise() -> None:
     """``--noise-free``: the case's rig replayed under its logged commands and recorded by its logger without noise,
     quantisation or jitter. Oracle: the proving ground's own noiseless channels (``logged``) of that replay; and
