@@ -361,8 +361,8 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
     ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
     search residual) or was found only with the nominal armature (:attr:`.align.Alignment.nominal`: it assumed
     ``L``), ``L`` is judged beside the timing error it cannot be told from (:func:`.inductance.open_timing`).
-    A measured one: ``L`` named only where ``judged`` (:func:`.inductance.inductance_wins`) says it predicts
-    the held-out free run better than the timing that mimics it; else it is unresolved, the selection redone. No
+    A measured one: ``L`` named only where ``judged`` gives no reason against it (:func:`.inductance.inductance_wins`,
+    :func:`.inductance.filter_mimics`); else it is unresolved, or free above nominal again, the selection redone. No
     model is adopted with a dry friction or a ripple beyond ``stall`` [N m] (:func:`.explain.stall_torque`)."""
     design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True, held=held,
                    folds=list(sp.folds) or None)
