@@ -197,7 +197,8 @@ def calibration(p: MotorParams, design: Design, f: Fitted, tol: float) -> dict[s
         out[c] = {"nominal": nominal, "fitted": nominal * (1.0 + x), "relative": x, "unit": UNITS[c],
                   "applied": applied(design, f, c),  # the relative error the calibrated plant takes
                   "named": c in f.items, "within_tolerance": bool(abs(x) <= tol + 1e-9),
-                  "unresolved": design.unresolved.get(c) or design.one_sided.get(c) or design.unseen.get(c),  # (reason)
+                  "unresolved": design.unresolved.get(c) or (None if c in f.items else design.one_sided.get(c))
+                  or design.unseen.get(c),  # (why the log cannot decide it; a named one-sided constant it decided)
                   "slack": design.slack.get(c)}  # the box widened by what a nuisance mimics (Design.slack)
     return out
 

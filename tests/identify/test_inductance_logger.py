@@ -85,6 +85,7 @@ def test_high_inductance_named_under_two_samples_where_the_speed_shows_it() -> N
     assert res.verdict == ["param:L"]
     cal = res.calibration["L"]
     assert cal["relative"] == pytest.approx(0.4, abs=0.2) and cal["applied"] == cal["relative"]
+    assert cal["unresolved"] is None  # (named: the log decided it, no "cannot tell" beside the verdict)
 
 
 def test_filter_raised_inductance_not_named_where_the_speed_denies_it() -> None:
