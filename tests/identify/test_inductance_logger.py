@@ -16,6 +16,7 @@ nominal (1 + e)):
 from __future__ import annotations
 
 import functools
+from typing import Any
 
 import numpy as np
 import pytest
@@ -34,10 +35,14 @@ from tests.proving_ground import make_case
 def _clean(seed: int) -> tuple[Log, dict[str, float], float, float]:
     """The clean draw's log, its (true) constants, the current filter [samples] and L/R [samples]."""
     case = make_case(seed, kind="clean")
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
     lg = case.logger
-    return log, dict(case.nominal), (1.0 - lg.alpha) / lg.alpha, case.nominal["L"] / case.nominal["R"] / lg.dt
+    return _log(case), dict(case.nominal), (1.0 - lg.alpha) / lg.alpha, case.nominal["L"] / case.nominal["R"] / lg.dt
+
+
+def _log(case: Any) -> Log:
+    """A proving-ground case's log as the file readers give it (a jittery clock resampled to a uniform grid)."""
+    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
+    return log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
 
 
 def _told(seed: int, l_error: float) -> tuple[Log, MotorParams]:
@@ -97,9 +102,7 @@ def test_filter_raised_inductance_not_named_where_the_speed_denies_it() -> None:
     lg = case.logger
     assert (1.0 - lg.alpha) / lg.alpha == pytest.approx(0.56, abs=0.01) and case.constant_error == {"k": pytest.approx(
         -0.147, abs=0.001)}
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
-    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
+    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), _log(case))
     assert res.verdict == ["param:k"]
     cal = res.calibration["L"]
     assert cal["unresolved"] == FILTER_MIMICS and cal["relative"] > 0.5 and cal["applied"] == 0.0
