@@ -28,7 +28,9 @@ on, or for an angle ripple that wins beyond sampling noise or by the likelihood 
 itself (calibration already takes the first ``tol`` of its error, and beyond it the user wants the name), so a
 constant freed beyond it needs only to win beyond sampling noise -- or, the models being nested and scored on the
 same rows, in a paired comparison over held-out blocks or a likelihood ratio (the torque equation's likelihood
-ratio judges an effect's material fall too: on a fast, short log its rows are too few for any other test).
+ratio judges an effect's material fall too: on a fast, short log its rows are too few for any other test), or, where
+its equation is too noisy to fall by the tolerance's 10 %, on its estimate: three standard errors and half the box
+beyond its box, the held-out blocks agreeing and the equation left at its noise (:func:`.evidence.estimate_agrees`).
 An angle ripple that wins by its own test alone (its rows' independence is a fast ripple's) yields to an effect
 that scores better and is material (:func:`_slower_first`): the residual it took is slow.
 After the forward rounds, each adopted constant, then each effect but the last one adopted, is tested again
@@ -66,6 +68,7 @@ from ocp.identify.evidence import (
     beyond_scatter,
     blocks_agree,
     equations_of,
+    estimate_agrees,
     implausible_factor,
     is_material,
     own_material,
@@ -317,14 +320,15 @@ def _halves(design: Design, current: Fitted, items: Sequence[str], after: Fitted
 def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float) -> bool:
     """Whether adding ``item`` (fitted ``f``) to ``current`` wins on held-out data: beyond sampling noise
     (:func:`.evidence.beyond_scatter`), and for an effect by ``min_improvement`` too (a constant's materiality is the
-    tolerance, module doc)."""
+    tolerance, module doc: read on the held-out fall, or on its estimate, :func:`.evidence.estimate_agrees`)."""
     material = item in CONSTANTS or is_material(design, current, f, (item,), min_improvement)
     # an angle ripple's fall is material on the torque equation alone where it wins by the tests below (module doc)
     if not (material or (item == "cogging" and own_material(design, current, f, (item,), min_improvement))):
         return False
     if beyond_scatter(design, current, f, (item,)) or ratio_agrees(design, current, item, f):
         return True
-    return material and ((item in CONSTANTS and blocks_agree(design, current, item, f))
+    return material and ((item in CONSTANTS and (blocks_agree(design, current, item, f)
+                                                 or estimate_agrees(design, current, item, f)))
                          or (item == "cogging" and ripple_beyond(design, current, f)))
 
 
