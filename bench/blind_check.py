@@ -5,14 +5,17 @@ Usage::
     python bench/blind_check.py --first 0 --n 60 --procs 2 --dir /work/blindcache --json /work/blind_0.json
 
 Generates ``case-<seed>.*`` into DIR (kept unless --regen), runs the checker on each through its CLI
-(subprocess, timeout 120 s) and prints the exact-verdict rate, false alarms on clean logs, per-label
-confusion, exact rates by case kind and by logging-rate band, timing and every wrong verdict.
+(subprocess, timeout 120 s; the code of the tree this script is in, :data:`TREE`, first on its path: the installed
+CLI is an editable install of one checkout, and run from another worktree it checked that one) and prints the
+exact-verdict rate, false alarms on clean logs, per-label confusion, exact rates by case kind and by logging-rate
+band, timing and every wrong verdict.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import subprocess
 import sys
@@ -26,6 +29,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from blindrig.case import generate
 from blindrig.draw import EFFECTS, PARAMS
 
+#: the checkout whose ``ocp`` and ``clients`` the CLI runs (PYTHONPATH, ahead of the editable install's)
+TREE = Path(__file__).resolve().parents[1]
 CLI = Path(sys.executable).with_name("thrustshape")
 if not CLI.exists():
     CLI = Path(shutil.which("thrustshape") or "thrustshape")
@@ -53,7 +58,8 @@ def run_one(seed: int, outdir: str, regen: bool, timeout: float = 120.0) -> dict
     cmd = [str(CLI), "diagnose", str(csv), "--params", str(par), "--json"]
     t1 = time.time()
     try:
-        pr = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout)
+        env = {**os.environ, "PYTHONPATH": os.pathsep.join(filter(None, (str(TREE), os.environ.get("PYTHONPATH"))))}
+        pr = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
     except subprocess.TimeoutExpired:
         rec.update(time_s=time.time() - t1, error=f"timeout {timeout} s")
         return rec
