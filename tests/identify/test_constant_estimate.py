@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 import pytest
 
+from bench.modelcheck import case_log
 from ocp.identify import diagnose, evidence, select
-from ocp.logs import Log, log_from_arrays
-from ocp.logs.timebase import uniform
+from ocp.logs import Log
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.identify.diagnosed import blind
@@ -31,8 +31,7 @@ from tests.proving_ground import make_case
 @functools.cache
 def _case(seed: int, kind: str | None = None) -> tuple[Any, Log]:
     case = make_case(seed, kind=kind) if kind else make_case(seed)
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    return case, log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    return case, case_log(case)
 
 
 def _diagnose(seed: int, kind: str | None = None, **told: float) -> Any:

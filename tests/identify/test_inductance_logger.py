@@ -16,16 +16,15 @@ nominal (1 + e)):
 from __future__ import annotations
 
 import functools
-from typing import Any
 
 import numpy as np
 import pytest
 
+from bench.modelcheck import case_log
 from ocp.identify import diagnose
 from ocp.identify.align import LAG_STEP, Alignment, spread
 from ocp.identify.inductance import FILTER_MIMICS
-from ocp.logs import Log, log_from_arrays
-from ocp.logs.timebase import uniform
+from ocp.logs import Log
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import make_case
@@ -35,14 +34,8 @@ from tests.proving_ground import make_case
 def _clean(seed: int) -> tuple[Log, dict[str, float], float, float]:
     """The clean draw's log, its (true) constants, the current filter [samples] and L/R [samples]."""
     case = make_case(seed, kind="clean")
-    lg = case.logger
-    return _log(case), dict(case.nominal), (1.0 - lg.alpha) / lg.alpha, case.nominal["L"] / case.nominal["R"] / lg.dt
-
-
-def _log(case: Any) -> Log:
-    """A proving-ground case's log as the file readers give it (a jittery clock resampled to a uniform grid)."""
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    return log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=c["omega"], theta=c.get("theta"))
+    lg, p = case.logger, case.nominal
+    return case_log(case), dict(p), (1.0 - lg.alpha) / lg.alpha, p["L"] / p["R"] / lg.dt
 
 
 def _told(seed: int, l_error: float) -> tuple[Log, MotorParams]:
@@ -102,7 +95,7 @@ def test_filter_raised_inductance_not_named_where_the_speed_denies_it() -> None:
     lg = case.logger
     assert (1.0 - lg.alpha) / lg.alpha == pytest.approx(0.56, abs=0.01) and case.constant_error == {"k": pytest.approx(
         -0.147, abs=0.001)}
-    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), _log(case))
+    res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), case_log(case))
     assert res.verdict == ["param:k"]
     cal = res.calibration["L"]
     assert cal["unresolved"] == FILTER_MIMICS and cal["relative"] > 0.5 and cal["applied"] == 0.0
