@@ -349,7 +349,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     spots = blind_spots(log, verdict, gain=gain is not None, cov=cov)
     return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
-                          spectrum_peak(design, stall), opt.tolerance, spots)
+                          spectrum_peak(design, stall, sel.ripple), opt.tolerance, spots)
 
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],

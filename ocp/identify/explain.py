@@ -233,7 +233,7 @@ def units(item: str) -> dict[str, str]:
     return dict(CATALOGUE[item].units)
 
 
-def spectrum_peak(design: Design, stall: float = math.inf) -> dict[str, Any] | None:
+def spectrum_peak(design: Design, stall: float = math.inf, why: str | None = None) -> dict[str, Any] | None:
     """The angle-periodic torque's period count (the best held-out fit, :mod:`.regression`) and amplitude [N m], the
     fraction of the torque equation's held-out residual it explains and that fraction at 1..64 periods (``shares``,
     the spectrum, and its median), the other counts the held-out rows cannot tell from it (``rivals``, ascending),
@@ -258,7 +258,7 @@ def spectrum_peak(design: Design, stall: float = math.inf) -> dict[str, Any] | N
     amp = float(design.angle.get("amplitude", 0.0))  # type: ignore[arg-type]
     unnamed = (f"its {amp:.3g} N m is more than the motor's stall torque under the log's largest command ({stall:.3g} "
                "N m): a rotor come to rest in one of its wells could not start again" if amp > stall else
-               "it does not win on held-out data")
+               why or "it does not win on held-out data")
     return {"periods": design.periods, "share": best, "median_share": float(np.median(s)), "unnamed": unnamed,
             "shares": [float(v) for v in s], "rivals": rivals, **design.angle,
             "torque_rows": "raw" if design.raw_torque else "low-passed"}

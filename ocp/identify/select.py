@@ -65,15 +65,18 @@ from ocp.identify.evidence import (
     Fitted,
     acts_alike,
     band_alike,
+    band_of,
     beyond_scatter,
     blocks_agree,
     equations_of,
     estimate_agrees,
     implausible_factor,
     is_material,
+    off_band_fall,
     own_material,
     ratio_agrees,
     ripple_beyond,
+    ripple_off_band,
     scatter,
     worst,
 )
@@ -178,6 +181,8 @@ class Selection:
     ambiguous: list[dict[str, object]]
     #: items adopted in a forward step that no longer win beside the other adopted items (not named)
     dropped: list[str] = field(default_factory=list)
+    #: why an angle ripple is not named beside the adopted Stribeck band, where it wins only on the band's rows
+    ripple: str | None = None
 
 
 def select(design: Design, pool: Sequence[str], tol: float, min_improvement: float, noise_floor: float,
@@ -205,7 +210,22 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
             items.remove(c)
             dropped.append(c)
             current = rest
-    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin, min_improvement), dropped)
+    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin, min_improvement), dropped,
+                     _ripple_off_band(design, current, tol, min_improvement))
+
+
+def _ripple_off_band(design: Design, final: Fitted, tol: float, min_improvement: float) -> str | None:
+    """Why an angle ripple is left out beside ``final``'s Stribeck band where it is not material off the band's rows
+    (:func:`.evidence.ripple_off_band`), or None."""
+    if "stribeck" not in final.items or "cogging" in final.items or not design.index("cogging"):
+        return None
+    f = fit_model(design, [*final.items, "cogging"], tol)
+    j = band_of(design, f, ("stribeck",))
+    fall = off_band_fall(design, final, f, j) if j is not None else math.inf
+    return None if fall >= min_improvement else (
+        f"beside the Stribeck band it is not material where the band does not act: on those held-out rows the torque "
+        f"equation's error falls {100 * fall:.0f} % with it (an effect needs {100 * min_improvement:.0f} %), while a "
+        "ripple shows on every row the log resolves it")
 
 
 def _forward(design: Design, pool: list[str], items: list[str], current: Fitted, tol: float, min_improvement: float,
@@ -324,6 +344,8 @@ def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement
     material = item in CONSTANTS or is_material(design, current, f, (item,), min_improvement)
     # an angle ripple's fall is material on the torque equation alone where it wins by the tests below (module doc)
     if not (material or (item == "cogging" and own_material(design, current, f, (item,), min_improvement))):
+        return False
+    if item == "cogging" and not ripple_off_band(design, current, f, min_improvement):
         return False
     if beyond_scatter(design, current, f, (item,)) or ratio_agrees(design, current, item, f):
         return True
