@@ -220,10 +220,9 @@ def _ripple_off_band(design: Design, final: Fitted, tol: float, min_improvement:
     if "stribeck" not in final.items or "cogging" in final.items or not design.index("cogging"):
         return None
     f = fit_model(design, [*final.items, "cogging"], tol)
-    j = band_of(design, f, ("stribeck",))
-    fall = off_band_fall(design, final, f, j) if j is not None else math.inf
+    fall = off_band_fall(design, final, f, j) if (j := band_of(design, f, ("stribeck",))) is not None else math.inf
     return None if fall >= min_improvement else (
-        f"beside the Stribeck band it is not material where the band does not act: on those held-out rows the torque "
+        "beside the Stribeck band it is not material where the band does not act: on those held-out rows the torque "
         f"equation's error falls {100 * fall:.0f} % with it (an effect needs {100 * min_improvement:.0f} %), while a "
         "ripple shows on every row the log resolves it")
 
@@ -283,7 +282,7 @@ def _rescue(design: Design, first: list[tuple[str, Fitted]], final: Fitted, tol:
         return None
     fits = [(a, b, fit_model(design, [a, b], tol)) for a, b in itertools.combinations(effects, 2)]
     a, b, f = min(fits, key=lambda e: e[2].score)
-    if not physical(f):
+    if not physical(f) or not _ripple_alone(design, (a, b), single, f, min_improvement):
         return None
     for before in (final, single[a], single[b]):
         if not (is_material(design, before, f, (a, b), min_improvement) and beyond_scatter(design, before, f, (a, b))):
@@ -305,12 +304,20 @@ def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], cur
     single = dict(tried[:PAIR_TOP])
     fits = [(a, b, fit_model(design, [*items, a, b], tol)) for a, b in itertools.combinations(single, 2)]
     a, b, f = min(fits, key=lambda e: e[2].score)
-    if not physical(f) or not _room(design, current, (a, b), noise_floor, f):
+    if not physical(f) or not _room(design, current, (a, b), noise_floor, f) or \
+            not _ripple_alone(design, (a, b), single, f, min_improvement):
         return None
     for before in (current, single[a], single[b]):
         if not (is_material(design, before, f, (a, b), min_improvement) and beyond_scatter(design, before, f, (a, b))):
             return None
     return [Step(current, [(a, single[a]), *[e for e in tried if e[0] != a]], a), Step(single[a], [(b, f)], b)]
+
+
+def _ripple_alone(design: Design, pair: tuple[str, str], single: dict[str, Fitted], f: Fitted, least: float) -> bool:
+    """Whether a pair adopted together (``f``) holding a ripple passes :func:`.evidence.ripple_off_band` (materiality
+    ``least``) beside the other item's own fit (``single``), as a ripple adopted alone does in :func:`_wins`."""
+    other = [i for i in pair if i != "cogging"]
+    return len(other) == 2 or ripple_off_band(design, single[other[0]], f, least)
 
 
 def _room(design: Design, current: Fitted, items: Sequence[str], noise_floor: float, after: Fitted) -> bool:

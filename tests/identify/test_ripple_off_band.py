@@ -57,3 +57,12 @@ def test_a_drawn_ripple_beside_the_band_stays_named() -> None:
     res = _result(50762, "two")
     assert sorted(res.verdict) == ["cogging", "stribeck"]
     assert "Stribeck band" not in res.angle_periodic["unnamed"]  # (named: no reason to leave it out is given)
+
+
+def test_a_ripple_adopted_in_a_pair_is_held_to_it_too(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``make_case(50168, kind="two")``: its ripple and its Stribeck band clear the test only together
+    (:func:`ocp.identify.select._pair`), and are named so. With a test off the band that refuses every ripple, the
+    pair is refused too: the pair's path asks it as a single ripple's does."""
+    assert _result(50168, "two").verdict == ["stribeck", "cogging"]
+    monkeypatch.setattr(select, "ripple_off_band", lambda *a: False)
+    assert "cogging" not in _diagnose(50168, "two").verdict
