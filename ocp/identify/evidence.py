@@ -158,11 +158,14 @@ def band_score(design: Design, f: Fitted, j: int, acts: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.maximum(total[live], 0.0) / rows[live]))) if live.any() else math.inf
 
 
-def off_band_fall(design: Design, before: Fitted, after: Fitted, j: int) -> float:
+def off_band_fall(design: Design, before: Fitted, after: Fitted) -> float:
     """The fall (a fraction) of the torque equation's held-out error from ``before`` to ``after`` on the held-out
-    rows where banded column ``j`` does NOT act (each fold's rows scored by the model fitted without them, as
-    :func:`band_score`); 0 where no row or no error is left there."""
-    assert design.footprint is not None
+    rows where ``after``'s Stribeck band (:data:`.footprint.BANDED`) does NOT act (each fold's rows scored by the model
+    fitted without them, as :func:`band_score`); ``inf`` without a band, 0 where no row or no error is left off it
+    (nothing there to tell a ripple from the band's misfit)."""
+    j = band_of(design, after, ("stribeck",))
+    if j is None or design.footprint is None:
+        return math.inf
     g, h, c, _ = design.footprint.grams(j)
     parts = [(design.g_fold[k], design.h_fold[k], design.c_fold[k]) for k in range(design.folds)] or \
         [(design.g_test, design.h_test, design.c_test)]
@@ -178,14 +181,13 @@ def off_band_fall(design: Design, before: Fitted, after: Fitted, j: int) -> floa
 
 
 def ripple_off_band(design: Design, before: Fitted, after: Fitted, min_improvement: float) -> bool:
-    """Whether an angle ripple (``after``: ``before`` plus ``cogging``) beside a Stribeck band (:data:`.footprint.
-    BANDED`) is material (``min_improvement``) on the torque equation's held-out rows where the band does not act
-    (:func:`off_band_fall`); True without a band. A ripple is periodic in the angle and shows wherever the log
-    resolves it; one that helps only where the band acts takes up the band's misfit (on 6 proving-ground logs with
-    Stribeck friction and a ripple named falsely beside it the fall off the band was -0.01 to 0.28; on 17 with both
-    drawn and named, 0.30 to 0.97: bench/modelcheck.py --kind two, seeds 50015..52555 with both drawn)."""
-    j = band_of(design, after, ("stribeck",))
-    return j is None or off_band_fall(design, before, after, j) >= min_improvement
+    """Whether an angle ripple (``after``: ``before`` plus ``cogging``) beside a Stribeck band is material
+    (``min_improvement``) on the torque equation's held-out rows where the band does not act (:func:`off_band_fall`);
+    True without a band. A ripple is periodic in the angle and shows wherever the log resolves it; one that helps only
+    where the band acts takes up the band's misfit (on 6 proving-ground logs with Stribeck friction and a ripple named
+    falsely beside it the fall off the band was -0.01 to 0.28; on 17 with both drawn and named, 0.30 to 0.97:
+    bench/modelcheck.py --kind two, seeds 50015..52555 with both drawn)."""
+    return off_band_fall(design, before, after) >= min_improvement
 
 
 def band_alike(design: Design, item: str, best: Fitted, alt: Fitted, margin: float) -> bool:

@@ -32,7 +32,8 @@ ratio judges an effect's material fall too: on a fast, short log its rows are to
 its equation is too noisy to fall by the tolerance's 10 %, on its estimate: three standard errors and half the box
 beyond its box, the held-out blocks agreeing and the equation left at its noise (:func:`.evidence.estimate_agrees`).
 An angle ripple that wins by its own test alone (its rows' independence is a fast ripple's) yields to an effect
-that scores better and is material (:func:`_slower_first`): the residual it took is slow.
+that scores better and is material (:func:`_slower_first`): the residual it took is slow; beside a Stribeck band it
+must be material on the rows the band does not act on too (:func:`.evidence.ripple_off_band`), in a pair as alone.
 After the forward rounds, each adopted constant, then each effect but the last one adopted, is tested again
 beside all the other adopted items, and dropped (a constant: calibrated, not named) where it no longer wins: a
 greedy first pick that stood for a mix of the items adopted after it (a thrust asymmetry taken first for a wake lag
@@ -65,7 +66,6 @@ from ocp.identify.evidence import (
     Fitted,
     acts_alike,
     band_alike,
-    band_of,
     beyond_scatter,
     blocks_agree,
     equations_of,
@@ -219,8 +219,7 @@ def _ripple_off_band(design: Design, final: Fitted, tol: float, min_improvement:
     (:func:`.evidence.ripple_off_band`), or None."""
     if "stribeck" not in final.items or "cogging" in final.items or not design.index("cogging"):
         return None
-    f = fit_model(design, [*final.items, "cogging"], tol)
-    fall = off_band_fall(design, final, f, j) if (j := band_of(design, f, ("stribeck",))) is not None else math.inf
+    fall = off_band_fall(design, final, fit_model(design, [*final.items, "cogging"], tol))
     return None if fall >= min_improvement else (
         "beside the Stribeck band it is not material where the band does not act: on those held-out rows the torque "
         f"equation's error falls {100 * fall:.0f} % with it (an effect needs {100 * min_improvement:.0f} %), while a "

@@ -122,5 +122,6 @@ def test_the_fall_off_the_band_is_the_held_out_error_on_the_other_rows() -> None
     d = _design(a, t, folds)
     before, after = fit_model(d, (), tol=0.5), fit_model(d, ("stribeck",), tol=0.5)
     want = 1.0 - _band_oracle(a, t, folds, [0, 1], off=True) / _band_oracle(a, t, folds, [0], off=True)
-    assert np.isclose(off_band_fall(d, before, after, 1), want, rtol=1e-9, atol=1e-12)
+    assert np.isclose(off_band_fall(d, before, after), want, rtol=1e-9, atol=1e-12)
+    assert off_band_fall(d, before, fit_model(d, ("B",), tol=0.5)) == np.inf  # (no band: nothing to judge off it)
     assert abs(want) < 0.02 < 0.25 < 1.0 - _band_oracle(a, t, folds, [0, 1]) / _band_oracle(a, t, folds, [0])
