@@ -161,8 +161,9 @@ def band_score(design: Design, f: Fitted, j: int, acts: np.ndarray) -> float:
 def off_band_fall(design: Design, before: Fitted, after: Fitted) -> float:
     """The fall (a fraction) of the torque equation's held-out error from ``before`` to ``after`` on the held-out
     rows where ``after``'s Stribeck band (:data:`.footprint.BANDED`) does NOT act (each fold's rows scored by the model
-    fitted without them, as :func:`band_score`); ``inf`` without a band, 0 where no row or no error is left off it
-    (nothing there to tell a ripple from the band's misfit)."""
+    fitted without them, as :func:`band_score`); ``inf`` without a band or without a held-out row (or error) off it:
+    nothing there to judge a ripple on (a run dwelling at low speed, where the band covers every row), and the other
+    tests decide alone."""
     j = band_of(design, after, ("stribeck",))
     if j is None or design.footprint is None:
         return math.inf
@@ -177,16 +178,16 @@ def off_band_fall(design: Design, before: Fitted, after: Fitted) -> float:
             for (gg, hh, cc), sign in ((parts[k], 1.0), ((g[k], h[k], c[k]), -1.0)):
                 total += sign * float(cc[0] - 2.0 * hh[0, idx] @ fk.x + fk.x @ gg[0][np.ix_(idx, idx)] @ fk.x)
         sse.append(max(total, 0.0))
-    return 1.0 - math.sqrt(sse[1] / sse[0]) if sse[0] > 0 else 0.0
+    return 1.0 - math.sqrt(sse[1] / sse[0]) if sse[0] > 0 else math.inf
 
 
 def ripple_off_band(design: Design, before: Fitted, after: Fitted, min_improvement: float) -> bool:
     """Whether an angle ripple (``after``: ``before`` plus ``cogging``) beside a Stribeck band is material
     (``min_improvement``) on the torque equation's held-out rows where the band does not act (:func:`off_band_fall`);
-    True without a band. A ripple is periodic in the angle and shows wherever the log resolves it; one that helps only
-    where the band acts takes up the band's misfit (on 6 proving-ground logs with Stribeck friction and a ripple named
-    falsely beside it the fall off the band was -0.01 to 0.28; on 17 with both drawn and named, 0.30 to 0.97:
-    bench/modelcheck.py --kind two, seeds 50015..52555 with both drawn)."""
+    True without a band or a row off it. A ripple is periodic in the angle and shows wherever the log resolves it; one
+    that helps only where the band acts takes up the band's misfit (on 6 proving-ground logs with Stribeck friction and
+    a ripple named falsely beside it the fall off the band was -0.01 to 0.28; on 17 with both drawn and named, 0.30 to
+    0.97: bench/modelcheck.py --kind two, seeds 50015..52555 with both drawn)."""
     return off_band_fall(design, before, after) >= min_improvement
 
 

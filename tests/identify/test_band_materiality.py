@@ -125,3 +125,13 @@ def test_the_fall_off_the_band_is_the_held_out_error_on_the_other_rows() -> None
     assert np.isclose(off_band_fall(d, before, after), want, rtol=1e-9, atol=1e-12)
     assert off_band_fall(d, before, fit_model(d, ("B",), tol=0.5)) == np.inf  # (no band: nothing to judge off it)
     assert abs(want) < 0.02 < 0.25 < 1.0 - _band_oracle(a, t, folds, [0, 1]) / _band_oracle(a, t, folds, [0])
+
+
+def test_a_band_over_every_row_leaves_nothing_to_judge_off_it() -> None:
+    """A run that never leaves the band (a rotor dwelling at low speed, as a ripple's own test runs it): no held-out
+    row off the band, so the fall there is not judged (``inf``: the ripple's other tests decide alone, as before)."""
+    a, t, folds = _rows(12, 1.5)
+    a[0, :, 1] = np.where(a[0, :, 0] >= 0.0, 1.0, -1.0)  # (the band's column at its peak on every row)
+    d = _design(a, t, folds)
+    assert d.footprint is not None and int(d.footprint.grams(1)[3][:, 0].sum()) == N  # (every held-out row)
+    assert off_band_fall(d, fit_model(d, (), tol=0.5), fit_model(d, ("stribeck",), tol=0.5)) == np.inf
