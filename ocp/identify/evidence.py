@@ -149,10 +149,7 @@ def band_score(design: Design, f: Fitted, j: int, acts: np.ndarray) -> float:
     in the equations ``acts`` (3,): each fold's rows scored by the model fitted without them."""
     assert design.footprint is not None  # (a fold's design has none: scored at the top level only)
     g, h, c, n = design.footprint.grams(j)
-    total = np.zeros(3)
-    for k, fk in enumerate(f.folds or (f,)):  # (one split: the model itself on the held-out rows)
-        idx = np.array(fk.cols, dtype=int)
-        total += c[k] - 2.0 * h[k][:, idx] @ fk.x + np.einsum("q,eqr,r->e", fk.x, g[k][:, idx][:, :, idx], fk.x)
+    total = held_sse(f, g, h, c)
     rows = n.sum(axis=0)
     live = acts & (rows > 0)
     return float(np.sqrt(np.mean(np.maximum(total[live], 0.0) / rows[live]))) if live.any() else math.inf
@@ -167,18 +164,22 @@ def off_band_fall(design: Design, before: Fitted, after: Fitted) -> float:
     j = band_of(design, after, ("stribeck",))
     if j is None or design.footprint is None:
         return math.inf
-    g, h, c, _ = design.footprint.grams(j)
-    parts = [(design.g_fold[k], design.h_fold[k], design.c_fold[k]) for k in range(design.folds)] or \
-        [(design.g_test, design.h_test, design.c_test)]
-    sse = []
-    for f in (before, after):
-        total = 0.0
-        for k, fk in enumerate(f.folds or (f,)):
-            idx = np.array(fk.cols, dtype=int)
-            for (gg, hh, cc), sign in ((parts[k], 1.0), ((g[k], h[k], c[k]), -1.0)):
-                total += sign * float(cc[0] - 2.0 * hh[0, idx] @ fk.x + fk.x @ gg[0][np.ix_(idx, idx)] @ fk.x)
-        sse.append(max(total, 0.0))
+    band = design.footprint.grams(j)[:3]
+    held = (design.g_fold, design.h_fold, design.c_fold) if design.folds else \
+        (design.g_test[None], design.h_test[None], design.c_test[None])
+    sse = [max(float(held_sse(f, *held)[0] - held_sse(f, *band)[0]), 0.0) for f in (before, after)]
     return 1.0 - math.sqrt(sse[1] / sse[0]) if sse[0] > 0 else math.inf
+
+
+def held_sse(f: Fitted, g: np.ndarray, h: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """(3,) ``f``'s held-out squared error per equation over the rows whose Gram matrices per fold are ``g``
+    (K, 3, Q, Q), ``h`` (K, 3, Q), ``c`` (K, 3): each fold's rows scored by the model fitted without them
+    (:attr:`Fitted.folds`; one split, K = 1: ``f`` itself)."""
+    total = np.zeros(3)
+    for k, fk in enumerate(f.folds or (f,)):
+        idx = np.array(fk.cols, dtype=int)
+        total += c[k] - 2.0 * h[k][:, idx] @ fk.x + np.einsum("q,eqr,r->e", fk.x, g[k][:, idx][:, :, idx], fk.x)
+    return total
 
 
 def ripple_off_band(design: Design, before: Fitted, after: Fitted, min_improvement: float) -> bool:
