@@ -11,41 +11,39 @@ is the held-out RMS of the three weighted equation residuals, ``sqrt(mean_e MS_e
 the noise); under cross-validation (:attr:`.regression.Design.g_fold`) the model is fitted once per fold on the other
 folds' rows and scored on the fold's, the squared errors pooled (each row held out once; coefficients fit on all).
 
-Forward selection adopts, while some equation's held-out RMS is above ``noise_floor``, the best-scoring item
-whose win passes its test; a constant must enter such an equation, or halve the held-out error of one it enters
-(:func:`_room`), an effect may win in any (its material fall shows an equation below the floor was not at its
-noise: the noise level is an estimate; a torque equation at 0.86 noise units that an angle ripple brought to 0.25 on
-a 10 kHz log was never explained while effects too were held to equations above the floor). Once every equation
-is at or under the floor, an effect still wins where it halves the held-out error of one it enters (:func:`_halves`,
-as a constant's room): the blind rig's seed 227, a brush drop left the torque equation at 0.65 noise units, and an
-18-period ripple took it to 0.23.
-The tests differ by item, so the best-scoring one may fail where the next passes (they are in
-:mod:`.evidence`): the score falls beyond sampling noise (the pooled score's scatter, or one
-equation's own) -- for an effect also by at least ``min_improvement`` (its materiality, on the score with every
-equation the effect does not enter counted at most at its noise level, or for a Stribeck band on the rows it acts
-on, or for an angle ripple that wins beyond sampling noise or by the likelihood ratio, on the torque equation alone:
-:func:`.evidence.own_material`); a constant's materiality is the tolerance
-itself (calibration already takes the first ``tol`` of its error, and beyond it the user wants the name), so a
-constant freed beyond it needs only to win beyond sampling noise -- or, the models being nested and scored on the
-same rows, in a paired comparison over held-out blocks or a likelihood ratio (the torque equation's likelihood
-ratio judges an effect's material fall too: on a fast, short log its rows are too few for any other test), or, where
-its equation is too noisy to fall by the tolerance's 10 %, on its estimate: three standard errors and half the box
-beyond its box, the held-out blocks agreeing and the equation left at its noise (:func:`.evidence.estimate_agrees`).
-An angle ripple that wins by its own test alone (its rows' independence is a fast ripple's) yields to an effect
-that scores better and is material (:func:`_slower_first`): the residual it took is slow; beside a Stribeck band it
-must be material on the rows the band does not act on too (:func:`.evidence.ripple_off_band`), in a pair as alone.
-After the forward rounds, each adopted constant, then each effect but the last one adopted, is tested again
-beside all the other adopted items, and dropped (a constant: calibrated, not named) where it no longer wins: a
-greedy first pick that stood for a mix of the items adopted after it (a thrust asymmetry taken first for a wake lag
-and a force offset) leaves nothing of its own once they are in.
-Where no item clears that alone, two that clear it only together (and each against the other alone) are adopted
-as a pair (:func:`_pair`). Where the forward rounds end with an equation still far from its noise (``RESCUE``), the
-best pair of the first round's best single effects starts the rounds again, if it beats their end and either effect
-alone (:func:`_rescue`): a constant can win the first round with a share of two overlapping effects.
+Forward selection adopts, while some equation's held-out RMS is above ``noise_floor``, the best-scoring item whose win
+passes its test; a constant must enter such an equation, or halve the held-out error of one it enters (:func:`_room`),
+an effect may win in any (its material fall shows an equation below the floor was not at its noise: the noise level is
+an estimate; a torque equation at 0.86 noise units that an angle ripple brought to 0.25 on a 10 kHz log was never
+explained while effects too were held to equations above the floor). Once every equation is at or under the floor, an
+effect still wins where it halves the held-out error of one it enters (:func:`_halves`, as a constant's room): the blind
+rig's seed 227, a brush drop left the torque equation at 0.65 noise units, and an 18-period ripple took it to 0.23.
+The tests differ by item, so the best-scoring one may fail where the next passes (they are in :mod:`.evidence`): the
+score falls beyond sampling noise (the pooled score's scatter, or one equation's own) -- for an effect also by at least
+``min_improvement`` (its materiality, on the score with every equation the effect does not enter counted at most at its
+noise level, or for a Stribeck band on the rows it acts on, or for an angle ripple that wins beyond sampling noise or by
+the likelihood ratio, on the torque equation alone: :func:`.evidence.own_material`); a constant's materiality is the
+tolerance itself (calibration already takes the first ``tol`` of its error, and beyond it the user wants the name), so a
+constant freed beyond it needs only to win beyond sampling noise -- or, the models being nested and scored on the same
+rows, in a paired comparison over held-out blocks or a likelihood ratio (the torque equation's likelihood ratio judges
+an effect's material fall too: on a fast, short log its rows are too few for any other test), or, where its equation is
+too noisy to fall by the tolerance's 10 %, on its estimate: three standard errors and half the box beyond its box, the
+held-out blocks agreeing and the equation left at its noise (:func:`.evidence.estimate_agrees`). An angle ripple that
+wins by its own test alone (its rows' independence is a fast ripple's) yields to an effect that scores better and is
+material (:func:`_slower_first`): the residual it took is slow; beside a Stribeck band it must be material on the rows
+the band does not act on too (:func:`.evidence.ripple_off_band`), in a pair as alone.
+After the forward rounds, each adopted constant, then each effect but the last one adopted, is tested again beside all
+the other adopted items, and dropped (a constant: calibrated, not named) where it no longer wins: a greedy first pick
+that stood for a mix of the items adopted after it (a thrust asymmetry taken first for a wake lag and a force offset)
+leaves nothing of its own once they are in.
+Where no item clears that alone, two that clear it only together (and each against the other alone) are adopted as a
+pair (:func:`_pair`). Where the forward rounds end with an equation still far from its noise (``RESCUE``), the best pair
+of the first round's best single effects starts the rounds again, if it beats their end and either effect alone
+(:func:`_rescue`): a constant can win the first round with a share of two overlapping effects.
 A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` (beyond its fit's uncertainty,
 :func:`.evidence.implausible_factor`) yields to an effect that fits as well (a prior on constant errors:
-:func:`_prefer_effects`). Then every adopted item is challenged: an alternative that swaps it for another item,
-scores within ``ambiguity_margin``, fits the item's own equations as well and wins in its place by the item's test
+:func:`_prefer_effects`). Then every adopted item is challenged: an alternative that swaps it for another item, scores
+within ``ambiguity_margin``, fits the item's own equations as well and wins in its place by the item's test
 (:func:`_challenge`) makes the verdict ``ambiguous`` (both candidates and the reason are reported) instead of a
 confident wrong name.
 """
@@ -417,11 +415,11 @@ def _prefer_effects(design: Design, tried: list[tuple[str, Fitted]], margin: flo
 
 def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitted, tol: float,
                margin: float, min_improvement: float) -> list[dict[str, object]]:
-    """Adopted items that another item explains as well on held-out data: within ``margin``, or within the
-    held-out score's own sampling scatter (:func:`.evidence.scatter`), whichever is wider, on the equations (and a
-    band's rows) the adopted item acts on too, and winning in its place by the test the adopted item passed
-    (:func:`_wins`, from the other adopted items). Where the alternative is a constant off by more than
-    :data:`IMPLAUSIBLE_FACTOR`, the reason says why the effect was preferred."""
+    """Adopted items that another item explains as well on held-out data: within ``margin``, or within the held-out
+    score's own sampling scatter (:func:`.evidence.scatter`), whichever is wider, on the equations (and a band's
+    rows) the adopted item acts on too, and winning in its place by the test the adopted item passed (:func:`_wins`,
+    from the other adopted items). Where the alternative is a constant off by more than :data:`IMPLAUSIBLE_FACTOR`,
+    the reason says why the effect was preferred."""
     margin = max(margin, scatter(design))
     out = []
     without = functools.cache(lambda a: fit_model(design, [i for i in items if i != a], tol))  # (once per item)
