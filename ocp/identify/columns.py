@@ -52,6 +52,9 @@ class Column:
     form: float = math.nan
     #: False: zero at the rows where the rotor is at rest (:func:`at_rest`), for a model whose dry friction holds it
     at_rest: bool = True
+    #: True: fitted only as a rival to an adopted item (:func:`.select._challenge`), never offered to the selection
+    #: nor in the noise level's rich fit: a dead band under a command of one magnitude (:func:`.drops.drop_columns`)
+    rival: bool = False
 
     @property
     def plain(self) -> bool:

@@ -37,11 +37,13 @@ def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
     the command, a PRBS edge, passes through the band within a row, not over the low-pass's rise, and leaves a
     residual at every edge). ``held``: the log's command (N,) [V] before the alignment shifted it by that many
     samples: the dead band acts on each held level, before the shift mixes two of them in a row. A width no row
-    falls inside is the drop's sign times its width: a brush width so is not offered, nor a dead band's on a
-    command of one magnitude (two levels, a PRBS), where it is a drive gain that no dead band can be told from. Over
-    several magnitudes (steps to random levels) a gain scales with the level and the dead band does not
-    (:func:`_levels`): there it is offered (before session 15 it was not, and a dead band on a steps log was named
-    a brush drop, proving-ground tuning seeds 6043, 6069, 6076, 6155)."""
+    falls inside is the drop's sign times its width: a brush width so is not offered. A dead band's on a command of
+    one magnitude (two levels, a PRBS) is a drive gain no selection may name, and is built as a rival only
+    (:attr:`.columns.Column.rival`): the brush drop, offered, differs from it only on the rows where the current
+    opposes the command, and where the two fit alike both are said (proving ground 14025: a 1.70 V band fitted as a
+    3.66 V brush drop, with no alternative said). Over several magnitudes (steps to random levels) a gain scales with
+    the level and the dead band does not (:func:`_levels`): there it is offered (before session 15 it was not, and a
+    dead band on a steps log was named a brush drop, proving-ground tuning seeds 6043, 6069, 6076, 6155)."""
     v = log.voltage[:s.v.size] if s.dt > 0 else s.v
     x, lag = (held[0], held[1]) if held is not None and name == "voltage_deadband" and s.dt > 0 else (v, 0.0)
     if name == "brush_drop":
@@ -51,8 +53,10 @@ def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
     key = "v_b" if name == "brush_drop" else "v_db"
     v_peak = float(np.max(np.abs(s.v))) or 1.0
     widths = np.geomspace(0.005 * v_peak, 0.3 * v_peak, GRID)
-    cols = [(Column(name, key, b), np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size], s.dt, fc), z]))
-            for b in widths if np.any(np.abs(x) < b) or (name == "voltage_deadband" and _levels(x))]
+    one = name == "voltage_deadband" and not _levels(x)  # (a rival only where no row is under the width)
+    cols = [(Column(name, key, b, rival=one and not np.any(np.abs(x) < b)),
+             np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size], s.dt, fc), z]))
+            for b in widths if np.any(np.abs(x) < b) or name == "voltage_deadband"]
     gaps = [(b, np.abs(x) < b) for b in gap_widths(x, widths)] if name == "voltage_deadband" else []  # (inside: lost)
     return cols + [(Column(name, key, b, form=DEAD_BAND_FORMS[1]),
                     np.vstack([z, _low(shifted(np.where(m, x, 0.0) / b, lag)[:s.v.size], s.dt, fc), z]))

@@ -445,6 +445,6 @@ def _effect_columns_on(name: str, p: MotorParams, log: Log, s: Signals) -> list[
 
 
 def _mid(cols: list[tuple[Column, np.ndarray]], item: str) -> float:
-    """The middle shape of ``item``'s plain columns (:attr:`.columns.Column.plain`; NaN if none)."""
-    shapes = sorted(c.shape for c, _ in cols if c.item == item and not math.isnan(c.shape) and c.plain)
+    """The middle shape of ``item``'s plain columns (:attr:`.columns.Column.plain`), not rivals; NaN if none."""
+    shapes = sorted(c.shape for c, _ in cols if c.item == item and c.plain and not (c.rival or math.isnan(c.shape)))
     return shapes[len(shapes) // 2] if shapes else math.nan

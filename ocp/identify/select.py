@@ -45,7 +45,8 @@ A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` (be
 :func:`_prefer_effects`). Then every adopted item is challenged: an alternative that swaps it for another item, scores
 within ``ambiguity_margin``, fits the item's own equations as well and wins in its place by the item's test
 (:func:`_challenge`) makes the verdict ``ambiguous`` (both candidates and the reason are reported) instead of a
-confident wrong name.
+confident wrong name. A dead band under one command magnitude (a gain) challenges a brush drop alone
+(:attr:`.columns.Column.rival`).
 """
 
 from __future__ import annotations
@@ -79,7 +80,7 @@ from ocp.identify.evidence import (
     worst,
 )
 from ocp.identify.lsq import SATURATING, score, solve
-from ocp.identify.regression import CONSTANTS, DRY, NUISANCES, Design
+from ocp.identify.regression import CONSTANTS, DROPS, DRY, NUISANCES, Design
 from ocp.identify.shape_choice import neighbours, preferred
 
 #: a pair of items is tried among this many best single challengers when none clears the test alone (:func:`_pair`)
@@ -190,7 +191,8 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
     Constants the log cannot resolve (:attr:`.regression.Design.unresolved`) are calibrated, never named;
     ``min_improvement`` applies to effects (a constant's materiality is ``tol``). A model that ``physical``
     refuses (an effect fitted outside its catalogue range, e.g. a Stribeck level of 1.8e4 N m) is never adopted."""
-    pool = [c for c in pool if c not in design.unresolved and design.index(c)]  # (no columns: not testable here)
+    offered = [c for c in pool if c not in design.unresolved and design.index(c)]  # (no columns: not testable here)
+    pool = [c for c in offered if not all(design.columns[j].rival for j in design.index(c))]
     forward = functools.partial(_forward, design, pool, tol=tol, min_improvement=min_improvement,
                                 noise_floor=noise_floor, max_items=max_items, margin=margin, physical=physical)
     items, current, steps = forward([], fit_model(design, [], tol), progress=progress)
@@ -208,8 +210,8 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
             items.remove(c)
             dropped.append(c)
             current = rest
-    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin, min_improvement), dropped,
-                     _ripple_off_band(design, current, tol, min_improvement))
+    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin, min_improvement, offered),
+                     dropped, _ripple_off_band(design, current, tol, min_improvement))
 
 
 def _ripple_off_band(design: Design, final: Fitted, tol: float, min_improvement: float) -> str | None:
@@ -414,16 +416,17 @@ def _prefer_effects(design: Design, tried: list[tuple[str, Fitted]], margin: flo
 
 
 def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitted, tol: float,
-               margin: float, min_improvement: float) -> list[dict[str, object]]:
+               margin: float, min_improvement: float, kin: Sequence[str] = ()) -> list[dict[str, object]]:
     """Adopted items that another item explains as well on held-out data: within ``margin``, or within the held-out
     score's own sampling scatter (:func:`.evidence.scatter`), whichever is wider, on the equations (and a band's
     rows) the adopted item acts on too, and winning in its place by the test the adopted item passed (:func:`_wins`,
     from the other adopted items). Where the alternative is a constant off by more than :data:`IMPLAUSIBLE_FACTOR`,
-    the reason says why the effect was preferred."""
+    the reason says why the effect was preferred. ``kin``: also challenging an adopted voltage drop (a dead band
+    offered as a rival only, :attr:`.columns.Column.rival`)."""
     margin = max(margin, scatter(design))
     out = []
     without = functools.cache(lambda a: fit_model(design, [i for i in items if i != a], tol))  # (once per item)
-    for a, b in itertools.product(items, pool):
+    for a, b in dict.fromkeys([*itertools.product(items, pool), *((d, c) for d in items if d in DROPS for c in kin)]):
         if b in items:
             continue
         alt = fit_model(design, [b if i == a else i for i in items], tol)

@@ -6,8 +6,9 @@ row and left a residual at every PRBS edge, which a second drop then explained: 
 (a 1.5 V dead band and a 5.4 ms input delay, PRBS and a ramp at 1 kHz; never the reported seeds 0..199) the dead
 band alone left the armature equation at 1.35 noise units and a 0.34 V brush drop was named beside it. Formed on
 the held levels (before the alignment's sub-sample shift mixes two of them) and low-passed like the command, the
-dead band leaves it at the noise. A width no row of the command falls inside is not offered: on a two-level
-command the drop is then a drive gain, which no dead band can be told from.
+dead band leaves it at the noise. A width no row of the command falls inside is not offered to the selection: on a
+two-level command the drop is then a drive gain, and its columns are the brush drop's rival only
+(tests/identify/test_drop_rival.py).
 """
 
 from __future__ import annotations
@@ -39,10 +40,11 @@ def test_dead_band_columns_need_rows_inside_the_band() -> None:
     p = preset("paper-rig")
     prbs = np.where((np.arange(2000) // 37) % 3 == 1, -6.0, 6.0)  # two levels: every width below 6 V saturates
     log = _log(prbs)
-    assert drop_columns("voltage_deadband", p, signals(log, p), log) == []
+    rivals = drop_columns("voltage_deadband", p, signals(log, p), log)
+    assert len(rivals) == 12 and all(c.rival for c, _ in rivals)  # (the shifted form at each width; no gap)
     ramp = _log(np.linspace(-6.0, 6.0, 2000))  # passes through every band
     cols = drop_columns("voltage_deadband", p, signals(ramp, p), ramp)
-    assert all(c.item == "voltage_deadband" for c, _ in cols)
+    assert all(c.item == "voltage_deadband" and not c.rival for c, _ in cols)
     # both forms (drops.DEAD_BAND_FORMS): shifted at each of the 12 widths; a gap at those and at up to
     # drops.GAP_WIDTHS (24) more put where the rows are (drops.gap_widths), from 0.5 % of the rows inside to the share
     # under the largest shifted width (0.3 of the peak: 30 % of a ramp's rows)
