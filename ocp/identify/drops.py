@@ -53,10 +53,10 @@ def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
     key = "v_b" if name == "brush_drop" else "v_db"
     v_peak = float(np.max(np.abs(s.v))) or 1.0
     widths = np.geomspace(0.005 * v_peak, 0.3 * v_peak, GRID)
-    one = name == "voltage_deadband" and not _levels(x)  # (a rival only where no row is under the width)
-    cols = [(Column(name, key, b, rival=one and not np.any(np.abs(x) < b)),
-             np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size], s.dt, fc), z]))
-            for b in widths if np.any(np.abs(x) < b) or name == "voltage_deadband"]
+    rival = name == "voltage_deadband" and not _levels(x) and not np.any(np.abs(x) < widths[-1])  # (no row inside)
+    cols = [(Column(name, key, b, rival=rival), np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size],
+                                                                  s.dt, fc), z]))
+            for b in widths if rival or np.any(np.abs(x) < b) or (name == "voltage_deadband" and _levels(x))]
     gaps = [(b, np.abs(x) < b) for b in gap_widths(x, widths)] if name == "voltage_deadband" else []  # (inside: lost)
     return cols + [(Column(name, key, b, form=DEAD_BAND_FORMS[1]),
                     np.vstack([z, _low(shifted(np.where(m, x, 0.0) / b, lag)[:s.v.size], s.dt, fc), z]))

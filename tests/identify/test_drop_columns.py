@@ -42,6 +42,11 @@ def test_dead_band_columns_need_rows_inside_the_band() -> None:
     log = _log(prbs)
     rivals = drop_columns("voltage_deadband", p, signals(log, p), log)
     assert len(rivals) == 12 and all(c.rival for c, _ in rivals)  # (the shifted form at each width; no gap)
+    few = prbs.copy()
+    few[::500] = 1.0  # four rows inside the wider bands: still one magnitude (drops._levels), but some rows tell
+    some = drop_columns("voltage_deadband", p, signals(_log(few), p), _log(few))
+    assert some and not any(c.rival for c, _ in some)  # offered as before, at the widths rows fall inside only
+    assert all(np.any(np.abs(few) < c.shape) for c, _ in some) and len({c.shape for c, _ in some}) < 12
     ramp = _log(np.linspace(-6.0, 6.0, 2000))  # passes through every band
     cols = drop_columns("voltage_deadband", p, signals(ramp, p), ramp)
     assert all(c.item == "voltage_deadband" and not c.rival for c, _ in cols)
