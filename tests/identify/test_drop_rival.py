@@ -47,8 +47,6 @@ def test_a_brush_drop_named_for_a_dead_band_says_the_dead_band_fits_as_well() ->
         if "brush_drop" in res.verdict:
             named += 1
             assert ("brush_drop", "voltage_deadband") in _pairs(res), (seed, res.verdict, res.ambiguous)
-            entry = next(a for a in res.ambiguous if a["alternative"] == "voltage_deadband")
-            assert entry["alternative_score"] <= entry["score"] * 1.2
     assert named >= 1, "no rig came back as a brush drop: the test shows nothing"
 
 
