@@ -44,7 +44,9 @@ GAP_TEXT = {"reversal": "the log never reverses", "low_speed": "the log spends n
             "forward": "the rotor never turns forward: the forward drag and thrust coefficients are not checked, and "
                        "what reverse rotation shows against them beyond the tolerance is the asymmetry",
             "voltage_range": "the command holds one voltage magnitude (a dead band or a brush drop then acts as a "
-                             "gain on it, which the constants take up)",
+                             "gain on it, which the constants take up; the two differ only where the current opposes "
+                             "the command: a brush drop named here is reported ambiguous where the dead band fits "
+                             "as well)",
             "ripple_reach": f"under {100 * RIPPLE_ROWS:g} % of the moving rows are slow enough to show an angle "
                             f"ripple of {MAX_PERIODS} periods/rev (the log resolves at most {{ripple_periods}} "
                             "periods/rev on half of them)"}

@@ -47,6 +47,8 @@ def test_a_brush_drop_named_for_a_dead_band_says_the_dead_band_fits_as_well() ->
         if "brush_drop" in res.verdict:
             named += 1
             assert ("brush_drop", "voltage_deadband") in _pairs(res), (seed, res.verdict, res.ambiguous)
+            spot = next(b for b in res.to_dict()["blind_spots"] if b["gap"] == "voltage_range")
+            assert "voltage_deadband" in spot["hidden"] and "where the current opposes the command" in spot["text"]
     assert named >= 1, "no rig came back as a brush drop: the test shows nothing"
 
 
