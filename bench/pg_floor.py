@@ -47,15 +47,14 @@ def floor_and_footprint(case: Any, item: str) -> tuple[float, float]:
     p = MotorParams(J=t.J, B=t.B, c_tau=t.c_tau, c_f=t.c_f, k_t=t.k, k_e=t.k, R=t.R, L=t.L)
     s = raw_signals(log, log.theta) if log.theta is not None else signals(log, p)
     theta = s.theta if s.theta is not None else np.zeros_like(s.w)
-    load = np.vectorize(load_torque, excluded={0})
-
-    def torque(x: Any) -> np.ndarray:
-        return np.asarray(load(x, s.w, theta), float)
+    def torque(x: Any) -> np.ndarray:  # the proving ground's load torque (a scalar function) on every row
+        load = load_torque(x)
+        return np.array([load(float(w), float(a)) for w, a in zip(s.w, theta, strict=True)])
 
     other = without(case, item)
     offset = t.e("current_offset", "i0")
     resid = p.k_t * (s.i - offset) - p.J * (s.w1 - s.w0) / s.dt - torque(t)
-    tau = rotor_tau(p, signals(log, p))
+    tau = rotor_tau(p, signals(log, p).w)
     rows = slice(s.w.size // 10, -(s.w.size // 10))
     r = speed_view(resid, s.dt, tau)[rows]
     lag = speed_view(nuisance_columns(p, s)["current_lag"][0], s.dt, tau)[rows]
