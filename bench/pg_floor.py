@@ -6,6 +6,10 @@ what the item alone puts there. (Calibration of the constants within the toleran
 identifier also has, can take a further share of the floor, and of the footprint.)
 
     python bench/pg_floor.py --items 6132:stribeck 113:param:B 88:cogging --cache DIR [--noise-free]
+    python bench/pg_floor.py --records a.json b.json --label stribeck --cache DIR [--noise-free]
+
+``--records``: the logs of ``bench/modelcheck.py --json`` records whose verdict missed ``--label`` where the audit
+(``bench/modelcheck.py --audit``) finds it required: which misses the equations' rows could show at all.
 
 A footprint under the floor is an item that no choice of columns can show on these rows: the equations'
 discretisation against the logger (sample means, an encoder's difference, a sub-sample skew), not noise or a
@@ -18,6 +22,7 @@ offset is taken out of the measured current.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 from typing import Any
@@ -26,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from bench.modelcheck import case_log, load_case, noise_free
+from bench.modelcheck import audited, case_log, load_case, noise_free
 from ocp.identify.align import estimate, realign
 from ocp.identify.columns import nuisance_columns, raw_signals, signals
 from ocp.identify.regression import speed_view
@@ -65,24 +70,37 @@ def floor_and_footprint(case: Any, item: str) -> tuple[float, float]:
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--items", nargs="+", required=True, help="SEED:ITEM, e.g. 6132:stribeck or 113:param:B")
+    which = ap.add_mutually_exclusive_group(required=True)
+    which.add_argument("--items", nargs="+", help="SEED:ITEM, e.g. 6132:stribeck or 113:param:B")
+    which.add_argument("--records", nargs="+", help="bench/modelcheck.py --json files (with --label)")
+    ap.add_argument("--label", choices=LOAD_ITEMS, help="with --records: the label whose required misses to take")
     ap.add_argument("--cache", default=None, help="as bench/modelcheck.py's")
     ap.add_argument("--noise-free", action="store_true", help="the logs recorded again without noise")
     args = ap.parse_args(argv)
+    if args.records and not args.label:
+        ap.error("--records needs --label")
+    specs = [(int(s.split(":", 1)[0]), s.split(":", 1)[1], None) for s in args.items] if args.items else \
+        [(r["seed"], args.label, r.get("forced_kind")) for r in _required_misses(args.records, args.label, args.cache)]
     under = 0
-    for spec in args.items:
-        seed, item = spec.split(":", 1)
+    for seed, item, kind in specs:
         if item not in LOAD_ITEMS:
-            print(f"{spec}: not a load-torque item ({', '.join(LOAD_ITEMS)})")
+            print(f"{seed}:{item}: not a load-torque item ({', '.join(LOAD_ITEMS)})")
             continue
-        case = load_case(int(seed), args.cache)
+        case = load_case(seed, args.cache, kind=kind)
         case = noise_free(case) if args.noise_free else case
         floor, foot = floor_and_footprint(case, item)
         under += foot < floor
-        print(f"{int(seed):6d} {item:17s} {case.logger.rate:6.0f} Hz {case.logger.speed:8s} floor {floor:9.3g} N m "
+        print(f"{seed:6d} {item:17s} {case.logger.rate:6.0f} Hz {case.logger.speed:8s} floor {floor:9.3g} N m "
               f"footprint {foot:9.3g} N m  ratio {foot / floor:7.2f}", flush=True)
-    print(f"footprint under the floor: {under} of {len(args.items)}")
+    print(f"footprint under the floor: {under} of {len(specs)}")
     return 0
+
+
+def _required_misses(files: list[str], label: str, cache: str | None) -> list[dict[str, Any]]:
+    """The records in ``files`` whose verdict misses ``label`` where the audit finds it required."""
+    rows = [r for f in files for r in json.loads(Path(f).read_text(encoding="utf-8"))]
+    missed = [r for r in rows if label in r["expected"] and label not in r["verdict"]]
+    return [r for r in missed if label in audited(r, cache)["required"]]
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ drifted from the proving ground's ``load_torque`` (a scalar function of the rig 
 from __future__ import annotations
 
 import importlib.util
+import json
 import re
 from pathlib import Path
 from types import ModuleType
@@ -47,3 +48,16 @@ def test_the_script_prints_one_line_per_item(capsys: pytest.CaptureFixture[str])
     assert foot > 0.0 and ratio == pytest.approx(foot / floor, rel=0.01)
     assert out[1].startswith("17:thrust_asymmetry: not a load-torque item")
     assert out[-1] == f"footprint under the floor: {int(foot < floor)} of 2"
+
+
+def test_records_give_the_required_misses_of_a_label(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """``--records``: a record that missed seed 17's Coulomb friction (its own draw, which the audit finds visible
+    beyond calibration) is measured; one whose verdict named it is not, nor is a label the rig was not drawn with."""
+    rec = {"seed": 17, "kind": "one", "expected": ["coulomb_friction"], "verdict": []}
+    path = tmp_path / "records.json"
+    path.write_text(json.dumps([rec, {**rec, "seed": 18, "verdict": ["coulomb_friction"]},
+                                {**rec, "seed": 19, "expected": ["stribeck"]}]), encoding="utf-8")
+    assert _bench("pg_floor").main(["--records", str(path), "--label", "coulomb_friction"]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert len(out) == 2 and re.match(r"\s*17 coulomb_friction .* ratio", out[0])
+    assert out[1].startswith("footprint under the floor: ") and out[1].endswith(" of 1")
