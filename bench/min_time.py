@@ -3,7 +3,7 @@
 ``python bench/min_time.py [--time-limit S]`` solves the +0.4 N -> -0.4 N reversal of ``examples/reversal.json``
 at 1 A / 12 V in min-time mode, ``bounded`` and ``continuous-voltage``, with mesh refinement
 (:mod:`ocp.optimize.min_time`), and prints every mesh's duration, the reported value with its error bound, the
-independent solve of ``tests/test_min_time.py`` (scipy shooting on the optimal switching structure) and the
+independent solve of ``tests/optimize/test_min_time.py`` (scipy shooting on the optimal switching structure) and the
 fastest ``sin^5`` reversal within the same limits.
 """
 
@@ -11,13 +11,15 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
-from tests.test_min_time import oracle_min_time
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from ocp.optimize.mission import mission_from_mapping
 from ocp.optimize.solve import optimize
+from tests.optimize.test_min_time import oracle_min_time
 
 
 def main() -> None:
