@@ -63,14 +63,16 @@ def main(argv: list[str] | None = None) -> int:
     with multiprocessing.Pool(args.procs) as pool:
         rows = [r for r in pool.starmap(one, [(s, args.cache) for s in seeds]) if r is not None]
     print(f"{len(rows)} logs without an effect among seeds {seeds.start}..{seeds.stop - 1}; exact plant, noise units")
+    if not rows:
+        return 0
     print(f"{'channel':28s} {'median':>8s} {'p90':>8s} {'max':>8s}")
     for key, label in (("omega", "speed"), ("unread", "current as simulated"),
                        ("read", "current read through the lag"), ("thrust", "thrust")):
         v = np.array([r[key] for r in rows])
         print(f"{label:28s} {np.median(v):8.2f} {np.percentile(v, 90):8.2f} {v.max():8.2f}")
     err = np.array([abs(r["lag"] - r["logger_lag"]) for r in rows if r["aligned"]])
-    print(f"lag fitted - logger's [samples], {err.size} logs aligned within a quarter sample: "
-          f"median {np.median(err):.2f}, max {err.max():.2f}")
+    print(f"lag fitted - logger's [samples], {err.size} logs aligned within a quarter sample"
+          + (f": median {np.median(err):.2f}, max {err.max():.2f}" if err.size else ""))
     return 0
 
 
