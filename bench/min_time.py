@@ -21,12 +21,14 @@ from ocp.optimize.mission import mission_from_mapping
 from ocp.optimize.solve import optimize
 from tests.optimize.test_min_time import oracle_min_time
 
+ROOT = Path(__file__).resolve().parents[1]
+
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--time-limit", type=float, default=120.0, help="mission time_limit_s (refinement budget)")
     args = parser.parse_args()
-    example = json.loads(Path("examples/reversal.json").read_text())
+    example = json.loads((ROOT / "examples" / "reversal.json").read_text())
     print(f"{'regularity':<20}{'meshes (intervals: ms)':<58}{'reported [ms]':>20}{'independent':>13}{'rel. err':>10}"
           f"{'sin^(2q+1)':>12}{'wall [s]':>10}")
     for regularity in ("bounded", "continuous-voltage"):

@@ -28,7 +28,7 @@ from ocp.optimize import solve as opt
 from ocp.optimize.mission import mission_from_mapping
 from ocp.optimize.solve import optimize
 
-EXAMPLE = json.loads(Path("examples/reversal.json").read_text())
+EXAMPLE = json.loads((Path(__file__).resolve().parents[2] / "examples" / "reversal.json").read_text())
 # the paper-rig preset's constants, typed here (an oracle does not read the code it checks)
 J, B, C_TAU, C_F, K_T, K_E, R, L = 2.71e-5, 5.31e-5, 2.2e-6, 1.4e-4, 0.0573, 0.0573, 5.0, 0.002
 V_MAX, I_MAX = 12.0, 1.0
