@@ -210,7 +210,8 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
             items.remove(c)
             dropped.append(c)
             current = rest
-    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin, min_improvement, offered),
+    rivals = [c for c in offered if c not in pool]  # (rival-only items: :func:`_challenge`'s ``kin``)
+    return Selection(current, steps, _challenge(design, items, pool, current, tol, margin, min_improvement, rivals),
                      dropped, _ripple_off_band(design, current, tol, min_improvement))
 
 
@@ -421,12 +422,11 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
     score's own sampling scatter (:func:`.evidence.scatter`), whichever is wider, on the equations (and a band's
     rows) the adopted item acts on too, and winning in its place by the test the adopted item passed (:func:`_wins`,
     from the other adopted items). Where the alternative is a constant off by more than :data:`IMPLAUSIBLE_FACTOR`,
-    the reason says why the effect was preferred. ``kin``: also challenging an adopted voltage drop (a dead band
-    offered as a rival only, :attr:`.columns.Column.rival`)."""
-    margin = max(margin, scatter(design))
-    out = []
+    the reason says why the effect was preferred. ``kin``: rival-only items (:attr:`.columns.Column.rival`), which
+    challenge an adopted voltage drop only."""
+    margin, out = max(margin, scatter(design)), []
     without = functools.cache(lambda a: fit_model(design, [i for i in items if i != a], tol))  # (once per item)
-    for a, b in dict.fromkeys([*itertools.product(items, pool), *((d, c) for d in items if d in DROPS for c in kin)]):
+    for a, b in [*itertools.product(items, pool), *((d, c) for d in items if d in DROPS for c in kin)]:
         if b in items:
             continue
         alt = fit_model(design, [b if i == a else i for i in items], tol)
