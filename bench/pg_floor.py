@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -40,11 +41,30 @@ from ocp.model.params import MotorParams
 from tests.proving_ground.calibration import without
 from tests.proving_ground.physics import load_torque
 
+#: points along a row's path at which the load torque is averaged (the identifier's ``columns.ROW_POINTS``, not read)
+ROW_POINTS = 8
 LOAD_ITEMS = ("coulomb_friction", "stribeck", "drag_asymmetry", "cogging", "param:B", "param:c_tau")
 
 
+def row_mean(load: Callable[[float, float], float], s: Any, theta: np.ndarray) -> np.ndarray:
+    """Each row's mean (M,) [N m] of the load torque ``load(w, theta)`` along the rotor's path over the row of
+    ``s`` (:class:`ocp.identify.columns.Signals`), ``theta`` (M,) [rad] at the row's sample: raw rows k-1 -> k+1
+    under a triangle (the mean speed over each half, the angle exact at k), low-passed rows k -> k+1 (the speed
+    linear over the row, the angle its integral); :data:`ROW_POINTS` points per half or row."""
+    u = (np.arange(ROW_POINTS) + 0.5) / ROW_POINTS
+    if s.triangle:
+        paths = [(s.w0, theta - (1.0 - x) * s.dt * s.w0, x) for x in u] + \
+            [(s.w1, theta + x * s.dt * s.w1, 1.0 - x) for x in u]
+    else:
+        paths = [(s.w0 + x * (s.w1 - s.w0), theta + s.dt * (x * s.w0 + 0.5 * x * x * (s.w1 - s.w0)), 1.0) for x in u]
+    total = sum(wt * np.array([load(float(a), float(b)) for a, b in zip(w, th, strict=True)]) for w, th, wt in paths)
+    return np.asarray(total, float) / sum(wt for _, _, wt in paths)
+
+
 def floor_and_footprint(case: Any, item: str) -> tuple[float, float]:
-    """(floor, footprint) [N m]: RMS over the middle 80 % of the rows, speed view (module doc)."""
+    """(floor, footprint) [N m]: RMS over the middle 80 % of the rows, speed view (module doc). The load torque is
+    each row's mean along the rotor's path over it, as the torque balance holds it (a ripple of several periods
+    within a row, a dry friction whose sign flips inside one), not its value at one point."""
     t = case.truth
     log = case_log(case)
     nominal = case.nominal
@@ -52,9 +72,9 @@ def floor_and_footprint(case: Any, item: str) -> tuple[float, float]:
     p = MotorParams(J=t.J, B=t.B, c_tau=t.c_tau, c_f=t.c_f, k_t=t.k, k_e=t.k, R=t.R, L=t.L)
     s = raw_signals(log, log.theta) if log.theta is not None else signals(log, p)
     theta = s.theta if s.theta is not None else np.zeros_like(s.w)
-    def torque(x: Any) -> np.ndarray:  # the proving ground's load torque (a scalar function) on every row
-        load = load_torque(x)
-        return np.array([load(float(w), float(a)) for w, a in zip(s.w, theta, strict=True)])
+
+    def torque(x: Any) -> np.ndarray:
+        return row_mean(load_torque(x), s, theta)
 
     other = without(case, item)
     offset = t.e("current_offset", "i0")

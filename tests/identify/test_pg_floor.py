@@ -8,12 +8,15 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import math
 import re
 from pathlib import Path
 from types import ModuleType
 
+import numpy as np
 import pytest
 
+from ocp.identify.columns import Signals
 from tests.proving_ground import make_case
 
 BENCH = Path(__file__).resolve().parents[2] / "bench"
@@ -61,3 +64,20 @@ def test_records_give_the_required_misses_of_a_label(tmp_path: Path, capsys: pyt
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 2 and re.match(r"\s*17 coulomb_friction .* ratio", out[0])
     assert out[1].startswith("footprint under the floor: ") and out[1].endswith(" of 1")
+
+
+@pytest.mark.parametrize("x", [0.3, 1.0, math.pi])  # half the phase a row of the ripple spans (pi: none is left)
+@pytest.mark.parametrize("triangle", [True, False])
+def test_a_ripple_is_averaged_along_the_rows_path(x: float, triangle: bool) -> None:
+    """At a constant speed ``w`` a ripple ``sin(n theta)`` averages to ``sin(n theta_k)`` times the window's transfer
+    at ``n w``: ``sinc(x)^2`` under the raw rows' triangle over k-1 -> k+1, ``x = n w dt / 2``; over a row k -> k+1
+    the box's exact mean ``(cos(n theta_k) - cos(n theta_k + 2 x)) / (2 x)`` (closed forms, not the script's sums)."""
+    n, dt, m = 7.0, 1e-3, 50
+    w = 2.0 * x / (n * dt)
+    theta = np.linspace(0.0, 3.0, m)
+    ones = np.full(m, w)
+    s = Signals(ones, ones, ones, ones, ones, ones, ones, ones, theta, np.arange(m) * dt, dt, triangle=triangle)
+    got = _bench("pg_floor").row_mean(lambda _w, a: math.sin(n * a), s, theta)
+    want = np.sin(n * theta) * (math.sin(x) / x) ** 2 if triangle else \
+        (np.cos(n * theta) - np.cos(n * theta + 2.0 * x)) / (2.0 * x)
+    assert np.max(np.abs(got - want)) < 0.01
