@@ -1,49 +1,39 @@
-"""``bench/pg_floor.py`` (the torque equation's floor against a load item's footprint, README: Model check) on
-proving-ground rigs drawn with Coulomb friction: the footprint is the rotor's low-pass of ``tau_c tanh(w / eps)``,
-a filter with a non-negative impulse response of unit area, so it never exceeds ``tau_c``; it is the rig's, not the
-sensors' (the same on the log recorded again without noise), and sensor noise only raises the floor. The script had
-drifted from the proving ground's ``load_torque`` (a scalar function of the rig since) and crashed on every item."""
+"""``bench/pg_floor.py`` (the torque equation's floor against a load item's footprint, README: Model check). On
+proving-ground rigs drawn with Coulomb friction the footprint is the rotor's low-pass of ``tau_c tanh(w / eps)``, a
+filter with a non-negative impulse response of unit area, so it never exceeds ``tau_c``; it is the rig's, not the
+sensors' (the same on the log recorded again without noise), and sensor noise only raises the floor. A ripple's row
+mean meets the windows' closed forms; ``--records`` takes the required misses. The script had drifted from the
+proving ground's ``load_torque`` (a scalar function of the rig since) and crashed on every item."""
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import math
 import re
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 import pytest
 
+from bench import pg_floor
+from bench.modelcheck import noise_free
 from ocp.identify.columns import Signals
 from tests.proving_ground import make_case
-
-BENCH = Path(__file__).resolve().parents[2] / "bench"
-
-
-def _bench(name: str) -> ModuleType:
-    spec = importlib.util.spec_from_file_location(f"{name}_bench", BENCH / f"{name}.py")
-    assert spec is not None and spec.loader is not None
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
 
 
 @pytest.mark.parametrize("seed", [119, 121])  # Coulomb friction alone: 5 kHz encoder, 200 Hz encoder
 def test_a_friction_footprint_is_bounded_by_its_level_and_not_the_noise(seed: int) -> None:
-    floor_bench, modelcheck = _bench("pg_floor"), _bench("modelcheck")
     case = make_case(seed, "one")
     tau_c = case.truth.effects["coulomb_friction"]["tau_c"]
-    floor, foot = floor_bench.floor_and_footprint(case, "coulomb_friction")
-    quiet_floor, quiet_foot = floor_bench.floor_and_footprint(modelcheck.noise_free(case), "coulomb_friction")
+    floor, foot = pg_floor.floor_and_footprint(case, "coulomb_friction")
+    quiet_floor, quiet_foot = pg_floor.floor_and_footprint(noise_free(case), "coulomb_friction")
     assert 0.0 < foot <= tau_c
     assert quiet_foot == pytest.approx(foot, rel=0.05)
     assert 0.0 < quiet_floor <= floor
 
 
 def test_the_script_prints_one_line_per_item(capsys: pytest.CaptureFixture[str]) -> None:
-    assert _bench("pg_floor").main(["--items", "17:coulomb_friction", "17:thrust_asymmetry"]) == 0  # (seed 17's
+    assert pg_floor.main(["--items", "17:coulomb_friction", "17:thrust_asymmetry"]) == 0  # (seed 17's
     out = capsys.readouterr().out.splitlines()  # own draw: Coulomb friction alone, 200 Hz, a tachometer)
     row = re.match(r"\s*17 coulomb_friction .* floor\s+(\S+) N m footprint\s+(\S+) N m\s+ratio\s+(\S+)", out[0])
     assert row is not None
@@ -60,7 +50,7 @@ def test_records_give_the_required_misses_of_a_label(tmp_path: Path, capsys: pyt
     path = tmp_path / "records.json"
     path.write_text(json.dumps([rec, {**rec, "seed": 18, "verdict": ["coulomb_friction"]},
                                 {**rec, "seed": 19, "expected": ["stribeck"]}]), encoding="utf-8")
-    assert _bench("pg_floor").main(["--records", str(path), "--label", "coulomb_friction"]) == 0
+    assert pg_floor.main(["--records", str(path), "--label", "coulomb_friction"]) == 0
     out = capsys.readouterr().out.splitlines()
     assert len(out) == 2 and re.match(r"\s*17 coulomb_friction .* ratio", out[0])
     assert out[1].startswith("footprint under the floor: ") and out[1].endswith(" of 1")
@@ -77,7 +67,7 @@ def test_a_ripple_is_averaged_along_the_rows_path(x: float, triangle: bool) -> N
     theta = np.linspace(0.0, 3.0, m)
     ones = np.full(m, w)
     s = Signals(ones, ones, ones, ones, ones, ones, ones, ones, theta, np.arange(m) * dt, dt, triangle=triangle)
-    got = _bench("pg_floor").row_mean(lambda _w, a: math.sin(n * a), s, theta)
+    got = pg_floor.row_mean(lambda _w, a: math.sin(n * a), s, theta)
     want = np.sin(n * theta) * (math.sin(x) / x) ** 2 if triangle else \
         (np.cos(n * theta) - np.cos(n * theta + 2.0 * x)) / (2.0 * x)
     assert np.max(np.abs(got - want)) < 0.01
