@@ -192,7 +192,8 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
     ``min_improvement`` applies to effects (a constant's materiality is ``tol``). A model that ``physical``
     refuses (an effect fitted outside its catalogue range, e.g. a Stribeck level of 1.8e4 N m) is never adopted."""
     offered = [c for c in pool if c not in design.unresolved and design.index(c)]  # (no columns: not testable here)
-    pool = [c for c in offered if not all(design.columns[j].rival for j in design.index(c))]
+    rivals = [c for c in offered if all(design.columns[j].rival for j in design.index(c))]  # (:func:`_challenge`)
+    pool = [c for c in offered if c not in rivals]
     forward = functools.partial(_forward, design, pool, tol=tol, min_improvement=min_improvement,
                                 noise_floor=noise_floor, max_items=max_items, margin=margin, physical=physical)
     items, current, steps = forward([], fit_model(design, [], tol), progress=progress)
@@ -210,7 +211,6 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
             items.remove(c)
             dropped.append(c)
             current = rest
-    rivals = [c for c in offered if c not in pool]  # (rival-only items: :func:`_challenge`'s ``kin``)
     return Selection(current, steps, _challenge(design, items, pool, current, tol, margin, min_improvement, rivals),
                      dropped, _ripple_off_band(design, current, tol, min_improvement))
 
