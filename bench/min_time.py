@@ -15,13 +15,11 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(ROOT := Path(__file__).resolve().parents[1]))
 
 from ocp.optimize.mission import mission_from_mapping
 from ocp.optimize.solve import optimize
 from tests.optimize.test_min_time import oracle_min_time
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def main() -> None:
