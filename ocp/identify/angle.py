@@ -63,13 +63,6 @@ def interval_ripple(theta: np.ndarray, n: int, triangle: bool) -> tuple[np.ndarr
     return z.imag, z.real
 
 
-def speed_noise(omega: np.ndarray) -> float:
-    """Per-sample white noise [rad/s] of a speed column ``omega`` (N,) from its second differences (a smooth
-    speed's curvature left out by the median): ``sd(d2 w) = sqrt(6) sigma``."""
-    d2 = np.diff(omega, 2)
-    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0)) if d2.size else 0.0
-
-
 def drift_windows(t: np.ndarray, periods: int, sigma_w: float, dt: float) -> np.ndarray:
     """Hat functions (M, K) over the row times ``t`` (M,) [s] for a ripple whose phase drifts: the angle integrated
     from a speed with white noise ``sigma_w`` [rad/s] per sample of ``dt`` [s] wanders as a random walk, the

@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from ocp.identify.noise_level import white_noise
 from ocp.logs import Log, LogKind
 from ocp.model.effect_base import EffectBase
 from ocp.model.effects import measured_current, stateful
@@ -210,8 +211,7 @@ def noise(log: Log, names: tuple[str, ...], plant: DCMotorPlant) -> dict[str, fl
         if log.kind is LogKind.STEADY_STATE or y.size < 10:
             out[eq] = max(0.01 * rms, 1e-12)
             continue
-        d2 = np.diff(y, 2)
-        out[eq] = max(1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / np.sqrt(6.0), 1e-3 * rms, 1e-12)
+        out[eq] = max(white_noise(y), 1e-3 * rms, 1e-12)
     return out
 
 

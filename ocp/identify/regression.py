@@ -48,7 +48,7 @@ import numpy as np
 
 from ocp.filters import filtfilt
 from ocp.identify.align import cutoff_hz
-from ocp.identify.angle import MAX_PERIODS, angle_limits, ripple_independence, speed_noise, tracked_periods
+from ocp.identify.angle import MAX_PERIODS, angle_limits, ripple_independence, tracked_periods
 from ocp.identify.clipping import clipped, widened
 from ocp.identify.columns import (
     DROPS,
@@ -67,6 +67,7 @@ from ocp.identify.columns import (
 from ocp.identify.coverage import unseen
 from ocp.identify.drops import drop_columns
 from ocp.identify.footprint import BANDED, Footprints, grams, weighted
+from ocp.identify.noise_level import white_noise
 from ocp.identify.resolution import rotor_tau, unresolved
 from ocp.identify.ripple import pick_periods, residualizer
 from ocp.logs import Log, LogKind
@@ -285,8 +286,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     keep = [j for j, (c, _) in enumerate(cols)
             if c.item != "k" and (math.isnan(c.shape) or (c.shape == _mid(cols, c.item) and c.plain))]
     periods, spectrum, angle = 0, np.zeros(0), {}
-    ripple = "cogging" in effects and s.theta is not None and raw.theta is not None \
-        and log.kind is LogKind.TIME_SERIES
+    ripple = "cogging" in effects and s.theta is not None and raw.theta is not None and log.kind is LogKind.TIME_SERIES
 
     # eq. dc_mechanical judged by the speed error it causes (speed_view), the others as they are; the
     # edge rows are zeroed on both sides first (still an equation), so their transients do not spread, and the
@@ -316,7 +316,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
             cols += [(replace(c, at_rest=False), np.vstack([view(np.where(rest, 0.0, a[0])), a[1:]]))
                      for c, a in unviewed]
         tracked = MAX_PERIODS if log.theta is not None or raw.dt == 0 else \
-            tracked_periods(raw.t, speed_noise(log.omega), raw.dt)
+            tracked_periods(raw.t, white_noise(log.omega), raw.dt)
         angle = {"amplitude": amplitude, **angle_limits(raw.theta, periods, log.theta is not None, tracked)}
     # (the armature and thrust equations keep the motor constant: their measured side does not scale)
     k_col = [a for c, a in cols if c.item == "k"]

@@ -14,8 +14,8 @@ import pytest
 
 from bench.modelcheck import case_log
 from ocp.identify import diagnose, regression
-from ocp.identify.angle import speed_noise
 from ocp.identify.columns import REST_ROWS, at_rest, held_still, signals
+from ocp.identify.noise_level import white_noise
 from ocp.logs import Log, log_from_arrays
 from ocp.model.params import MotorParams, load_params
 from ocp.model.plant import DCMotorPlant
@@ -43,7 +43,7 @@ def test_the_rows_at_rest_are_those_where_the_rotor_stands() -> None:
     w, p, log = _rest_log(stand, noise=0.05)
     s = signals(log, p)
     rest = at_rest(s, log, p)
-    assert speed_noise(log.omega) == pytest.approx(0.05, rel=0.2)
+    assert white_noise(log.omega) == pytest.approx(0.05, rel=0.2)
     assert rest[stand[0] + 10:stand[1] - 10].all()
     running = np.abs(w[:-1]) > 2.0  # (a sine through zero stands within the noise for a few rows only)
     assert not rest[running].any()

@@ -12,7 +12,8 @@ from __future__ import annotations
 import numpy as np
 
 from ocp.identify import diagnose
-from ocp.identify.angle import DRIFT_SPAN, drift_windows, speed_noise, track_phase
+from ocp.identify.angle import DRIFT_SPAN, drift_windows, track_phase
+from ocp.identify.noise_level import white_noise
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams
@@ -37,7 +38,7 @@ def test_drift_windows_and_phase_tracking() -> None:
     assert drift_windows(t, 3, 0.01, dt).shape == (m, 1)  # drift within one phase: one column of ones
     h = drift_windows(t, 3, 3.5, dt)  # 0.55 rad^2/s over 15 s: pieces of at least DRIFT_SPAN
     assert 2 < h.shape[1] <= 1 + int(t[-1] / DRIFT_SPAN) and np.allclose(h.sum(axis=1), 1.0)
-    assert abs(speed_noise(np.sin(t) + 0.2 * rng.standard_normal(m)) - 0.2) < 0.02  # white noise, not the sine
+    assert abs(white_noise(np.sin(t) + 0.2 * rng.standard_normal(m)) - 0.2) < 0.02  # white noise, not the sine
     theta = 40.0 * t  # the integrated angle; the true one drifts from it by a slow phase
     drift = 2.0 * np.sin(2 * np.pi * t / t[-1])
     z = np.exp(3j * theta)

@@ -1,0 +1,21 @@
+"""The white-noise level of a sampled channel: the one estimate every noise unit of the model check is read in.
+
+A smooth signal's second differences are small beside white noise's, whose ``d2 y = e_{k+2} - 2 e_{k+1} + e_k`` has
+standard deviation ``sqrt(6) sigma``; the median absolute deviation (times 1.4826, a Gaussian's MAD to its standard
+deviation) leaves the signal's curvature and outliers out. Biased high where the curvature is not small beside the
+noise (a slowly logged, finely resolved speed: ``docs/model-check-history.md``, session 58) and zero on a quantized
+channel whose second differences are mostly zero; callers floor it.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+
+def white_noise(y: np.ndarray) -> float:
+    """Per-sample white noise [``y``'s unit] of the samples ``y`` (N,) from their second differences' MAD /
+    sqrt(6); 0 for fewer than three samples."""
+    d2 = np.diff(y, 2)
+    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0)) if d2.size else 0.0
