@@ -26,6 +26,7 @@ from ocp.optimize import min_time
 from ocp.optimize import problem as opt_problem
 from ocp.optimize import solve as opt
 from ocp.optimize.mission import mission_from_mapping
+from ocp.optimize.result import OptimizeResult
 from ocp.optimize.solve import optimize
 
 EXAMPLE = json.loads((Path(__file__).resolve().parents[2] / "examples" / "reversal.json").read_text())
@@ -115,12 +116,12 @@ def test_min_time_smoothing_term_does_not_move_the_optimum(regularity: str, monk
                               "collocation": {"intervals": 60}, "time_limit_s": 60.0})
     problem = opt_problem.problem_for(m)
     r = opt.solve_problem(problem, opt_data.problem_data(problem), warm=False)
-    assert r.source == "optimized", r.reason
+    assert isinstance(r, OptimizeResult) and r.source == "optimized", r.reason
     duration = r.arrays["t"][-1]
     assert 0.0 <= r.solver["objective"] - duration / 2.0 <= 1e-6 * duration / 2.0
     monkeypatch.setitem(opt_data.WEIGHTS, "min-time", (0.0, 1.0, 0.0, 0.0, 0.0))
     bare = opt.solve_problem(problem, opt_data.problem_data(problem), warm=False)
-    assert bare.source == "optimized", bare.reason
+    assert isinstance(bare, OptimizeResult) and bare.source == "optimized", bare.reason
     assert bare.solver["objective"] == pytest.approx(bare.arrays["t"][-1] / 2.0, rel=1e-12)
     assert duration == pytest.approx(bare.arrays["t"][-1], rel=1e-5)
     assert 0.9 * oracle_min_time(False) < duration < 1.2 * oracle_min_time(False)
