@@ -1,0 +1,87 @@
+"""A known limit of the alignment (``align.estimate``), written down as strict expected failures: a fast rotor logged
+slowly, alone or behind a lagging speed sensor.
+
+The alignment fits the armature equation over one held sample with free coefficients, the back-EMF on the logged
+speed averaged over the sample's ends. Where the rotor settles within a sample or two (propeller drag at 63 Hz) that
+average is not the sample's mean, and behind a tachometer's first-order filter of a few samples (the blind rig's
+loggers draw up to three) the logged speed is late by most of a row's change: the free fit moves the command's
+timing to match. The blind rig's fresh seed 741 (63 Hz, a filter of 2.9 samples, the command logged two rows early)
+was aligned at 0.09 samples, and a false 2 V brush drop took the rest. Of its fresh seeds 600..799, the three clean
+logs named wrong all have a tachometer filter of 1.9-2.9 samples and an early command (637, 679, 741: aligned 0.43,
+1.70, 0.09 for lags of 1, 2, 2), as have two right verdicts with a false ``R`` beside them (688, 730: 1.54, 1.04 for 2).
+
+On this file's rig (seed 741's) the estimate is 0.0 for a lag of 2 behind a 2.9-sample filter (1.98 for a lag of 0),
+0.0 for 1 behind 2.0 samples, 0.95 for 2 at 120 Hz behind 2.5; unfiltered, every lag 0.38 samples long. A free
+coefficient on the speed's step over the row (the sensor lag to first order, as the identifier's ``speed_lag``)
+brought these cases within 0.2 samples (session 59), but moved low-rate encoder logs of the proving ground the other way
+(3415, 50 Hz: 2.39 -> 0.71 for a true 2.09; 6054, 100 Hz: a false delay); exact verdicts 1,808 -> 1,808 on its
+ten sets, 307 -> 307 on the blind rig's seeds 0..399, none of those five changed: not adopted. These tests turn
+to passes (and, strict, fail) when a fix lands.
+
+The oracle is this file's own simulation (RK4 on the armature and the rotor at 64 substeps a sample, the command held
+between rows, a first-order filter on the tachometer), not the identifier's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ocp.identify import align
+from ocp.logs import Log, log_from_arrays
+
+# seed 741's rig [Ohm, H, N m/A, kg m^2, N m s/rad, N m s^2/rad^2]: L/R 0.15 ms
+R, L, K, J, B, C = 0.1, 1.5e-5, 0.012, 2.6e-5, 1.5e-5, 1.1e-6
+
+
+def _log(rate: float, skew: int, filt: float, seed: int, n: int = 995) -> Log:
+    """A chirp of 5.3 V (0.08 Hz to a tenth of the rate) logged at ``rate`` [Hz], the command logged ``skew`` rows
+    before it acts, the speed through a first-order filter of ``filt`` samples (0: none), 0.3 % noise on speed and
+    current; seed 741's rig (propeller drag: at 63 Hz the rotor settles in 0.7 samples)."""
+    rng = np.random.default_rng(seed)
+    dt, sub = 1.0 / rate, 64
+    t = np.arange(n) * dt
+    f = np.geomspace(0.08, 0.1 * rate, n)
+    v_log = 5.3 * np.sin(2 * np.pi * np.cumsum(f) * dt)
+    v_act = np.concatenate([np.zeros(skew), v_log[:n - skew]])  # row m's command acts from row m + skew
+    x = np.zeros(3)  # current [A], true speed [rad/s], filtered speed [rad/s]
+    out = np.zeros((n, 3))
+    h = dt / sub
+
+    def rhs(x: np.ndarray, v: float) -> np.ndarray:
+        i, w, wf = x
+        return np.array([(v - R * i - K * w) / L, (K * i - B * w - C * w * abs(w)) / J,
+                         (w - wf) / (filt * dt) if filt else 0.0])
+
+    for m in range(n):
+        out[m] = x
+        for _ in range(sub):  # RK4, the command held over the sample
+            k1 = rhs(x, v_act[m])
+            k2 = rhs(x + 0.5 * h * k1, v_act[m])
+            k3 = rhs(x + 0.5 * h * k2, v_act[m])
+            k4 = rhs(x + h * k3, v_act[m])
+            x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+            if not filt:
+                x[2] = x[1]
+    w = out[:, 2] if filt else out[:, 1]
+    i = out[:, 0]
+    return log_from_arrays(t, v_log, i + 0.003 * np.std(i) * rng.standard_normal(n), None,
+                           omega=w + 0.003 * np.std(w) * rng.standard_normal(n))
+
+
+LIMIT = pytest.mark.xfail(strict=True, reason="a fast rotor logged slowly (and a lagging speed) moves the alignment: "
+                          "known limit, module doc")
+
+
+@LIMIT
+@pytest.mark.parametrize(("rate", "filt", "skew"), [(63.0, 2.9, 2), (63.0, 2.0, 1), (120.0, 2.5, 2)])
+def test_a_lagging_tachometer_leaves_the_commands_timing(rate: float, filt: float, skew: int) -> None:
+    a = align.estimate(_log(rate, skew, filt, 1))
+    assert a.identified and abs(a.samples - skew) < 0.5, a.samples
+
+
+@LIMIT
+@pytest.mark.parametrize("skew", [0, 2])
+def test_an_unfiltered_speed_is_aligned_within_a_quarter_sample(skew: int) -> None:
+    a = align.estimate(_log(63.0, skew, 0.0, 2))
+    assert a.identified and abs(a.samples - skew) < 0.25, a.samples
