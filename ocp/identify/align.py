@@ -7,7 +7,10 @@ PWM period adds a fraction. The *alignment* is that lag, in samples, beyond the 
 
 Estimate: the armature equation over one held sample (eq. dc_electrical, exact under a zero-order
 hold) with free coefficients, so wrong nominal constants do not bias it, plus brush-drop, dead-band and
-offset terms: ``i[k+1] = a1 i[k] + a2 V[k - lag] + a3 w[k+1/2] + a4 sign(i) + a5 + a6 sign(V[k - lag])``,
+offset terms: ``i[k+1] = a1 i[k] + a2 V[k - lag] + a3 w[k] + a3' w[k+1] + a4 sign(i) + a5 + a6 sign(V[k - lag])``
+(the speed at both ends free: a fast armature's end current shows the end's back-EMF, a slow one's the row's mean,
+and a tachometer's filter or a differenced encoder logs the speed late, to first order a share of its step; with
+their mean alone the fit moved the command to match, session 60: ``tests/identify/test_alignment_speed_lag.py``),
 fitted by least squares (raw samples) for whole-sample lags up to :func:`search_range` (24 samples or 5 ms,
 whichever is longer, at most 64 samples), then on a grid of 1/8 sample around the best; the lag of the
 smallest residual, refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k
@@ -185,8 +188,9 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
     top = min(search_range(log.dt), max(log.n // 4 - 12, 1))
     k = np.arange(top + 10, max(top + 20, log.n - 10))
     ibar = 0.5 * (i[k] + i[k + 1])
-    cols = np.column_stack([i[k], 0.5 * (w[k] + w[k + 1]), np.tanh(ibar / (0.05 * np.std(i) + 1e-12)),
-                            np.ones(k.size)])
+    # the speed at both ends of the row, free: the back-EMF at the row's end (a fast armature's end current) or its
+    # mean (a slow one's), and a speed sensor's lag to first order (a tachometer's filter, a differenced encoder)
+    cols = np.column_stack([i[k], w[k], w[k + 1], np.tanh(ibar / (0.05 * np.std(i) + 1e-12)), np.ones(k.size)])
     gram, cross = np.einsum("mp,mq->pq", cols, cols), np.einsum("mp,m->p", cols, i[k + 1])
     # the drive's dead band acts on each held command, before the held commands share a sample: shifted after
     # the nonlinearity (else, for a two-level command, it is a free column on the rows where the level changes,
@@ -380,27 +384,40 @@ def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
                      align.nominal and known)
 
 
-def switched(samples: float, tau: float) -> float:
+def switched(samples: float, tau: float, top: float = math.inf) -> float:
     """The lag [samples] whose linear interpolation (:func:`shifted`) gives each held row the voltage that drives an
     armature of time constant ``tau`` [samples] (the nominal L/R) over the row as the drive does, which switches from
     the old command to the new one ``f`` of a row late (``samples = m + f``, ``m`` whole). A slow armature integrates
     the two levels: ``f`` itself (the interpolation); one that settles within the row shows only the new level at the
     row's end: ``m`` (its current samples cannot tell when in the row the drive switched; the torque equation's
-    ``switch_phase`` nuisance can, :func:`.columns.nuisance_columns`)."""
-    m = math.floor(samples)
-    f, x = samples - m, 1.0 / max(tau, 1e-9)
+    ``switch_phase`` nuisance can, :func:`.columns.nuisance_columns`).
+
+    The estimate's fraction is read from the whole sample nearest it, on either side: a lag measured a little short
+    of ``m + 1`` on a fast armature is ``m + 1``, not ``m`` (its interpolation-equivalent lag is the whole sample, and
+    a free fit's noise or a lagging speed sensor puts the estimate either side of it: the blind rig's 619 at 0.99 for
+    1, 626 at 1.84 for 2, 845 at 15.3 for 16, each applied a whole sample short as ``m``). With ``d = samples - n``,
+    ``n`` the nearest whole sample, the lag is ``n + sign(d) g(|d|)``, ``g`` the fraction's map above: ``samples``
+    itself for a slow armature, ``n`` for a fast one. ``top`` [samples]: the most whole samples the lag may be read
+    from (a lag within the logging conventions: at most their skew, so that their 0.75-sample fraction for the
+    drive's update instant is not read as a further whole sample); beyond it, the whole sample below."""
+    n = math.floor(samples + 0.5)
+    n = n if n <= top else math.floor(samples)
+    d = samples - n
+    x = 1.0 / max(tau, 1e-9)
     # eq:dc_electrical over the row, exact for held levels: i1 = a i0 + (1 - a) v / R with
     # v = V_new - (V_new - V_old) (b - a) / (1 - a), a = exp(-x), b = exp(-x (1 - f)), x = 1 / tau
-    return m + (math.exp(-x * (1.0 - f)) * math.expm1(-x * f) / math.expm1(-x) if x < 700.0 else 0.0)
+    f = abs(d)
+    g = math.exp(-x * (1.0 - f)) * math.expm1(-x * f) / math.expm1(-x) if x < 700.0 else 0.0
+    return n + math.copysign(g, d)
 
 
-def realign(log: Log, samples: float, tau: float | None = None) -> Log:
+def realign(log: Log, samples: float, tau: float | None = None, top: float = math.inf) -> Log:
     """The log with its command moved ``samples`` later, so that row k's command drives k -> k+1 (eq. ZOH); with the
     armature's nominal L/R ``tau`` [samples], a fraction of a sample as a drive switching within the row
-    (:func:`switched`), else interpolated."""
+    (:func:`switched`, read from at most ``top`` whole samples), else interpolated."""
     if samples <= 0 or log.kind is LogKind.STEADY_STATE:
         return log
-    lag = samples if tau is None else switched(samples, tau)
+    lag = samples if tau is None else switched(samples, tau, top)
     return Log(log.t, shifted(log.voltage, lag), log.current, log.omega, log.theta, log.thrust, log.kind,
                log.source)
 

@@ -199,8 +199,7 @@ class DiagnoseResult:
                             for k, v in self.calibration.items()},
             "tolerance": self.tolerance, "blind_spots": self.blind_spots,
             "ambiguous": [{k: finite(v) if isinstance(v, float) else v for k, v in a.items()} for a in self.ambiguous],
-            "angle_periodic": self.angle_periodic,
-            "noise": {k: finite(v) for k, v in self.noise.items()},
+            "angle_periodic": self.angle_periodic, "noise": {k: finite(v) for k, v in self.noise.items()},
             "units": CHANNEL_UNITS,
             "rounds": [{"baseline_rms": {k: finite(v) for k, v in r.baseline.rms.items()},
                         "baseline_score": finite(r.baseline.combined),
@@ -256,7 +255,7 @@ def aligned(plant: DCMotorPlant, log: Log, max_logging_skew: float) -> tuple[Ali
     align = estimate(log, max_logging_skew + own, armature)
     if align.delay:
         align = within(align, max_logging_skew + own, log.dt)
-    return align, realign(log, align.samples - own, armature[0] / log.dt)
+    return align, realign(log, align.samples - own, armature[0] / log.dt, max_logging_skew)
 
 
 @own_threads
@@ -285,9 +284,10 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
                                                                             current):
         unconfirmed, align = align, within(align, opt.max_logging_skew + own, log.dt)
     delay = (align.samples - own) * log.dt if align.delay and "input_delay" in _allowed(opt) else None
-    aligned = realign(log, align.samples - own, tau)  # the equations always see the command when it acts
+    top = math.inf if delay is not None else opt.max_logging_skew  # (a conventions' lag: at most its whole samples)
+    aligned = realign(log, align.samples - own, tau, top)  # the equations always see the command when it acts
     work = log if delay is not None else aligned  # free runs: the delay, if called, is in the plant
-    held = (log.voltage, switched(max(align.samples - own, 0.0), tau))  # (the drive's dead band acts before the shift)
+    held = (log.voltage, switched(max(align.samples - own, 0.0), tau, top))  # (the dead band acts before the shift)
 
     def judged(design: Design, f: Fitted) -> str | None:  # why a named L is not (what mimics it, on free runs)
         final, shift = plant_of(plant, design, f, delay), None if delay is not None else align.samples - own
@@ -295,7 +295,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         if not inductance_wins(plant, final, f.items, log, shift, tau, error, opt.min_improvement,
                                opt.max_logging_skew):
             return TIMING_MIMICS
-        mimic = "L" in design.one_sided and filter_mimics(plant, final, log, shift, tau,
+        mimic = "L" in design.one_sided and filter_mimics(plant, final, log, shift, tau, opt.max_logging_skew,
                                                            functools.partial(error, channels=("omega",)))
         return FILTER_MIMICS if mimic else None
 
@@ -426,12 +426,12 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
     if current(align.samples) <= (1.0 - opt.min_improvement) * current(short + own):
         return True
     lag = make_effect("input_delay", {"delay": (align.samples - own) * log.dt})
-    rivals = [(plant, realign(log, short, tau))]
+    rivals = [(plant, realign(log, short, tau, opt.max_logging_skew))]
     edge = opt.max_logging_skew + SKEW_FRACTION
     longer = 1.0 + (align.samples - own - edge) / tau  # the L/R, x nominal, that puts the lag at the edge
     if align.bias and longer <= IMPLAUSIBLE_FACTOR:  # (a held slow armature: the same lag as a longer L/R)
         rivals.append((DCMotorPlant(plant.params.model_copy(update={"L": longer * plant.params.L}), plant.effects),
-                       realign(log, edge, longer * tau)))
+                       realign(log, edge, longer * tau, opt.max_logging_skew)))
     delayed, *conv = (_free_error(p, x, sp, noise, seg) for p, x in
                       ((DCMotorPlant(plant.params, (*plant.effects, lag)), log), *rivals))
     return delayed <= (1.0 - opt.min_improvement) * min(conv)

@@ -106,14 +106,14 @@ def inductance_wins(plant: DCMotorPlant, final: DCMotorPlant, named: Sequence[st
                           if e.name == "input_delay" else e for e in final.effects)
             own, rival = heldout(final, log), heldout(DCMotorPlant(params, moved), log)
         else:
-            own = heldout(final, realign(log, shift, tau))
-            rival = heldout(DCMotorPlant(params, final.effects), realign(log, shift + x * tau, tau))
+            own = heldout(final, realign(log, shift, tau, max_skew))
+            rival = heldout(DCMotorPlant(params, final.effects), realign(log, shift + x * tau, tau, max_skew))
     except SolverError:
         return True
     return own <= (1.0 - min_improvement) * rival
 
 
-def filter_mimics(plant: DCMotorPlant, final: DCMotorPlant, log: Log, shift: float | None, tau: float,
+def filter_mimics(plant: DCMotorPlant, final: DCMotorPlant, log: Log, shift: float | None, tau: float, max_skew: float,
                   speed: Callable[[DCMotorPlant, Log], float]) -> bool:
     """Whether the nominal ``L`` predicts the held-out speed (``speed``: free-run error, noise units) at least as
     well as ``final``'s ``L`` above nominal (``shift``, ``tau``: as for :func:`inductance_wins`). A current filter
@@ -122,10 +122,11 @@ def filter_mimics(plant: DCMotorPlant, final: DCMotorPlant, log: Log, shift: flo
     transient delivers within a sample, and the speed shows it (proving ground 14198: ``L`` 47 % high at an L/R of
     0.52 samples, held-out speed 17.7 noise units with the nominal ``L``, 7.5 with the named one; 3046 of the
     ``constant`` draws, a ``k`` error logged through a 0.56-sample filter: ``L`` fitted 87 % high, speed 0.79 with
-    the nominal ``L``, 0.98 with it). A plant too stiff to free-run, or an ``L`` below nominal, is not mimicked."""
+    the nominal ``L``, 0.98 with it). A plant too stiff to free-run, or an ``L`` below nominal, is not mimicked.
+    ``max_skew``: the conventions' whole samples ``shift`` is read from (:func:`.align.switched`)."""
     if final.params.L <= plant.params.L:
         return False
-    moved = log if shift is None else realign(log, shift, tau)
+    moved = log if shift is None else realign(log, shift, tau, max_skew)
     try:
         return speed(DCMotorPlant(final.params.model_copy(update={"L": plant.params.L}), final.effects), moved) \
             <= speed(final, moved)
