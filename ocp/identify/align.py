@@ -395,7 +395,7 @@ def switched(samples: float, tau: float, top: float = math.inf) -> float:
     The estimate's fraction is read from the whole sample nearest it, on either side: a lag measured a little short
     of ``m + 1`` on a fast armature is ``m + 1``, not ``m`` (its interpolation-equivalent lag is the whole sample, and
     a free fit's noise or a lagging speed sensor puts the estimate either side of it: the blind rig's 619 at 0.99 for
-    1, 626 at 1.84 for 2, 845 at 15.3 for 16, each applied a whole sample short as ``m``). With ``d = samples - n``,
+    1 and 626 at 1.84 for 2 were each applied a whole sample short as ``m``). With ``d = samples - n``,
     ``n`` the nearest whole sample, the lag is ``n + sign(d) g(|d|)``, ``g`` the fraction's map above: ``samples``
     itself for a slow armature, ``n`` for a fast one. ``top`` [samples]: the most whole samples the lag may be read
     from (a lag within the logging conventions: at most their skew, so that their 0.75-sample fraction for the
