@@ -42,6 +42,22 @@ def _end_current(p: MotorParams, f: float, i0: float) -> float:
     return float(out.y[0, -1])
 
 
+@pytest.mark.parametrize("tau", [0.05, 0.5, 2.0, 20.0])
+@pytest.mark.parametrize("lag", [0.2, 1.3])
+def test_the_realigned_row_drives_the_armature_as_the_switch_does(rig: MotorParams, tau: float, lag: float) -> None:
+    """The command logged a step earlier, moved by ``switched(lag, tau)`` for a switching instant ``lag`` (its fraction
+    under half a sample: read from the whole sample below): the held row's voltage through the exact zero-order-hold
+    step (eq. dc_electrical) gives the end current of the drive that switched ``lag`` mod 1 of the row late."""
+    p = rig.model_copy(update={"L": tau * DT * rig.R})
+    m, f = math.floor(lag), lag - math.floor(lag)
+    logged = np.array([V_OLD] * 4 + [V_NEW] * 4)  # the new command logged at row 4, applied from row 4 + lag
+    v = shifted(logged, switched(lag, tau))[4 + m]  # (the row the drive switches in)
+    i0 = (V_OLD - p.k_e * W) / p.R + 0.1
+    a = math.exp(-DT * p.R / p.L)
+    zoh = a * i0 + (1.0 - a) * (v - p.k_e * W) / p.R
+    assert zoh == pytest.approx(_end_current(p, f, i0), rel=1e-7, abs=1e-9)
+
+
 def _old_share(p: MotorParams, f: float) -> float:
     """The old level's share in the end current of a row whose drive switches ``f`` of it late (ODE oracle): the
     fraction of a sample whose interpolation is exact."""
