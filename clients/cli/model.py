@@ -136,8 +136,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                 "equation\nresiduals, broken down by direction, reversals, speed band, "
                                 "acceleration and angle.\n" + _LOG_DESCRIPTION,
                     examples=["thrustshape check rig.csv --params paper-rig --report check.html",
-                              "thrustshape check rig.csv --params examples/params.yaml --json"],
-                    lists=("presets",))
+                              "thrustshape check rig.csv --params examples/params.yaml --json"], lists=("presets",))
     _log_args(p)
     p.add_argument("--report", default=None, help="write a self-contained HTML report here")
     _skew_arg(p)
@@ -147,8 +146,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                     description="Fits every effect of the catalogue (and corrections param:<key> of the nominal "
                                 "constants)\nand ranks them by held-out error reduction; clean data gives an "
                                 "empty verdict.\n" + _LOG_DESCRIPTION,
-                    examples=["thrustshape diagnose rig.csv --params paper-rig --json"],
-                    lists=("presets", "effects"))
+                    examples=["thrustshape diagnose rig.csv --params paper-rig --json"], lists=("presets", "effects"))
     _log_args(p)
     _diagnose_args(p)
     p.set_defaults(func=cmd_diagnose)
@@ -346,8 +344,10 @@ def _print_alignment(d: dict[str, Any], rule: bool = False) -> None:
     al = d.get("alignment")
     if not al:
         return
+    a = al.get("applied_samples")  # (the lag the equations moved the command by, where it differs)
+    moved = "" if a is None or abs(a - al["samples"]) < 0.005 else f"; the equations moved it {_g(a, '.2f')}"
     print(f"alignment: command acts {_g(al['samples'], '.2f')} samples ({_g(1e3 * al['seconds'], '.3g')} ms) after "
-          f"its row{' -> input_delay' if al['called_input_delay'] else ' (removed: logging convention)'}")
+          f"its row{' -> input_delay' if al['called_input_delay'] else ' (removed: logging convention)'}{moved}")
     if rule:
         print(f"  rule: {al['rule']}")
 

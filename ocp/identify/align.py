@@ -60,7 +60,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -111,6 +111,8 @@ class Alignment:
         bias: [samples] how far a :data:`HELD_L_ERROR` inductance error moves a lag found with a nominal ``L/R``
             over :data:`NOMINAL_TAU` samples (0 otherwise): such a lag is a delay only where held-out data prefer it
             to that longer ``L/R`` (the caller's test)
+        applied: [samples] the lag the equations saw the command moved by (:func:`applying`: ``samples`` read by
+            :func:`switched`, less the plant's own delay), where the log was realigned; None otherwise
     """
 
     samples: float
@@ -121,10 +123,12 @@ class Alignment:
     identified: bool = True
     nominal: bool = False
     bias: float = 0.0
+    applied: float | None = None
 
     def to_dict(self) -> dict[str, Any]:
         return {"samples": round(self.samples, 3), "seconds": self.seconds, "called_input_delay": self.delay,
-                "rule": self.rule, "identified": self.identified, "from_nominal_armature": self.nominal}
+                "rule": self.rule, "identified": self.identified, "from_nominal_armature": self.nominal,
+                "applied_samples": None if self.applied is None else round(self.applied, 3)}
 
 
 def smooth(y: np.ndarray, dt: float, cutoff: float) -> np.ndarray:
@@ -420,6 +424,14 @@ def realign(log: Log, samples: float, tau: float | None = None, top: float = mat
     lag = samples if tau is None else switched(samples, tau, top)
     return Log(log.t, shifted(log.voltage, lag), log.current, log.omega, log.theta, log.thrust, log.kind,
                log.source)
+
+
+def applying(align: Alignment, log: Log, own: float, tau: float, top: float) -> tuple[Alignment, Log]:
+    """``align`` with the lag the equations see (:attr:`Alignment.applied`) and ``log`` realigned by it: the
+    alignment less ``own`` [samples] (the plant's own delay), read by :func:`switched` with the nominal L/R ``tau``
+    [samples] from at most ``top`` whole samples."""
+    lag = switched(max(align.samples - own, 0.0), tau, top)
+    return replace(align, applied=lag), realign(log, align.samples - own, tau, top)
 
 
 def sample_rate(log: Log) -> float:

@@ -40,12 +40,12 @@ from ocp.identify.align import (
     DELAY_GAIN,
     SKEW_FRACTION,
     Alignment,
+    applying,
     armature_error,
     estimate,
     gain,
     realign,
     spread,
-    switched,
     within,
 )
 from ocp.identify.candidates import candidate
@@ -255,7 +255,7 @@ def aligned(plant: DCMotorPlant, log: Log, max_logging_skew: float) -> tuple[Ali
     align = estimate(log, max_logging_skew + own, armature)
     if align.delay:
         align = within(align, max_logging_skew + own, log.dt)
-    return align, realign(log, align.samples - own, armature[0] / log.dt, max_logging_skew)
+    return applying(align, log, own, armature[0] / log.dt, max_logging_skew)
 
 
 @own_threads
@@ -285,9 +285,9 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         unconfirmed, align = align, within(align, opt.max_logging_skew + own, log.dt)
     delay = (align.samples - own) * log.dt if align.delay and "input_delay" in _allowed(opt) else None
     top = math.inf if delay is not None else opt.max_logging_skew  # (a conventions' lag: at most its whole samples)
-    aligned = realign(log, align.samples - own, tau, top)  # the equations always see the command when it acts
+    align, aligned = applying(align, log, own, tau, top)  # the equations always see the command when it acts
     work = log if delay is not None else aligned  # free runs: the delay, if called, is in the plant
-    held = (log.voltage, switched(max(align.samples - own, 0.0), tau, top))  # (the dead band acts before the shift)
+    held = (log.voltage, align.applied or 0.0)  # (the drive's dead band acts before the shift)
 
     def judged(design: Design, f: Fitted) -> str | None:  # why a named L is not (what mimics it, on free runs)
         final, shift = plant_of(plant, design, f, delay), None if delay is not None else align.samples - own

@@ -117,13 +117,21 @@ function showReportFigures(reportHtml) {
   $("#m-report-link").appendChild(a);
 }
 
+// the lag the equations moved the command by, where it differs from the estimate (a fast armature's current shows
+// whole samples: ocp.identify.align.switched)
+function moved(al) {
+  const a = al.applied_samples;
+  return a === null || a === undefined || Math.abs(a - al.samples) < 0.005 ? "" :
+    ` The equations moved the command ${fmt(a, 3)} samples.`;
+}
+
 function showCheck(res, reportHtml) {
   $("#m-check-results").hidden = false;
   showEquations("#m-check-equations", res);
   const al = res.alignment;
   $("#m-check-alignment").textContent = al ? `Compared after removing the logging convention: the command acts ` +
     `${fmt(al.samples, 3)} samples (${fmt(1e3 * al.seconds, 3)} ms) after its row` +
-    (al.identified ? "." : " (not identifiable from this log: none assumed).") : "";
+    (al.identified ? "." : " (not identifiable from this log: none assumed).") + moved(al) : "";
   const fr = res.free_run || {}, os_ = res.one_step || {}, noise = res.noise || {};
   if (fr.current_sensor_lag) {
     $("#m-check-alignment").textContent += ` The simulated current is read through the current sensor's lag ` +
@@ -223,8 +231,8 @@ function showDiagnosisDetails(res, after) {
   const al = res.alignment;
   if (al) {
     line(`Alignment: the command acts ${fmt(al.samples, 3)} samples (${fmt(1e3 * al.seconds, 3)} ms) after its row` +
-         (al.called_input_delay ? " — called input_delay." : " — removed as a logging convention.") + ` Rule: ${al.rule}`,
-         "m-alignment");
+         (al.called_input_delay ? " — called input_delay." : " — removed as a logging convention.") + moved(al) +
+         ` Rule: ${al.rule}`, "m-alignment");
   }
   const cal = res.calibration || {};
   const keys = Object.keys(cal);
