@@ -431,7 +431,7 @@ def applying(align: Alignment, log: Log, own: float, tau: float, top: float) -> 
     alignment less ``own`` [samples] (the plant's own delay), read by :func:`switched` with the nominal L/R ``tau``
     [samples] from at most ``top`` whole samples."""
     lag = switched(max(align.samples - own, 0.0), tau, top)
-    return replace(align, applied=lag), realign(log, align.samples - own, tau, top)
+    return replace(align, applied=lag), realign(log, lag)  # (the lag read once: realign interpolates it as it is)
 
 
 def sample_rate(log: Log) -> float:
