@@ -30,8 +30,8 @@ log cannot show it).
 Where something holds the rotor (:func:`.columns.held_still`: dry friction holds whatever stays within its level), the
 torque balance holds a torque no column expresses: those rows are cut from the torque equation for every model.
 
-Rows are split into training and held-out samples (every ``holdout_every``-th segment), or into folds held out
-in turn (cross-validation, :attr:`Design.g_fold`); each equation is weighted by its noise level. Only Gram matrices
+Rows are split into training and held-out samples (every ``holdout_every``-th segment), or into folds held out in
+turn (cross-validation, :attr:`Design.g_fold`); each equation is weighted by its noise level. Only Gram matrices
 leave this module: fitting a model (a subset of columns, bounded) and scoring it on held-out rows are ``P x P``
 algebra (:mod:`.select`).
 """
@@ -49,7 +49,6 @@ import numpy as np
 from ocp.filters import filtfilt
 from ocp.identify.align import cutoff_hz
 from ocp.identify.angle import MAX_PERIODS, angle_limits, ripple_independence, tracked_periods
-from ocp.identify.clipping import clipped, widened
 from ocp.identify.columns import (
     DROPS,
     Column,
@@ -67,6 +66,7 @@ from ocp.identify.columns import (
 from ocp.identify.coverage import unseen
 from ocp.identify.drops import drop_columns
 from ocp.identify.footprint import BANDED, Footprints, grams, weighted
+from ocp.identify.holdout import usable
 from ocp.identify.noise_level import white_noise
 from ocp.identify.resolution import rotor_tau, unresolved
 from ocp.identify.ripple import pick_periods, residualizer
@@ -273,13 +273,13 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
     t = targets(p, s)
     t[0] = targets(p, raw)[0]
     rows = s.w.size
-    edge = np.zeros(rows, dtype=bool)
+    edge, m = np.zeros(rows, dtype=bool), 0
     tau = rotor_tau(p, s.w) if log.kind is LogKind.TIME_SERIES else 0.0
     if log.kind is LogKind.TIME_SERIES:  # the low-passes' start-up and run-out transients
         m = min(math.ceil(1.5 / (cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * log.dt)), rows // 6)
         edge[:m] = edge[rows - m:] = True
-        edge |= widened(clipped(log.current[:rows]), m)  # a clipped current and its transient, as the ends (.clipping)
-    train, test = train[:rows] & ~edge, test[:rows] & ~edge
+    # a clipped current and its transient cut as the ends (.clipping); too few rows left: a LogError
+    train, test, edge = usable(train[:rows], test[:rows], edge, log.current[:rows], m)
     cols = _columns(p, s, raw, log, effects, held)
     # noise level per equation: what the richest fit (one shape per effect) leaves on training rows
     # (the motor constant is left out: with it, J, B and c_tau the torque balance scales to zero)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 import ocp.identify.holdout as holdout
-import ocp.identify.regression as regression
+from ocp.errors import LogError
 from ocp.identify import diagnose
 from ocp.identify.clipping import clipped
 from ocp.logs import Log, log_from_arrays
@@ -58,8 +58,7 @@ def test_clipped_rows_are_found_and_said(clipped_case: tuple[Log, DCMotorPlant])
 def test_unhandled_the_clipped_rows_are_named_as_physics(seed: int, monkeypatch: pytest.MonkeyPatch) -> None:
     log, plant = _clipped_log(seed)
     never = lambda x: np.zeros(x.size, dtype=bool)  # noqa: E731
-    monkeypatch.setattr(holdout, "clipped", never)
-    monkeypatch.setattr(regression, "clipped", never)
+    monkeypatch.setattr(holdout, "clipped", never)  # (the split's and the equations' cut: .holdout.usable)
     assert diagnose(plant, log).verdict != []
 
 
@@ -74,3 +73,38 @@ def test_a_peak_or_a_coarse_plateau_is_not_clipping() -> None:
     assert not clipped(steps).any()  # a plateau at the top, its noise spread over levels
     cut = np.clip(x, -2.5, 2.5)  # the sensor's range
     assert np.array_equal(clipped(cut), np.abs(x) >= 2.5)
+
+
+def test_a_log_clipped_until_nothing_is_left_is_refused_with_its_reason() -> None:
+    """Proving ground 23018 (clean, 50 Hz PRBS, 509 rows) clipped at 45 % of its peak: 131 rows at the range, and
+    with their low-pass transient (84 rows either side) cut, no row is left to fit on. Before: the noise levels were
+    the mean of no rows (NaN) and a delay was named; now a LogError on the current says why."""
+    case = make_case(23018)
+    assert case.expected == set()
+    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
+    top = LEVEL * float(np.max(np.abs(c["current"])))
+    log = log_from_arrays(t, c["voltage"], np.clip(c["current"], -top, top), c["thrust"], omega=c.get("omega"),
+                          theta=c.get("theta"))
+    with pytest.raises(LogError) as err:
+        diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
+    assert err.value.field == "current" and f"fewer than {holdout.MIN_ROWS}" in str(err.value)
+
+
+def test_usable_rows_are_counted_from_the_cut() -> None:
+    """:func:`.holdout.usable` on a made-up current: a run of 5 rows at the range, cut with 3 rows either side, and
+    the ends' transients; the masks left are counted here row by row."""
+    n = 200
+    current = np.sin(np.linspace(0.0, 3.0, n))
+    current[100:105] = 1.5  # (the range: the top, five rows in a row)
+    edge = np.zeros(n, bool)
+    edge[:10] = edge[-10:] = True
+    train, test = np.arange(n) % 4 != 0, np.arange(n) % 4 == 0
+    kept, held, cut = holdout.usable(train, test, edge, current, 3)
+    gone = edge.copy()
+    gone[97:108] = True
+    assert np.array_equal(cut, gone)
+    assert np.array_equal(kept, train & ~gone) and np.array_equal(held, test & ~gone)
+    with pytest.raises(LogError) as err:  # a short log: the transients alone leave too few held-out rows
+        holdout.usable(train[:120], test[:120], np.r_[np.ones(50, bool), np.zeros(20, bool), np.ones(50, bool)],
+                       np.sin(np.linspace(0.0, 3.0, 120)), 3)
+    assert err.value.field == "t" and "5 to hold out" in str(err.value)
