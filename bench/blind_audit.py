@@ -33,9 +33,10 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from blindrig.draw import draw_case
+from blindrig.draw import Case, draw_case
 from blindrig.excite import Excitation
-from blindrig.logger import run_log
+from blindrig.logger import LoggerConfig, run_log
+from blindrig.rig import RigTruth
 
 #: a footprint this many noise levels or more shows (the proving ground's rule, ``tests.proving_ground.cases``)
 VISIBLE = 1.5
@@ -46,12 +47,12 @@ FIELDS = {"R": (("R",), "R"), "L": (("L",), "L"), "k": (("k",), "k_t"), "J": (("
           "c_tau": (("c_tau", "c_tau_rev"), "c_tau"), "c_f": (("c_f", "c_f_rev"), "c_f")}
 
 
-def _without(case: object, label: str) -> tuple[object, object]:
+def _without(case: Case, label: str) -> tuple[RigTruth, LoggerConfig]:
     """(rig, logger) of ``case`` without ``label``."""
-    p, cfg = dataclasses.replace(case.truth), dataclasses.replace(case.cfg)  # type: ignore[attr-defined]
+    p, cfg = dataclasses.replace(case.truth), dataclasses.replace(case.cfg)
     if label.startswith("param:"):
         fields, key = FIELDS[label.removeprefix("param:")]
-        nominal = case.nominal[key]  # type: ignore[attr-defined]
+        nominal = case.nominal[key]
         true = getattr(p, fields[0])
         near = nominal * (1.0 + math.copysign(TOLERANCE, true / nominal - 1.0))  # calibration's reach
         reached = near if abs(true - nominal) > abs(near - nominal) else true
@@ -69,15 +70,15 @@ def _without(case: object, label: str) -> tuple[object, object]:
     return p, cfg
 
 
-def _noise(cfg: object) -> np.ndarray:
+def _noise(cfg: LoggerConfig) -> np.ndarray:
     """(3,) noise levels of the logged speed [rad/s], current [A], thrust [N] (module doc)."""
-    q_i = 2.0 * cfg.cur_range / 2**cfg.cur_bits / math.sqrt(12.0)  # type: ignore[attr-defined]
-    q_f = 2.0 * cfg.thr_range / 2**cfg.thr_bits / math.sqrt(12.0)  # type: ignore[attr-defined]
-    if cfg.speed_sensor == "tacho":  # type: ignore[attr-defined]
-        s_w = cfg.tach_noise  # type: ignore[attr-defined]
+    q_i = 2.0 * cfg.cur_range / 2**cfg.cur_bits / math.sqrt(12.0)
+    q_f = 2.0 * cfg.thr_range / 2**cfg.thr_bits / math.sqrt(12.0)
+    if cfg.speed_sensor == "tacho":
+        s_w = cfg.tach_noise
     else:  # two quantised angles over the window
-        s_w = 2.0 * math.pi / cfg.cpr * cfg.rate / cfg.diff_window / math.sqrt(6.0)  # type: ignore[attr-defined]
-    return np.array([s_w, max(cfg.cur_noise, q_i), max(cfg.thr_noise, q_f)])  # type: ignore[attr-defined]
+        s_w = 2.0 * math.pi / cfg.cpr * cfg.rate / cfg.diff_window / math.sqrt(6.0)
+    return np.array([s_w, max(cfg.cur_noise, q_i), max(cfg.thr_noise, q_f)])
 
 
 def footprints(seed: int) -> dict[str, float]:
@@ -88,8 +89,8 @@ def footprints(seed: int) -> dict[str, float]:
     replay = Excitation("replay", ["replay"], np.zeros(n, dtype=bool), base["voltage"], np.zeros(n), False)
     sig = _noise(case.cfg)
 
-    def logged(p: object, cfg: object) -> np.ndarray:  # (3, n) speed, current, thrust as logged
-        c = run_log(p, cfg, replay, case.h_max, np.random.default_rng([seed, 7]), case.theta0)  # type: ignore[arg-type]
+    def logged(p: RigTruth, cfg: LoggerConfig) -> np.ndarray:  # (3, n) speed, current, thrust as logged
+        c = run_log(p, cfg, replay, case.h_max, np.random.default_rng([seed, 7]), case.theta0)
         return np.vstack([c["omega"], c["current"], c["thrust"]])
 
     true = logged(case.truth, case.cfg)  # (the rig as drawn: once for all its labels)
@@ -106,7 +107,10 @@ def main(argv: list[str] | None = None) -> int:
     recs = [r for r in json.loads(Path(args.records).read_text()) if r.get("verdict") is not None]
     with ProcessPoolExecutor(args.procs) as pool:
         prints = dict(zip((r["seed"] for r in recs), pool.map(footprints, [r["seed"] for r in recs]), strict=True))
-    drawn, shows, found_shown, found_hidden = Counter(), Counter(), Counter(), Counter()
+    drawn: Counter[str] = Counter()
+    shows: Counter[str] = Counter()
+    found_shown: Counter[str] = Counter()
+    found_hidden: Counter[str] = Counter()
     exact = exact_opt = 0
     for r in recs:
         fp, verdict, truth = prints[r["seed"]], set(r["verdict"]), set(r["truth"])

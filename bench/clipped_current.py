@@ -76,9 +76,10 @@ def main(argv: list[str] | None = None) -> int:
     false_drawn = [r[0] for r in rows if r[2]]
     print(f"seeds {args.first}..{args.first + args.n - 1}: {len(clean)} clean logs, current clipped at "
           f"{100 * args.level:.0f} % of its peak")
-    for name, k in (("clipped rows left out (shipped)", 3), ("clipped rows fitted (detection off)", 4)):
-        named = Counter(i for r in clean for i in r[k])
-        print(f"  {name:38s} clean {sum(not r[k] for r in clean):3d}/{len(clean)}   false items: "
+    for name, verdicts in (("clipped rows left out (shipped)", [r[3] for r in clean]),
+                           ("clipped rows fitted (detection off)", [r[4] for r in clean])):
+        named = Counter(i for v in verdicts for i in v)
+        print(f"  {name:38s} clean {sum(not v for v in verdicts):3d}/{len(clean)}   false items: "
               + (", ".join(f"{i} {n}" for i, n in named.most_common()) or "none"))
     print(f"  still named with the rows left out: {[(r[0], r[3]) for r in clean if r[3]]}")
     print(f"logs as drawn (every kind, unclipped) called clipped: {len(false_drawn)} {false_drawn}")

@@ -17,13 +17,14 @@ import argparse
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
-def one(seed: int, effect: str) -> dict[str, object]:
+def one(seed: int, effect: str) -> dict[str, Any]:
     from ocp.identify import diagnose
     from ocp.identify.design import DesignOptions, design
     from ocp.model.params import MotorParams
@@ -42,7 +43,7 @@ def one(seed: int, effect: str) -> dict[str, object]:
     limits = DesignOptions(voltage=rig.truth.v_max, current=0.5 * rig.truth.v_max / rig.truth.R)
     d = design(plant, log, first, limits)
     t_design = time.perf_counter() - t0
-    out: dict[str, object] = {"seed": seed, "effect": effect, "first": first.verdict,
+    out: dict[str, Any] = {"seed": seed, "effect": effect, "first": first.verdict,
                               "ambiguous": bool(first.ambiguous), "needed": d.needed, "t_design": t_design}
     if d.mission is None or d.chosen is None:
         return {**out, "proposal": None, "second": None, "right": False}
@@ -66,8 +67,8 @@ def main(argv: list[str] | None = None) -> int:
         for seed in range(args.first, args.first + args.n):
             r = one(seed, effect)
             rows.append(r)
-            first = ",".join(r["first"]) + (" (ambiguous)" if r["ambiguous"] else "")  # type: ignore[arg-type]
-            second = "-" if r["second"] is None else ",".join(r["second"]) or "nothing"  # type: ignore[arg-type]
+            first = ",".join(r["first"]) + (" (ambiguous)" if r["ambiguous"] else "")
+            second = "-" if r["second"] is None else ",".join(r["second"]) or "nothing"
             print(f"{seed:5d} {effect:17s} {first or 'nothing':28s} {r['proposal']!s:20s} "
                   f"{float(r.get('z', np.nan)):7.3g} {float(r.get('z_log', np.nan)):7.3g} {second:28s} "
                   f"{'yes' if r['right'] else 'NO':5s}  {float(r['t_design']):6.1f}", flush=True)
@@ -75,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"\nlogs: {len(rows)}; first log unsettled (ambiguous or wrong): {len(unsettled)}; "
           f"right after the proposed experiment: {sum(bool(r['right']) for r in rows)}/{len(rows)} "
           f"(of the unsettled: {sum(bool(r['right']) for r in unsettled)}/{len(unsettled)}); "
-          f"design time median {np.median([float(r['t_design']) for r in rows]):.1f} s")  # type: ignore[arg-type]
+          f"design time median {np.median([float(r['t_design']) for r in rows]):.1f} s")
     return 0
 
 

@@ -44,10 +44,10 @@ import httpx
 
 ROOT = Path(__file__).resolve().parents[1]
 ANALYTIC = {"amplitude": 0.5, "period": 2.0, "q": 2, "rate": 500}
-OPTIMIZE = {"name": "bench", "collocation": {"intervals": 60}, "time_limit_s": 5.0,
-            "segments": [{"kind": "hold", "duration": 0.2, "thrust": 0.3},
-                         {"kind": "reversal", "duration": 1.0, "to": -0.3},
-                         {"kind": "hold", "duration": 0.2, "thrust": -0.3}]}
+OPTIMIZE: dict[str, Any] = {"name": "bench", "collocation": {"intervals": 60}, "time_limit_s": 5.0,
+                            "segments": [{"kind": "hold", "duration": 0.2, "thrust": 0.3},
+                                         {"kind": "reversal", "duration": 1.0, "to": -0.3},
+                                         {"kind": "hold", "duration": 0.2, "thrust": -0.3}]}
 
 
 def _free_port() -> int:
@@ -276,7 +276,8 @@ def run_faults(workers: int, seconds: float, as_json: bool, factor: int = 2) -> 
     with tempfile.TemporaryDirectory() as tmp:
         db = Path(tmp) / "jobs.sqlite3"
         proc, url = _start(workers, 8, db, THRUSTSHAPE_STORE_BUSY_TIMEOUT_S="0.5")  # 8: the default queue
-        stop, log = threading.Event(), []
+        stop = threading.Event()
+        log: list[str] = []  # the faults injected
         try:
             asyncio.run(_round(url, "/v1/references/optimize", OPTIMIZE, 1, 2))  # warm the solver caches
             batch = httpx.post(url + "/v1/batches", json={"missions": missions}, timeout=60).json()["id"]

@@ -20,13 +20,17 @@ import sys
 from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ocp.logs import Log
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 KINDS = ("reverse: asymmetry", "reverse: constants within 5 %", "forward: one constant off", "as drawn (both ways)")
 
 
-def _logs(seed: int) -> list[tuple[str, list[str], object, dict[str, float], float | None]]:
+def _logs(seed: int) -> list[tuple[str, list[str], Log, dict[str, float], float | None]]:
     """(kind, drawn labels, log, nominal, drawn relative asymmetry) for rig ``seed``'s four logs."""
     import numpy as np
 
@@ -38,7 +42,7 @@ def _logs(seed: int) -> list[tuple[str, list[str], object, dict[str, float], flo
     rng = np.random.default_rng([seed, 1018])
     tr = case.truth
 
-    def one_way(sign: float, **change: object) -> object:
+    def one_way(sign: float, **change: object) -> Log:
         cols = replay(case, sign * np.abs(case.columns["voltage"]), rng, **change)
         return case_log(dataclasses.replace(case, columns=cols))
 
@@ -68,15 +72,15 @@ def _one(seed: int) -> list[tuple[str, list[str], list[str], list[str], float | 
     out = []
     for kind, drawn, log, nominal, ratio in _logs(seed):
         plant = DCMotorPlant(MotorParams(**nominal))
-        d = diagnose(plant, log)  # type: ignore[arg-type]
+        d = diagnose(plant, log)
         err = None
         if ratio is not None:
             key, base = ("dc_tau", "c_tau") if drawn[0] == "drag_asymmetry" else ("dc_f", "c_f")
             got = [getattr(e, key) / nominal[base] for e in d.plant.effects if e.name == drawn[0]]
             err = got[0] - ratio if got else None
-        regression.unseen = lambda _log: {}
+        regression.unseen = lambda log: {}
         try:
-            without = diagnose(plant, log).verdict  # type: ignore[arg-type]
+            without = diagnose(plant, log).verdict
         finally:
             regression.unseen = unseen
         out.append((kind, drawn, d.verdict, without, err))
@@ -93,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
     with ProcessPoolExecutor(args.procs) as pool:
         rows = [(seed, r) for seed, rs in zip(seeds, pool.map(_one, seeds), strict=True) for r in rs]
     right: Counter[tuple[str, str]] = Counter()
-    named: Counter[tuple[str, str]] = Counter()
+    named: Counter[str] = Counter()
     errors = []
     for seed, (kind, drawn, with_rule, without, err) in rows:
         for how, verdict in (("with", with_rule), ("without", without)):

@@ -501,9 +501,10 @@ class MissionBench:
     replay: dict[str, float] = field(default_factory=dict)
     #: back-off rounds of the last cold and warm solve (0: the limits held between nodes at once)
     backoff: dict[str, int] = field(default_factory=dict)
-    #: which program answered the cold solve (flat or radau), and the Radau program's own cold solve
+    #: which program answered the cold solve (flat or radau), and the Radau program's own cold solve (median seconds,
+    #: its back-off rounds and its result's source, a str)
     program: str = ""
-    radau: dict[str, float] = field(default_factory=dict)
+    radau: dict[str, Any] = field(default_factory=dict)
 
 
 def solution_time(result: OptimizeResult) -> float:

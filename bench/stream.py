@@ -115,8 +115,8 @@ def offline(p: MotorParams, t: np.ndarray, f: np.ndarray) -> list[dict[str, obje
     return rows
 
 
-def python_speed(p: MotorParams, t: np.ndarray, f: np.ndarray) -> dict[str, float]:
-    out = {}
+def python_speed(p: MotorParams, t: np.ndarray, f: np.ndarray) -> dict[str, dict[str, float]]:
+    out: dict[str, dict[str, float]] = {}
     for reg in ("bounded", "continuous-voltage"):
         sh = StreamShaper(p, stream_options(current=CURRENT, voltage=VOLTAGE, regularity=reg, delay=DELAY))
         per = np.empty(t.size)
@@ -172,8 +172,8 @@ def main() -> int:
     for reg, s in python_speed(p, t, f).items():
         print(reg, " ".join(f"{k}={v:.4g}" for k, v in s.items()))
     print("\n## generated C step (-O2), 50,000 samples, three runs")
-    for reg, s in c_speed(p, f).items():
-        print(reg, s)
+    for reg, runs in c_speed(p, f).items():
+        print(reg, runs)
     print(f"\n(python {sys.version.split()[0]}; single runs: the worst cases include the OS scheduling of a shared "
           "machine)")
     return 0

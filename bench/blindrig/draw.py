@@ -198,7 +198,7 @@ def draw_case(seed: int) -> Case:
     """Draw the whole case of ``seed`` (no simulation)."""
     rng = np.random.default_rng(seed)
     p, sc = draw_motor(rng)
-    kinds, probs = zip(*KIND_P, strict=True)
+    kinds, probs = [k for k, _ in KIND_P], [q for _, q in KIND_P]
     kind = str(rng.choice(kinds, p=np.asarray(probs)))
     rate = float(rng.choice([500.0, 1000.0])) if rng.random() < 0.5 else round(_logu(rng, 50.0, 10_000.0), 1)
     length = rng.uniform(2.0, 20.0)
