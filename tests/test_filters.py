@@ -3,6 +3,8 @@ filtering with odd padding, the Butterworth design and the zero-order-hold trans
 
 from __future__ import annotations
 
+from typing import Literal
+
 import numpy as np
 import pytest
 from scipy import signal
@@ -90,7 +92,7 @@ def test_a_pad_as_long_as_the_record_is_refused() -> None:
 
 
 @pytest.mark.parametrize("order", ["C", "F"])
-def test_the_input_is_left_alone_unless_it_may_be_overwritten(order: str) -> None:
+def test_the_input_is_left_alone_unless_it_may_be_overwritten(order: Literal["C", "F"]) -> None:
     """``iir``/``filtfilt`` without ``overwrite`` never change ``x`` (a first-order filter, all its numerator's later
     taps zero, is the case that filters in place); with it, the same result, ``x``'s buffer reused where its columns
     are contiguous."""

@@ -58,7 +58,12 @@ def test_the_builder_gives_back_as_it_drops_columns(monkeypatch: pytest.MonkeyPa
     """With the allowance at one byte, :func:`ocp.identify.regression.build` gives the heap back after every column
     it drops (one call per column of the design); at the default allowance a short log's columns make no call."""
     calls: list[int] = []
-    monkeypatch.setattr(memory, "give_back", lambda: bool(calls.append(1)) or True)
+
+    def give_back() -> bool:
+        calls.append(1)
+        return True
+
+    monkeypatch.setattr(memory, "give_back", give_back)
     log = generate(preset("paper-rig"), RigSpec(effects={"coulomb_friction": {"tau_c": 0.004}}, seconds=1.0, seed=3))
     half = np.arange(log.t.size) % 200 < 100
     build(preset("paper-rig"), log, half, ~half, ("coulomb_friction",))

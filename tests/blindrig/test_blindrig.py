@@ -24,7 +24,7 @@ def _motor(**kw: float) -> RigTruth:
     base = dict(V_supply=12.0, R=0.5, L=2.5e-4, k=0.01, J=2e-6, B=1e-6, c_tau=1e-8, c_tau_rev=1e-8,
                 c_f=2e-6, c_f_rev=2e-6, w_smooth=2.0)
     base.update(kw)
-    return RigTruth(**base)  # type: ignore[arg-type]
+    return RigTruth(**base)
 
 
 def test_steady_state_matches_quadratic_closed_form() -> None:
@@ -114,14 +114,14 @@ def test_cogging_mean_is_zero_and_ripple_is_angle_periodic() -> None:
     assert abs(freqs[np.argmax(spec)] - f_cog) < 2 * freqs[1]
 
 
-def _cfg(n: int, skew: int = 0, **kw: float) -> LoggerConfig:
+def _cfg(n: int, skew: int = 0, **kw: float | str) -> LoggerConfig:
     """A quiet 1 kHz logger with a tachometer."""
     base = dict(rate=1000.0, n=n, skew=skew, jitter=0.0, speed_sensor="tacho", columns="both", tach_noise=0.0,
                 tach_filter=0.0, cpr=4096, diff_window=1, cur_noise=1e-9, cur_filter=0.0, cur_bits=16,
                 cur_range=30.0, cur_offset=0.0, thr_noise=1e-9, thr_bits=24, thr_range=5.0, thr_offset=0.0,
                 thr_filter=0.0, pi_kp=0.0, pi_ki=0.0)
     base.update(kw)
-    return LoggerConfig(**base)  # type: ignore[arg-type]
+    return LoggerConfig(**base)
 
 
 def _step_exc(n: int, at: int, v: float) -> Excitation:

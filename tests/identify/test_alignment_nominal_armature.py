@@ -137,6 +137,7 @@ def test_a_delay_within_the_inductance_share_is_judged_on_held_out_data(tmp_path
     as ambiguous."""
     res, truth = blind(431, tmp_path)
     drawn = truth["logger"]["skew"] + truth["rig"]["delay"] * truth["logger"]["rate"]
+    assert res.alignment is not None
     assert res.alignment.nominal and res.alignment.bias > res.alignment.samples - 2.75
     assert abs(res.alignment.samples - drawn) < 0.5 and res.verdict == truth["labels"] == ["input_delay"]
     res, truth = blind(429, tmp_path)

@@ -15,18 +15,18 @@ import pytest
 from clients.cli import main
 from ocp.identify import diagnose
 from ocp.identify.coverage import GAIN, GAPS, blind_spots, coverage
-from ocp.logs import log_from_arrays, read_log, write_log_csv
+from ocp.logs import Log, log_from_arrays, read_log, write_log_csv
 from ocp.model.effects import load_plant
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.logfiles import write_csv
-from tests.proving_ground.experiment import draw, run_command, voltage_steps
+from tests.proving_ground.experiment import Rig, draw, run_command, voltage_steps
 from tests.rig_log import rig_log
 
 SEED = 0  # a 200 Hz rig whose two-level log misses its dead band (test_design_experiment's); any such rig holds
 
 
-def _log(rig, levels: tuple[float, ...]):  # type: ignore[no-untyped-def]
+def _log(rig: Rig, levels: tuple[float, ...]) -> Log:
     t, v = voltage_steps(rig, SEED, levels=levels)
     return rig_log(run_command(rig, t, v, SEED + 1))
 
@@ -71,7 +71,7 @@ def test_what_the_verdict_names_is_not_a_blind_spot() -> None:
     assert "voltage_range" not in {b["gap"] for b in blind_spots(log, ["brush_drop", "voltage_deadband"])}
 
 
-def _sweep(w: np.ndarray, path: Path):  # type: ignore[no-untyped-def]
+def _sweep(w: np.ndarray, path: Path) -> Log:
     """A noise-free sweep of the plant ``P`` at the speeds ``w`` [rad/s] (its steady current, voltage and thrust in
     closed form: eqs. dc_mechanical and dc_electrical with zero derivatives), read as a steady-state log."""
     i = (P["B"] * w + P["c_tau"] * w * np.abs(w)) / P["k_t"]

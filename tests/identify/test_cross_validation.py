@@ -72,7 +72,8 @@ def test_the_paired_tests_use_each_folds_own_fit() -> None:
     d = _design(a, t, folds)
     before, after = fit_model(d, (), tol=0.5), fit_model(d, ("force_offset",), tol=0.5)
     # per block, the fall of the squared error with each fold's own fits, by hand
-    falls, dd = [], np.zeros(3)
+    per_block: list[np.ndarray] = []  # (3,) per block: each equation's fall
+    dd = np.zeros(3)
     for m in folds:
         xb = np.linalg.lstsq(a[0, ~m][:, [0]], t[0, ~m], rcond=None)[0]  # before: B alone (torque rows only)
         xa = np.linalg.lstsq(a[:, ~m].reshape(-1, 2), t[:, ~m].ravel(), rcond=None)[0]
@@ -80,8 +81,8 @@ def test_the_paired_tests_use_each_folds_own_fit() -> None:
         for b in _blocks(m, 40):
             eb = np.sum((t[:, b] - a[:, b][:, :, [0]] @ xb) ** 2, axis=1)
             ea = np.sum((t[:, b] - a[:, b] @ xa) ** 2, axis=1)
-            falls.append(eb - ea)
-    falls = np.array(falls)[:, 2]  # the offset's thrust equation
+            per_block.append(eb - ea)
+    falls = np.array(per_block)[:, 2]  # the offset's thrust equation
     want = falls.mean() / falls.std(ddof=1) * np.sqrt(len(falls))
     t_stat, nb = block_t(d, before, after)
     assert nb == len(falls)

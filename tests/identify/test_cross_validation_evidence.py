@@ -19,6 +19,7 @@ from ocp.identify import diagnose
 from ocp.identify.diagnose import DiagnoseOptions
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
+from ocp.model.effects import Stribeck
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import make_case
@@ -35,5 +36,6 @@ def test_stribeck_at_few_reversals_is_named_under_cross_validation(seed: int, si
     res = diagnose(plant, log)
     assert res.verdict == ["stribeck"]
     fitted = [e for e in res.plant.effects if e.name == "stribeck"]
-    assert len(fitted) == 1 and fitted[0].tau_s > 0  # the calibrated plant carries it, a positive level
+    assert len(fitted) == 1 and isinstance(fitted[0], Stribeck)
+    assert fitted[0].tau_s > 0  # the calibrated plant carries it, a positive level
 

@@ -17,6 +17,7 @@ from ocp.identify import diagnose, regression
 from ocp.identify.columns import REST_ROWS, at_rest, held_still, signals
 from ocp.identify.noise_level import white_noise
 from ocp.logs import Log, log_from_arrays
+from ocp.model.effects import Stribeck
 from ocp.model.params import MotorParams, load_params
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import make_case
@@ -120,6 +121,7 @@ def test_stribeck_friction_that_holds_the_rotor_is_named(monkeypatch: pytest.Mon
     res = diagnose(DCMotorPlant(p), log)
     assert res.verdict == ["stribeck"]
     (fitted,) = res.plant.effects
+    assert isinstance(fitted, Stribeck)
     assert fitted.tau_s == pytest.approx(case.truth.effects["stribeck"]["tau_s"], rel=0.5)
     monkeypatch.setattr(regression, "held_still", lambda s, log, p, rest: np.zeros_like(rest))
     assert "stribeck" not in diagnose(DCMotorPlant(p), log).verdict

@@ -25,7 +25,7 @@ from ocp.identify.coverage import SEEN_ROWS, coverage, unseen
 from ocp.identify.design import design
 from ocp.logs import Log, log_from_arrays
 from ocp.logs.timebase import uniform
-from ocp.model.effects import load_plant
+from ocp.model.effects import DragAsymmetry, load_plant
 from ocp.optimize.mission import Mission
 from ocp.optimize.solve import optimize
 from tests.proving_ground import make_case
@@ -62,6 +62,7 @@ def test_a_reverse_drag_is_the_asymmetry_at_its_drawn_size(seed: int) -> None:
     d = diagnose(load_plant(nominal), log)
     assert d.verdict == ["drag_asymmetry"], d.verdict
     (asym,) = [e for e in d.plant.effects if e.name == "drag_asymmetry"]
+    assert isinstance(asym, DragAsymmetry)
     assert asym.dc_tau / c_tau == pytest.approx(0.4, abs=0.03)  # all of it: the forward constant held at nominal
     assert d.plant.params.c_tau == pytest.approx(nominal["c_tau"])
     assert "never turns forward" in d.calibration["c_tau"]["unresolved"]

@@ -8,12 +8,13 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
 
 from clients.cli import main
-from ocp.identify import diagnose
+from ocp.identify import DiagnoseResult, diagnose
 from ocp.identify.coverage import COMMON_GAIN, GAP_TEXT
 from ocp.identify.gain import with_gain
 from ocp.identify.regression import build
@@ -33,14 +34,14 @@ def _clean(seed: int) -> Rig:
 
 
 def _diagnose(rig: Rig, seed: int, levels: tuple[float, ...], scale: float = 1.0,
-              nominal: dict[str, float] | None = None):  # type: ignore[no-untyped-def]
+              nominal: dict[str, float] | None = None) -> DiagnoseResult:
     t, v = voltage_steps(rig, seed, levels=levels)
     cols = run_command(rig, t, v, seed + 1)
     cols["voltage"] = cols["voltage"] * scale  # the log says scale x what the motor got
     return diagnose(DCMotorPlant(MotorParams(**(nominal or rig.nominal))), rig_log(cols))
 
 
-def _gains(res) -> list[dict]:  # type: ignore[no-untyped-def, type-arg]
+def _gains(res: DiagnoseResult) -> list[dict[str, Any]]:
     return [a for a in res.to_dict()["ambiguous"] if a["alternative"] == COMMON_GAIN]
 
 

@@ -12,6 +12,7 @@ import pytest
 
 from clients.cli import main
 from ocp.identify import DiagnoseOptions, check, diagnose, fit
+from ocp.identify.check import CheckResult
 from ocp.identify.predict import CHANNELS
 from ocp.identify.report import html_report
 from ocp.logs import Log, write_log_csv
@@ -32,6 +33,7 @@ def clean(rig: MotorParams) -> Log:
 def test_check_on_clean_data_is_at_the_sensor_noise(rig: MotorParams, clean: Log) -> None:
     spec = RigSpec()
     res = check(DCMotorPlant(rig), clean)
+    assert isinstance(res, CheckResult)  # a time series' check (a sweep's is a PointCheck)
     for ch, sigma in (("omega", spec.noise_omega), ("current", spec.noise_current), ("thrust", spec.noise_thrust)):
         assert 0.8 * sigma < res.free_run_rms[ch] < 1.3 * sigma, ch
     d = json.loads(json.dumps(res.to_dict(), allow_nan=False))
@@ -98,7 +100,8 @@ def test_diagnose_fit_optimize_round_trip(rig: MotorParams, tmp_path: Path, caps
     assert plant.effects[0].v_b == pytest.approx(0.3, rel=0.05)  # type: ignore[attr-defined]
     again = fit(DCMotorPlant(rig), log, verdict)
     assert again.plant == plant
-    assert check(plant, log).free_run_rms["omega"] < 1.3 * RigSpec().noise_omega
+    checked = check(plant, log)
+    assert isinstance(checked, CheckResult) and checked.free_run_rms["omega"] < 1.3 * RigSpec().noise_omega
     from ocp.optimize.mission import mission_from_mapping
     from ocp.optimize.solve import optimize
 

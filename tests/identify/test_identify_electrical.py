@@ -110,7 +110,12 @@ def test_the_conventional_lag_is_free_run_as_the_equations_see_it(rig: MotorPara
     assert 0.2 < short % 1.0 < 0.8 and tau < 0.5  # a fraction the two realignments take differently
     seen: list[Log] = []
     real_score = diagnose_module.score
-    monkeypatch.setattr(diagnose_module, "score", lambda p, x, *a, **k: seen.append(x) or real_score(p, x, *a, **k))
+
+    def score(p: DCMotorPlant, x: Log, *a: object, **k: object) -> object:
+        seen.append(x)
+        return real_score(p, x, *a, **k)
+
+    monkeypatch.setattr(diagnose_module, "score", score)
     _delay_wins(plant, log, al, 0.0, opt, split(log, seg, opt.holdout_every), noise_levels(log), seg)
     conventional = seen[1].voltage
     np.testing.assert_allclose(conventional, realign(log, short, tau).voltage, rtol=0, atol=1e-12)

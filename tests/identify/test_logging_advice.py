@@ -13,7 +13,7 @@ import pytest
 from clients.cli import main
 from ocp.identify import diagnose
 from ocp.identify.design import logging_advice
-from ocp.logs import log_from_arrays, write_log_csv
+from ocp.logs import Log, log_from_arrays, write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground.experiment import at_rate, draw, run_command, voltage_steps
@@ -30,7 +30,7 @@ def test_the_advice_is_the_closed_form_rate_and_only_where_the_log_is_too_slow()
     p = MotorParams(J=1e-4, B=1e-5, c_tau=1e-6, c_f=1e-5, k_t=0.02, k_e=0.02, R=1.0, L=5e-4)  # L/R = 0.5 ms
     plant = DCMotorPlant(p)
 
-    def log_at(rate: float):  # type: ignore[no-untyped-def]
+    def log_at(rate: float) -> Log:
         t = np.arange(200) / rate
         v = np.sign(np.sin(2 * np.pi * 5 * t))
         return log_from_arrays(t, v, v, 0 * v, omega=50 * v)

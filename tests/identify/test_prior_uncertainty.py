@@ -55,9 +55,11 @@ def test_a_factor_at_the_edge_of_the_prior_is_left_to_the_data() -> None:
     # half the nominal minus one standard error: within reach of a factor of two
     assert implausible_factor(d, fit(-0.5 - se), "B") is None
     # beyond it by three standard errors: implausible, the fitted factor reported
-    assert np.isclose(implausible_factor(d, fit(-0.5 - 3 * se), "B"), 0.5 - 3 * se)
+    below = implausible_factor(d, fit(-0.5 - 3 * se), "B")
+    assert below is not None and np.isclose(below, 0.5 - 3 * se)
     assert implausible_factor(d, fit(1.0 + se), "B") is None
-    assert np.isclose(implausible_factor(d, fit(1.0 + 3 * se), "B"), 2.0 + 3 * se)
+    above = implausible_factor(d, fit(1.0 + 3 * se), "B")
+    assert above is not None and np.isclose(above, 2.0 + 3 * se)
 
 
 def test_an_interval_reaching_nominal_is_plausible() -> None:

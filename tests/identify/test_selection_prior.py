@@ -12,8 +12,9 @@ from ocp.identify.select import _prefer_effects, _prior_note
 
 def _design() -> Design:
     """A one-column design (``B``) with 100 held-out rows per equation: only its bookkeeping is used."""
-    return Design([Column("B", "B")], *[np.zeros((3, 1, 1))] * 2, *[np.zeros((3, 1))] * 2, np.zeros(3),
-                  np.zeros(3), np.full(3, 100), np.full(3, 100), np.ones(3))
+    g, h = np.zeros((3, 1, 1)), np.zeros((3, 1))
+    return Design([Column("B", "B")], g, g, h, h, np.zeros(3), np.zeros(3), np.full(3, 100), np.full(3, 100),
+                  np.ones(3))
 
 
 def _fit(score: float, x: float) -> Fitted:

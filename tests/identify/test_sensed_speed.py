@@ -18,7 +18,7 @@ from bench.modelcheck import case_log
 from ocp.identify.align import estimate, realign
 from ocp.identify.fit import channel_rms
 from ocp.identify.predict import MAX_SPEED_SPAN, noise_levels, sensed_speed, speed_span
-from ocp.logs import log_from_arrays
+from ocp.logs import Log, log_from_arrays
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import make_case
@@ -32,7 +32,7 @@ def _theta(t: np.ndarray) -> np.ndarray:
     return A / (2 * math.pi * F) * (1.0 - np.cos(2 * math.pi * F * t))
 
 
-def _log(span: int) -> object:
+def _log(span: int) -> Log:
     """A log of the closed-form rotor whose speed is the backward difference of its exact angle over ``span``
     samples (0: the speed at the sample)."""
     t = np.arange(2000) / RATE

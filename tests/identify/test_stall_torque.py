@@ -23,6 +23,7 @@ from ocp.identify.explain import stall_torque
 from ocp.logs import read_log
 from ocp.model.effects import load_plant, make_effect
 from ocp.model.params import load_params
+from ocp.model.stateful_effects import Cogging
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "bench"))
 
@@ -90,4 +91,5 @@ def test_a_right_ripple_is_named_well_within_the_stall_torque(tmp_path: Path) ->
     d = diagnose(plant, log)
     assert sorted(d.verdict) == ["cogging", "param:R"], d.verdict
     cog = next(e for e in d.plant.effects if e.name == "cogging")
+    assert isinstance(cog, Cogging)
     assert cog.breakaway() < 0.1 * stall_torque(plant.params, log.voltage)

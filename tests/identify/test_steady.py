@@ -4,6 +4,7 @@ series and flight logs whose truth comes from tests/logfiles.py's own formulas."
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -19,7 +20,7 @@ from ocp.model.effects import load_plant
 from tests.logfiles import RPM, Thruster, thruster_sweep, tyto_series, write_csv, write_ulog
 
 
-def _named(d: dict) -> set[str]:  # type: ignore[type-arg]
+def _named(d: dict[str, Any]) -> set[str]:
     """Every effect named anywhere in a diagnosis (verdict and every round's ranking)."""
     return set(d["verdict"]) | {e["effect"] for r in d["rounds"] for e in r["ranking"]}
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -98,7 +99,8 @@ def test_steady_state_sweep_needs_no_time(tmp_path: Path) -> None:
     (lambda c: [c.__setitem__(k, v[:10]) for k, v in list(c.items())], "t", "too short"),
     (lambda c: (c.pop("omega")), "omega", "omega or theta"),
 ])
-def test_bad_logs_raise_log_errors_naming_the_column(tmp_path: Path, mutate, field: str, words: str) -> None:  # type: ignore[no-untyped-def]
+def test_bad_logs_raise_log_errors_naming_the_column(tmp_path: Path, mutate: Callable[[dict[str, np.ndarray]], object],
+                                                      field: str, words: str) -> None:
     cols = _si()
     mutate(cols)
     _write_csv(tmp_path / "bad.csv", cols)

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from ocp.errors import LogError
-from ocp.logs import LogKind, ReadOptions, read_log, write_reference_mat
+from ocp.logs import Log, LogKind, ReadOptions, read_log, write_reference_mat
 from tests.logfiles import (
     G0,
     RPM,
@@ -23,13 +23,14 @@ from tests.logfiles import (
 )
 
 
-def _check_sweep(log, cols) -> None:  # type: ignore[no-untyped-def]
+def _check_sweep(log: Log, cols: dict[str, np.ndarray]) -> None:
     sign = np.sign(cols["PWM (µs)"] - 1500)
     assert log.kind is LogKind.STEADY_STATE and log.electrical == "supply"
     np.testing.assert_allclose(log.omega, sign * cols["RPM"] * RPM, rtol=1e-12)
     np.testing.assert_allclose(log.thrust, cols["Force (N)"], rtol=1e-12)  # the SI column of the two
     np.testing.assert_allclose(log.current, cols["Current (A)"], rtol=1e-12)  # supply current: unsigned
     np.testing.assert_allclose(log.voltage, 16.0)
+    assert log.command is not None
     np.testing.assert_allclose(log.command, (cols["PWM (µs)"] - 1500) / 400, rtol=1e-12)
     assert log.torque is None and not log.complete
     assert any("steady-state sweep" in n for n in log.notes) and any("sign taken from the command" in n
@@ -78,6 +79,7 @@ def test_tyto_electrical_speed_needs_pole_pairs(tmp_path: Path) -> None:
     log = read_log(tmp_path / "tyto.csv", options=ReadOptions(pole_pairs=7))
     np.testing.assert_allclose(log.omega, truth["omega"], rtol=1e-8, atol=1e-6)
     np.testing.assert_allclose(log.thrust, truth["thrust"], rtol=1e-8, atol=1e-9)  # kg -> kgf -> N
+    assert log.command is not None
     np.testing.assert_allclose(log.command, (truth["esc"] - 1500) / 400, atol=1e-8)  # 10 digits in the file
 
 
@@ -93,6 +95,7 @@ def test_neutral_and_range_options_move_the_sign(tmp_path: Path) -> None:
     cols = thruster_sweep()
     write_csv(cols, tmp_path / "sweep.csv")
     log = read_log(tmp_path / "sweep.csv", options=ReadOptions(neutral_us=1600, throttle_range_us=(1100, 1900)))
+    assert log.command is not None
     np.testing.assert_allclose(log.command, (cols["PWM (µs)"] - 1600) / 500, rtol=1e-12)
 
 

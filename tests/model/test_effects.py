@@ -15,6 +15,7 @@ from ocp.errors import ParameterError
 from ocp.model.effects import CATALOGUE, InputDelay, load_plant, make_effect, plant_to_mapping
 from ocp.model.params import MotorParams, load_params
 from ocp.model.plant import CASADI, NUMPY, DCMotorPlant
+from ocp.model.stateful_effects import Cogging
 from ocp.simulate.open_loop import simulate_zoh
 
 #: a non-trivial value for every fitted parameter (SI)
@@ -88,12 +89,14 @@ def test_cogging_harmonics_follow_their_fourier_series() -> None:
     fundamental alone (harmonics at their default 0) is the plain sine, and only non-zero harmonics are listed."""
     c = make_effect("cogging", {"tau_sin": 0.004, "tau_cos": -0.002, "periods": 7.0, "tau_sin2": 0.0015,
                                 "tau_cos2": 0.0005, "tau_cos3": -0.0008})
+    assert isinstance(c, Cogging)
     theta = np.linspace(0.0, 2 * np.pi, 97)
     want = (0.004 * np.sin(7 * theta) - 0.002 * np.cos(7 * theta) + 0.0015 * np.sin(14 * theta)
             + 0.0005 * np.cos(14 * theta) - 0.0008 * np.cos(21 * theta))
     got = np.array([c.bind([th]).load_torque(3.0, NUMPY, None) for th in theta])
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-15)
     plain = make_effect("cogging", {"tau_sin": 0.004, "periods": 7.0})
+    assert isinstance(plain, Cogging)
     assert [h for h, *_ in plain.harmonics()] == [1] and [h for h, *_ in c.harmonics()] == [1, 2, 3]
     np.testing.assert_array_equal([plain.bind([th]).load_torque(3.0, NUMPY, None) for th in theta],
                                   0.004 * np.sin(7 * theta))
@@ -108,7 +111,7 @@ def test_input_delay_delays_a_slow_sine(rig: MotorParams) -> None:
     t = np.arange(0.0, 1.0, 1e-4)
     v = np.sin(2 * np.pi * 2.0 * t)
     z = eff.observe(t, v, v, v, None)
-    out = np.array([eff.bound_drive_voltage(z[:, k], v[k]) for k in range(t.size)])
+    out = np.array([eff.bound_drive_voltage(tuple(z[:, k]), v[k]) for k in range(t.size)])  # (bind's tuple)
     late = t > 0.2
     np.testing.assert_allclose(out[late], np.sin(2 * np.pi * 2.0 * (t[late] - 0.005)), atol=0.01)
 

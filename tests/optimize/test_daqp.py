@@ -95,7 +95,7 @@ def test_screened_qp_is_the_full_qp():
         lower[n + 1:], upper[n + 1:] = lower[n + 1:] - 0.5, upper[n + 1:] + 0.5  # most rows start > SCREEN away
         base = _base(lower, upper)
         full = daqp.solve(H, f, A, lower, upper, base)
-        calls = []
+        calls: list[int] = []  # each solve's row count
 
         def solve(*args, _calls=calls):
             _calls.append(args[2].shape[0])

@@ -129,7 +129,10 @@ def test_a_failed_build_is_not_retried_and_the_cache_is_bounded(cache: Path, mon
     assert native.library("bad_source", "nlp", lambda: "int ok;", native_nlp.FLAGS, wait=True) is None
     monkeypatch.setattr(native, "MAX_LIBRARIES", 2)
     for k in range(4):
-        assert native.library(f"lib{k}", "nlp", lambda k=k: f"int v{k} = {k};", native_nlp.FLAGS, wait=True)
+        def source(k: int = k) -> str:
+            return f"int v{k} = {k};"
+
+        assert native.library(f"lib{k}", "nlp", source, native_nlp.FLAGS, wait=True)
         os.utime(cache / f"lib{k}.so", (1e9 + k, 1e9 + k))  # distinct ages, oldest first
     assert sorted(p.name for p in cache.glob("*.so")) == ["lib2.so", "lib3.so"]
 

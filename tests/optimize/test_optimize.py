@@ -19,7 +19,7 @@ from ocp.optimize.collocation import ipopt_options
 from ocp.optimize.data import problem_data
 from ocp.optimize.mission import mission_from_mapping, sample_segments, segment_samples
 from ocp.optimize.problem import problem_for
-from ocp.optimize.result import SolverProgram
+from ocp.optimize.result import OptimizeResult, SolverProgram
 from ocp.optimize.solve import optimize, solve_problem
 from ocp.reference.fallback import design_sin
 from ocp.reference.fallback_answer import analytic_fallback
@@ -257,6 +257,7 @@ def test_overshoot_between_nodes_is_removed_by_a_local_back_off():
                      {"kind": "hold", "duration": 0.5, "thrust": -0.4}]})
     problem = problem_for(m)
     plan = solve_problem(problem, problem_data(problem), False)
+    assert isinstance(plan, OptimizeResult), plan  # solved (an Unsolved has no verification)
     assert plan.verification["max_abs_current"] > 1.001
     r = optimize(m)
     assert r.source == "optimized" and r.solver["backoff_rounds"] >= 1
@@ -300,6 +301,7 @@ def test_cli_optimize_and_compare(tmp_path):
 @pytest.mark.parametrize("durations", [(0.5, 0.2, 0.5), (0.0004, 1.2345, 0.001), (3.0,)])
 def test_segment_samples_counts_what_sample_segments_makes(durations):
     segs = mission_from_mapping({"segments": [{"kind": "hold", "duration": d, "thrust": 0.1} for d in durations]})
+    assert segs.segments is not None
     assert segment_samples(segs.segments) == sample_segments(segs.segments)[0].size
 
 

@@ -33,7 +33,7 @@ def _true_error(result, true_plant) -> float:
     w0 = speed_for_thrust(true_plant, float(result.arrays["thrust"][0]), true_plant.params.c_f)
     x0, _ = equilibrium(true_plant, w0)
     t = result.arrays["t"]
-    sim = simulate(true_plant, t, v, x0, rtol=1e-8, atol=1e-9)
+    sim = simulate(true_plant, t, v, x0.tolist(), rtol=1e-8, atol=1e-9)
     return float(np.sqrt(np.mean((sim.thrust - result.arrays["thrust"]) ** 2)))
 
 

@@ -30,7 +30,9 @@ def test_the_in_interval_current_matches_an_independent_integration() -> None:
     hn, w_a, w_b = 0.017, 100.0, 93.0  # interval [s], speed at its start and end [rad/s]
     xs = np.array([120.0, 0.8])  # speed, current scales
     pts, uk, x_s, u_s = ca.SX.sym("pts", 2, TAU.size), ca.SX.sym("u"), ca.SX.sym("xs", 2), ca.SX.sym("us")
-    fn = ca.Function("i", [pts, uk, x_s, u_s], [path_limits.current_terms(plant, TAU, 0, 2, pts, uk, x_s, u_s, hn)])
+    # the interval's length a constant SX (the program passes a symbolic one)
+    terms = path_limits.current_terms(plant, TAU, 0, 2, pts, uk, x_s, u_s, ca.SX(hn))
+    fn = ca.Function("i", [pts, uk, x_s, u_s], [terms])
     for volts, i0 in ((-6.0, -0.2), (6.0, 0.75)):
         nodes = np.vstack([(w_a + (w_b - w_a) * TAU) / xs[0], np.full(TAU.size, i0 / xs[1])])
         got = np.asarray(fn(nodes, volts / 6.0, xs, 6.0)).ravel() * xs[1]

@@ -91,6 +91,7 @@ def test_a_passed_deadline_stops_the_sqp_before_its_first_step():
     """The program's deadline (``until`` of its iteration callback) stops the SQP between iterations: with a
     deadline already passed it returns the start unsolved, in IPOPT's words, after no iteration."""
     prog, data, bounds = _reversal()
+    assert prog.sqp_solver is not None  # the flat program's SQP (program_for builds it)
     prog.deadline.until = time.perf_counter() - 1.0
     try:
         sol = prog.sqp_solver(x0=data.x0, p=data.p, lbx=data.lbx, ubx=data.ubx, lbg=bounds[0], ubg=bounds[1])

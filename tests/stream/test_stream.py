@@ -15,7 +15,7 @@ from ocp.gallery.interaction import InteractionSetup, Law, interaction_reference
 from ocp.model.params import MotorParams
 from ocp.stream import StreamShaper, shape_profile, stream_options
 from ocp.stream.blend import blend_profile
-from ocp.stream.preview import design
+from ocp.stream.preview import Hold, design
 
 AMPLITUDE = 0.4  # N
 CURRENT, VOLTAGE = 1.0, 12.0
@@ -123,9 +123,9 @@ def test_steady_state_matches_motor_equilibrium(rig: MotorParams) -> None:
 
 
 @pytest.mark.parametrize("hold", ["zoh", "foh"])
-def test_preview_gains_hold_a_constant_reference(hold: str) -> None:
+def test_preview_gains_hold_a_constant_reference(hold: Hold) -> None:
     """For r constant the law v = -K z + F.r must keep z = (r, 0, ...) at rest: sum F = K[0]."""
-    g = design(hold, 0.001, 20.0, 100)  # type: ignore[arg-type]
+    g = design(hold, 0.001, 20.0, 100)
     assert float(np.sum(g.F)) == pytest.approx(float(g.K[0]), rel=1e-9)
     closed = g.A - np.outer(g.B, g.K)
     assert np.max(np.abs(np.linalg.eigvals(closed))) < 1.0

@@ -77,6 +77,7 @@ def _sympy_class(a: int, e: Fraction, kmax: int = 6) -> int:
         if sympy.simplify(lr - ll) != 0:
             return BOUNDED_DISCONTINUOUS if j == 0 else j - 1
         level = j
+    assert level is not None  # the loop ran (kmax >= 0) and went through
     return SMOOTH if level == kmax else level
 
 
