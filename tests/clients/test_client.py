@@ -8,6 +8,7 @@ import csv
 import json
 import time
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -116,7 +117,7 @@ def test_api_key_guards_everything_but_healthz(tmp_path: Path) -> None:
         assert "HTTPBearer" in spec["components"]["securitySchemes"]
 
 
-def _write_missions(d: Path, n: int, **extra: object) -> Path:
+def _write_missions(d: Path, n: int, **extra: Any) -> Path:
     d.mkdir()
     for i in range(n):
         (d / f"m{i}.json").write_text(json.dumps(mission(f"cli{i}", amplitude=0.2 + 0.05 * i, **extra)))

@@ -9,6 +9,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Iterator
+from typing import Any
 
 import httpx
 import pytest
@@ -144,12 +145,12 @@ def test_batch_lifecycle_json_and_csv(http: httpx.Client) -> None:
     assert via_accept.headers["content-type"].startswith("text/csv") and via_accept.text == csv_text
 
 
-def _wait(http: httpx.Client, batch_id: str, timeout: float = 60.0) -> dict[str, object]:
+def _wait(http: httpx.Client, batch_id: str, timeout: float = 60.0) -> dict[str, Any]:
     end = time.monotonic() + timeout
     while time.monotonic() < end:
         s = http.get(f"/v1/batches/{batch_id}").json()
         if s["status"] in ("done", "failed"):
-            return s  # type: ignore[no-any-return]
+            return s
         time.sleep(0.1)
     raise AssertionError(f"batch {batch_id} not finished in {timeout} s")
 

@@ -116,7 +116,8 @@ class _BruteForce:
     idle worker at every pairing (no candidate shortcut, no shared code)."""
 
     def __init__(self, workers: list[str], slots: int, patience: int, crowd: int) -> None:
-        self.idle, self.waiting = list(workers), []  # waiting: [call, key, urgent, skipped], oldest first
+        self.idle = list(workers)
+        self.waiting: list[list[Any]] = []  # [call, key, urgent, skipped], oldest first
         self.held: dict[str, list[Any]] = {w: [] for w in workers}  # least recently used first
         self.running: dict[str, Any] = {}
         self.slots, self.patience, self.crowd = slots, patience, crowd
@@ -151,7 +152,7 @@ class _BruteForce:
         return 4 if min(queue.values()) > self.crowd else None
 
     def match(self) -> list[tuple[int, str]]:
-        out = []
+        out: list[tuple[int, str]] = []
         while True:
             pairs = [(r, pos, len(self.held[w]), i) for i, w in enumerate(self.idle)
                      for pos, c in enumerate(self.waiting) if (r := self.rank(w, c)) is not None]
@@ -186,7 +187,11 @@ def test_dispatcher_pairs_as_the_brute_force_rule_does_with_many_calls_waiting(s
                 urgent = rng.random() < 0.08
                 keys[step] = key
                 t = asyncio.ensure_future(d.get(key, urgent=urgent))
-                t.add_done_callback(lambda t, c=step: made.append((c, t.result())))
+
+                def paired(t: asyncio.Future[str], c: int = step) -> None:
+                    made.append((c, t.result()))
+
+                t.add_done_callback(paired)
                 want = oracle.arrive(step, key, urgent)
             else:
                 w = rng.choice(sorted(busy))

@@ -40,7 +40,7 @@ def _run_batch(url: str, missions: list[dict[str, Any]]) -> list[dict[str, Any]]
     while httpx.get(f"{url}/v1/batches/{batch_id}", timeout=10).json()["status"] not in ("done", "failed"):
         assert time.monotonic() < end, "batch did not finish"
         time.sleep(0.2)
-    return httpx.get(f"{url}/v1/batches/{batch_id}/results", timeout=30).json()["results"]  # type: ignore[no-any-return]
+    return httpx.get(f"{url}/v1/batches/{batch_id}/results", timeout=30).json()["results"]
 
 
 def _stable(obj: Any) -> Any:

@@ -11,6 +11,7 @@ import sqlite3
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import httpx
 import numpy as np
@@ -50,7 +51,7 @@ def friction_csv(rig: MotorParams, tmp_path_factory: pytest.TempPathFactory) -> 
     return _csv(log, tmp_path_factory.mktemp("csv"), "friction.csv")
 
 
-def _poll(http: httpx.Client, job_id: str, timeout: float = 120.0) -> list[dict[str, object]]:
+def _poll(http: httpx.Client, job_id: str, timeout: float = 120.0) -> list[dict[str, Any]]:
     seen, end = [], time.monotonic() + timeout
     while time.monotonic() < end:
         seen.append(http.get(f"{JOBS}/{job_id}").json())
@@ -71,7 +72,7 @@ def test_a_diagnosis_past_the_request_timeout_completes_as_a_job(http: httpx.Cli
         assert problem(http.get(f"{JOBS}/{job['id']}/result"), 409)["title"] == "Not finished"
     seen = _poll(http, job["id"])
     assert seen[-1]["status"] == "done" and seen[-1]["progress"] == 1.0
-    progress = [float(s["progress"]) for s in seen]  # type: ignore[arg-type]
+    progress = [float(s["progress"]) for s in seen]
     assert any(0.0 < p < 1.0 for p in progress), progress  # the worker reported progress while it ran
     assert progress == sorted(progress)
     assert http.get(f"{JOBS}/{job['id']}/result").json()["verdict"] == ["coulomb_friction"]
@@ -85,7 +86,7 @@ def test_a_failed_job_answers_its_problem_naming_the_field(http: httpx.Client, f
     r = http.post(JOBS, files={"log": ("broken.csv", b"t,voltage\n0,\x00\xff\xfe\n")}, data={"params": "paper-rig"})
     assert r.status_code == 202
     seen = _poll(http, r.json()["id"])
-    assert seen[-1]["status"] == "failed" and seen[-1]["error"]["field"] == "omega"  # type: ignore[index]
+    assert seen[-1]["status"] == "failed" and seen[-1]["error"]["field"] == "omega"
     body = problem(http.get(f"{JOBS}/{r.json()['id']}/result"), 422)  # a column of the log: shown next to it
     assert body["field"] == "omega" and body["form_field"] == "log" and "missing" in body["reason"]
     # bad form fields are refused before anything is stored
@@ -137,7 +138,7 @@ def test_design_runs_as_a_job(server: Server, friction_csv: Path) -> None:
         assert seen[-1] == 1.0
         with pytest.raises(InvalidInput) as exc:
             c.design_experiment(str(friction_csv), "paper-rig", rivals="coulomb_friction;nope")
-        assert exc.value.field == "rivals"  # type: ignore[attr-defined]
+        assert exc.value.field == "rivals"
 
 
 def test_an_unfinished_job_runs_after_a_restart(tmp_path: Path, friction_csv: Path) -> None:

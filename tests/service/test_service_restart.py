@@ -20,7 +20,7 @@ N = 10
 
 
 def _results(url: str, batch_id: str) -> dict[str, Any]:
-    return httpx.get(f"{url}/v1/batches/{batch_id}/results", timeout=10).json()  # type: ignore[no-any-return]
+    return httpx.get(f"{url}/v1/batches/{batch_id}/results", timeout=10).json()
 
 
 def test_sigkill_mid_batch_then_restart_completes_exactly_once(tmp_path: Path) -> None:
