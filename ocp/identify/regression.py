@@ -30,8 +30,8 @@ log cannot show it).
 Where something holds the rotor (:func:`.columns.held_still`: dry friction holds whatever stays within its level), the
 torque balance holds a torque no column expresses: those rows are cut from the torque equation for every model.
 
-Rows are split into training and held-out samples (every ``holdout_every``-th segment), or into folds held out in
-turn (cross-validation, :attr:`Design.g_fold`); each equation is weighted by its noise level. Only Gram matrices
+Rows are split into training and held-out samples (every ``holdout_every``-th segment), or into folds held out
+in turn (cross-validation, :attr:`Design.g_fold`); each equation is weighted by its noise level. Only Gram matrices
 leave this module: fitting a model (a subset of columns, bounded) and scoring it on held-out rows are ``P x P``
 algebra (:mod:`.select`).
 """
