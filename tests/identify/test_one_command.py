@@ -6,8 +6,11 @@ plant ``diagnose`` is given, so nothing is missing and the right verdict is the 
 the loggers' noise at a tenth of a typical level (1 mA, 0.05 rad/s) a current offset of -0.09 A is named (the
 regression's held-out score falls 68 % while the free run gets worse, 0.995 -> 1.037 noise units), and at the full
 level (10 mA, 0.5 rad/s) a -1 A offset and a 34 % ``c_tau``: under one command the offset is nearly collinear with
-``R``, ``k`` and the drag in both equations, and only the spin-up's first rows tell them apart. A step after a
-stretch at rest (the offset then shows at zero current) comes back clean at the full level. Strict xfails: a fix
+``R``, ``k`` and the drag in both equations, and only the spin-up's first rows tell them apart. A step after 25 rows
+at rest (6 after the low-passes' start-up cut) is named a 0.6 V dead band (10 % of the step: a gain at the
+calibration box's edge; a dead band's column counted the zero command as a second level, and with the rows at rest
+counted as "off" a brush drop took its place, so the residual the drop explains is the open question); after 200
+rows at rest the step comes back clean at the full level. Noise-free, every one is clean. Strict xfails: a fix
 turns them into passes and the marks must go.
 """
 
@@ -38,17 +41,18 @@ def _log(u: np.ndarray, scale: float, dt: float = 1e-3) -> Log:
                            omega=w + sw * rng.standard_normal(u.size))
 
 
-def test_the_noise_free_spin_up_is_clean() -> None:
-    assert diagnose(DCMotorPlant(P), _log(np.full(2000, 6.0), 0.0)).verdict == []
-
-
-def test_a_step_after_rest_is_clean() -> None:
-    u = np.where(np.arange(2000) >= 1000, 6.0, 0.0)
+def test_a_step_after_a_long_rest_is_clean() -> None:
+    u = np.where(np.arange(2000) >= 200, 6.0, 0.0)
     assert diagnose(DCMotorPlant(P), _log(u, 1.0)).verdict == []
 
 
-@pytest.mark.xfail(strict=True, reason="session 61: under one command a current offset is named on a model-exact "
-                                       "log (-0.09 A at a tenth of the noise, -1 A beside c_tau at the full level)")
-@pytest.mark.parametrize("scale", [0.1, 1.0])
-def test_a_noisy_spin_up_under_one_command_is_clean(scale: float) -> None:
-    assert diagnose(DCMotorPlant(P), _log(np.full(2000, 6.0), scale)).verdict == []
+@pytest.mark.parametrize("rest", [0, 25])
+def test_the_noise_free_step_is_clean(rest: int) -> None:
+    assert diagnose(DCMotorPlant(P), _log(np.where(np.arange(2000) >= rest, 6.0, 0.0), 0.0)).verdict == []
+
+
+@pytest.mark.xfail(strict=True, reason="session 61: a model-exact step log under noise gets a false name (a current "
+                                       "offset under one command from the start; a dead band after 25 rows at rest)")
+@pytest.mark.parametrize(("rest", "scale"), [(0, 0.1), (0, 1.0), (25, 1.0)])
+def test_a_noisy_step_is_clean(rest: int, scale: float) -> None:
+    assert diagnose(DCMotorPlant(P), _log(np.where(np.arange(2000) >= rest, 6.0, 0.0), scale)).verdict == []
