@@ -52,13 +52,13 @@ def usable(train: np.ndarray, test: np.ndarray, edge: np.ndarray, current: np.nd
     Raises :class:`ocp.errors.LogError` where fewer than :data:`MIN_ROWS` are left in either mask (a 50 Hz PRBS log
     clipped on a quarter of its rows kept none, and its noise levels came out NaN: proving ground 23018, clipped at
     45 % of its peak by ``bench/clipped_current.py``)."""
-    top = clipped(current)
-    cut = edge | widened(top, margin)
+    at_range = clipped(current)
+    cut = edge | widened(at_range, margin)
     train, test = train & ~cut, test & ~cut
     fit, held = int(train.sum()), int(test.sum())
     if min(fit, held) >= MIN_ROWS:
         return train, test, cut
-    n = int(top.sum())
+    n = int(at_range.sum())
     why = (f"the current is clipped at its sensor's range on {n} of {current.size} rows; those rows and the "
            "low-pass's transient around them are left out" if n else
            "the low-passes' start-up and run-out transients are left out")

@@ -79,14 +79,9 @@ def test_a_log_clipped_until_nothing_is_left_is_refused_with_its_reason() -> Non
     """Proving ground 23018 (clean, 50 Hz PRBS, 509 rows) clipped at 45 % of its peak: 131 rows at the range, and
     with their low-pass transient (84 rows either side) cut, no row is left to fit on. Before: the noise levels were
     the mean of no rows (NaN) and a delay was named; now a LogError on the current says why."""
-    case = make_case(23018)
-    assert case.expected == set()
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    top = LEVEL * float(np.max(np.abs(c["current"])))
-    log = log_from_arrays(t, c["voltage"], np.clip(c["current"], -top, top), c["thrust"], omega=c.get("omega"),
-                          theta=c.get("theta"))
+    log, plant = _clipped_log(23018)
     with pytest.raises(LogError) as err:
-        diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
+        diagnose(plant, log)
     assert err.value.field == "current" and f"fewer than {holdout.MIN_ROWS}" in str(err.value)
 
 
