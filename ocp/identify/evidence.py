@@ -55,6 +55,9 @@ class Fitted:
     #: under cross-validation (:attr:`.regression.Design.g_fold`), the model fitted for each fold (whose held-out
     #: errors make ``per_eq``); ``cols``/``x`` are then fitted on all rows
     folds: tuple[Fitted, ...] = ()
+    #: the nominal model as given, nothing fitted (:func:`.lsq.as_given`): it predicts the held-out rows better than
+    #: the calibrated fit
+    as_given: bool = False
 
     def coefficient(self, j: int) -> float:
         return float(self.x[self.cols.index(j)]) if j in self.cols else 0.0

@@ -79,7 +79,7 @@ from ocp.identify.evidence import (
     scatter,
     worst,
 )
-from ocp.identify.lsq import SATURATING, score, solve
+from ocp.identify.lsq import SATURATING, as_given, score, solve
 from ocp.identify.regression import CONSTANTS, DROPS, DRY, NUISANCES, Design
 from ocp.identify.shape_choice import neighbours, preferred
 
@@ -187,16 +187,17 @@ class Selection:
 def select(design: Design, pool: Sequence[str], tol: float, min_improvement: float, noise_floor: float,
            max_items: int, margin: float, progress: Callable[[float], None] | None = None,
            physical: Callable[[Fitted], bool] = lambda f: True) -> Selection:
-    """Forward selection over ``pool`` (effects and constants), then the ambiguity challenge (module doc).
-    Constants the log cannot resolve (:attr:`.regression.Design.unresolved`) are calibrated, never named;
-    ``min_improvement`` applies to effects (a constant's materiality is ``tol``). A model that ``physical``
-    refuses (an effect fitted outside its catalogue range, e.g. a Stribeck level of 1.8e4 N m) is never adopted."""
+    """Forward selection over ``pool`` (effects and constants) from the calibrated fit of no item, or the nominal
+    model as given where it predicts the held-out rows better (:func:`.lsq.as_given`), then the ambiguity challenge
+    (module doc). Constants the log cannot resolve (:attr:`.regression.Design.unresolved`) are calibrated, never named;
+    ``min_improvement`` applies to effects (a constant's materiality is ``tol``). A model that ``physical`` refuses (an
+    effect fitted outside its catalogue range, e.g. a Stribeck level of 1.8e4 N m) is never adopted."""
     offered = [c for c in pool if c not in design.unresolved and design.index(c)]  # (no columns: not testable here)
     rivals = [c for c in offered if all(design.columns[j].rival for j in design.index(c))]  # (:func:`_challenge`)
     pool = [c for c in offered if c not in rivals]
     forward = functools.partial(_forward, design, pool, tol=tol, min_improvement=min_improvement,
                                 noise_floor=noise_floor, max_items=max_items, margin=margin, physical=physical)
-    items, current, steps = forward([], fit_model(design, [], tol), progress=progress)
+    items, current, steps = forward([], as_given(design, fit_model(design, [], tol)), progress=progress)
     if steps and worst(design, current) > RESCUE:  # the greedy picks explained little: two effects together?
         start = _rescue(design, steps[0].tried, current, tol, min_improvement, physical)
         if start is not None:
@@ -432,8 +433,7 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
         alt = fit_model(design, [b if i == a else i for i in items], tol)
         na, nb = (f"param:{x}" if x in CONSTANTS else x for x in (a, b))
         if alt.score <= best.score * (1.0 + margin) and band_alike(design, a, best, alt, margin) \
-                and acts_alike(design, a, best, alt, margin) \
-                and _wins(design, without(a), b, alt, min_improvement):
+                and acts_alike(design, a, best, alt, margin) and _wins(design, without(a), b, alt, min_improvement):
             out.append({"adopted": a, "alternative": b, "score": best.score, "alternative_score": alt.score,
                         "reason": f"replacing {na} by {nb} fits the held-out data as well "
                                   f"({alt.score:.3g} vs {best.score:.3g} noise units, within {100 * margin:.1f} %): "
