@@ -365,6 +365,9 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
     if cal:
         print(f"calibration (refinements within {100 * d.get('tolerance', 0.1):.0f} % stay here; beyond it a constant "
               "is named in the verdict):")
+        if any(c.get("as_given") for c in cal.values()):
+            print("  none applied: the nominal constants as given predict the held-out rows better than any refinement "
+                  "fitted on the training rows")
         for k, c in cal.items():
             rel = 100 * c["relative"] if isinstance(c["relative"], int | float) else None
             print(f"  {k:6s} {_g(c['nominal'], '.4g'):>10s} -> {_g(c['fitted'], '.4g'):>10s} {c['unit']:16s} "

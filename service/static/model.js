@@ -241,7 +241,10 @@ function showDiagnosisDetails(res, after) {
     const kept = (c) => (typeof c.applied === "number" && Math.abs(c.applied - c.relative) > 1e-12
       ? ` (not resolved by this log: plant keeps ${c.applied === 0 ? "nominal" : fmt(100 * c.applied, 2) + " %"})` : "");
     const parts = keys.map((k) => `${k} ${fmt(100 * cal[k].relative, 2)} %${cal[k].named ? " (named)" : ""}${kept(cal[k])}`);
-    line(`Calibration (within ±${fmt(tol, 2)} % a constant is refined, not named): ${parts.join(", ")}`, "m-calibration");
+    const given = keys.some((k) => cal[k].as_given)
+      ? ". None applied: the nominal constants as given predict the held-out rows better than any refinement" : "";
+    line(`Calibration (within ±${fmt(tol, 2)} % a constant is refined, not named): ${parts.join(", ")}${given}`,
+         "m-calibration");
   }
   const ap = res.angle_periodic;
   if (ap) line(`Angle-periodic torque: best fit at ${ap.periods} periods/rev, ${fmt(ap.amplitude, 3)} N m` +

@@ -15,18 +15,21 @@ does help (a constant drawn within the tolerance) it still starts the rounds.
 
 from __future__ import annotations
 
+import json
 import sys
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
+from clients.cli import main
 from ocp.identify import diagnose
 from ocp.identify.evidence import Fitted
 from ocp.identify.lsq import as_given
 from ocp.identify.regression import Design
 from ocp.identify.select import fit_model
-from ocp.logs import Log, log_from_arrays
+from ocp.logs import Log, log_from_arrays, write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from ocp.simulate.open_loop import simulate_zoh
@@ -69,6 +72,19 @@ def test_a_noisy_step_is_clean(rest: int, scale: float, monkeypatch: pytest.Monk
     assert verdict == []
 
 
+def test_the_diagnosis_says_the_constants_are_held_as_given(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The JSON marks every constant held at nominal for that reason, and the CLI text says so once."""
+    log = step_log(np.full(2000, 6.0), 1.0)
+    res = diagnose(DCMotorPlant(P), log)
+    assert all(c["as_given"] and c["relative"] == 0.0 for c in res.to_dict()["calibration"].values())
+    csv, params = tmp_path / "step.csv", tmp_path / "nominal.json"
+    write_log_csv(log, csv)
+    params.write_text(json.dumps(P.model_dump()))
+    assert main(["diagnose", str(csv), "--params", str(params)]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("nothing missing") and out.count("none applied: the nominal constants as given") == 1
+
+
 def test_a_constant_within_the_tolerance_is_still_calibrated(monkeypatch: pytest.MonkeyPatch) -> None:
     """Proving-ground seed 34 (``c_tau`` drawn 9.1 % off, inside the 10 % tolerance): the calibrated fit starts the
     rounds and takes the error up, and nothing is named."""
@@ -76,7 +92,7 @@ def test_a_constant_within_the_tolerance_is_still_calibrated(monkeypatch: pytest
     assert abs(case.constant_error["c_tau"] - 0.091) < 1e-3
     calibrated = fit_model(design, [], 0.1)
     assert as_given(design, calibrated) is calibrated
-    assert res.verdict == []
+    assert res.verdict == [] and not any(c["as_given"] for c in res.calibration.values())
     assert abs(res.calibration["c_tau"]["relative"] - case.constant_error["c_tau"]) < 0.03
 
 

@@ -1,6 +1,7 @@
 """The Model check tab's calibration line in headless Chromium against a real server: a constant the log cannot
 resolve (the paper rig's L/R of 0.4 ms under two samples at 1 kHz, a current filter of four samples) is shown
-with its apparent value and says that the calibrated plant keeps the nominal one."""
+with its apparent value and says that the calibrated plant keeps the nominal one; under one constant command the
+line says no refinement was applied (the nominal model as given predicts the held-out rows better)."""
 
 from __future__ import annotations
 
@@ -12,7 +13,8 @@ import pytest
 
 from ocp.logs import Log, write_log_csv
 from ocp.model.params import load_params
-from tests.page.test_page import LONG, open_tab
+from tests.identify.test_one_command import P, step_log
+from tests.page.test_page import LONG, custom_params, open_tab
 from tests.service.test_service_support import Server
 from tests.synthetic_rig import RigSpec, generate
 
@@ -35,3 +37,14 @@ def test_an_unresolved_constant_is_shown_as_kept_at_nominal(page: Any, server: S
     entries = dict(e.split(" ", 1) for e in page.inner_text("#m-calibration").split(": ", 1)[1].split(", "))
     assert "not resolved by this log: plant keeps nominal" in entries["L"]
     assert "not resolved" not in entries["R"]
+
+
+def test_constants_held_as_given_are_said_once(page: Any, server: Server, tmp_path: Path) -> None:
+    write_log_csv(step_log(np.full(2000, 6.0), 1.0), tmp_path / "step.csv")
+    open_tab(page, server, "model")
+    page.set_input_files("#m-log", str(tmp_path / "step.csv"))
+    custom_params(page, P.model_dump())
+    page.click("#m-diagnose")
+    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    text = page.inner_text("#m-calibration")
+    assert text.count("None applied: the nominal constants as given predict the held-out rows better") == 1
