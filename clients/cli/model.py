@@ -156,8 +156,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                                 "param:<key>)\nand writes a calibrated parameter file that --params and "
                                 "missions accept.\n" + _LOG_DESCRIPTION,
                     examples=["thrustshape fit rig.csv --params paper-rig --effects coulomb_friction "
-                              "--out calibrated.json"],
-                    lists=("presets", "effects"))
+                              "--out calibrated.json"], lists=("presets", "effects"))
     _log_args(p)
     p.add_argument("--effects", required=True, help="comma-separated effect names (or param:<key> corrections)")
     p.add_argument("--out", default=None, help="write the calibrated parameter file (JSON) here")
@@ -364,10 +363,8 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
     cal = d.get("calibration") or {}
     if cal:
         print(f"calibration (refinements within {100 * d.get('tolerance', 0.1):.0f} % stay here; beyond it a constant "
-              "is named in the verdict):")
-        if any(c.get("as_given") for c in cal.values()):
-            print("  none applied: the nominal constants as given predict the held-out rows better than any refinement "
-                  "fitted on the training rows")
+              "is named in the verdict):" + ("\n  none applied: the nominal constants as given predict the held-out "
+              "rows better than any refinement" if any(c.get("as_given") for c in cal.values()) else ""))
         for k, c in cal.items():
             rel = 100 * c["relative"] if isinstance(c["relative"], int | float) else None
             print(f"  {k:6s} {_g(c['nominal'], '.4g'):>10s} -> {_g(c['fitted'], '.4g'):>10s} {c['unit']:16s} "
