@@ -113,8 +113,8 @@ def score(design: Design, ms: np.ndarray) -> float:
 
 def as_given(design: Design, calibrated: Fitted) -> Fitted:
     """The nominal model as given where it scores better than ``calibrated`` (the fit of no item,
-    :func:`.select.fit_model`), else ``calibrated``: the forward rounds' start. As given, every constant and nuisance
-    is at nominal (all coefficients zero), nothing fitted, and the held-out score is the nominal residual's on the
+    :func:`.select.fit_model`), else ``calibrated``: the forward rounds' start. As given, every constant is at nominal
+    and every nuisance at its default (all coefficients zero), nothing fitted, and the held-out score is the nominal residual's on the
     held-out rows (every fold's the same model). An explanation of its own: where it scores better, the calibration
     fitted the training rows' noise through columns those rows do not excite, and an item must beat the nominal
     model, not that fit (a spin-up under one command, ``tests/identify/test_one_command.py``: the steady rows leave

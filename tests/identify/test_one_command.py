@@ -2,7 +2,7 @@
 
 The first log a user takes of a new rig is often a single step: the command switched to one voltage at the start and
 held. Simulated here by the catalogue's own ZOH integration (:func:`ocp.simulate.open_loop.simulate_zoh`) of the very
-plant ``diagnose`` is given, so nothing is missing and the right verdict is the empty one. Without noise it was. With
+plant ``diagnose`` is given, so nothing is missing and the right verdict is the empty one. Without noise it is. With
 the loggers' noise at a tenth of a typical level (1 mA, 0.05 rad/s) session 61 named a current offset of -0.09 A, at
 the full level (10 mA, 0.5 rad/s) a -1 A offset and a 34 % ``c_tau``, and a step after 25 rows at rest a 0.6 V dead
 band (after 200 rows at rest the step was clean). The cause was the calibration, not the items: the steady rows leave
