@@ -114,13 +114,13 @@ def score(design: Design, ms: np.ndarray) -> float:
 def as_given(design: Design, calibrated: Fitted) -> Fitted:
     """The nominal model as given where it scores better than ``calibrated`` (the fit of no item,
     :func:`.select.fit_model`), else ``calibrated``: the forward rounds' start. As given, every constant is at nominal
-    and every nuisance at its default (all coefficients zero), nothing fitted, and the held-out score is the nominal residual's on the
-    held-out rows (every fold's the same model). An explanation of its own: where it scores better, the calibration
-    fitted the training rows' noise through columns those rows do not excite, and an item must beat the nominal
-    model, not that fit (a spin-up under one command, ``tests/identify/test_one_command.py``: the steady rows leave
-    the unresolved ``L`` and the current's lag free, the differentiated current's noise pulled ``L`` to its -80 % box
-    and the lag to 5 samples, and the fold that held the spin-up out read 24 noise units where the nominal model reads
-    1.1; a current offset cut that and was named)."""
+    and every nuisance at its default (all coefficients zero), nothing fitted, and the held-out score is the nominal
+    residual's on the held-out rows (every fold's the same model). An explanation of its own: where it scores better,
+    the calibration fitted the training rows' noise through columns those rows do not excite, and an item must beat the
+    nominal model, not that fit (a spin-up under one command, ``tests/identify/test_one_command.py``: the steady rows
+    leave the unresolved ``L`` and the current's lag free, the differentiated current's noise pulled ``L`` to its -80 %
+    box and the lag to 5 samples, and the fold that held the spin-up out read 24 noise units where the nominal model
+    reads 1.1; a current offset cut that and was named)."""
     cols = tuple(j for c in (*CONSTANTS, *NUISANCES) for j in design.index(c))
     ms = design.c_test / np.maximum(design.n_test, 1)
     one = Fitted((), cols, np.zeros(len(cols)), float(design.c_train.sum()), score(design, ms),
