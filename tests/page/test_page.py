@@ -44,6 +44,16 @@ def custom_params(page: Any, params: dict[str, float]) -> None:
     page.fill("#m-params", json.dumps(params))
 
 
+def diagnose_on_page(page: Any, server: Server, log: Path, params: dict[str, Any]) -> None:
+    """The Model check tab's diagnosis of the log file ``log`` with the parameters ``params`` (a custom parameter
+    file), waited for until it is shown."""
+    open_tab(page, server, "model")
+    page.set_input_files("#m-log", str(log))
+    custom_params(page, params)
+    page.click("#m-diagnose")
+    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+
+
 def number(text: str) -> float:
     return float(text.strip().replace("−", "-"))
 

@@ -13,7 +13,7 @@ import pytest
 
 from ocp.logs import write_log_csv
 from tests.logfiles import Thruster, thruster_sweep, write_csv
-from tests.page.test_page import LONG, custom_params, open_tab
+from tests.page.test_page import diagnose_on_page
 from tests.proving_ground.experiment import draw, run_command, voltage_steps
 from tests.rig_log import rig_log
 from tests.service.test_service_support import Server
@@ -25,11 +25,7 @@ def test_the_page_says_a_two_level_log_cannot_show_a_dead_band(page: Any, server
     rig = draw(0, "voltage_deadband")
     t, v = voltage_steps(rig, 0, levels=(-1.0, 1.0))
     write_log_csv(rig_log(run_command(rig, t, v, 1)), tmp_path / "two-level.csv")
-    open_tab(page, server, "model")
-    page.set_input_files("#m-log", str(tmp_path / "two-level.csv"))
-    custom_params(page, rig.nominal)
-    page.click("#m-diagnose")
-    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    diagnose_on_page(page, server, tmp_path / "two-level.csv", rig.nominal)
     blind = page.locator("#m-blind")
     assert blind.count() >= 1
     text = " ".join(blind.nth(k).inner_text() for k in range(blind.count()))
@@ -48,11 +44,7 @@ def test_the_page_says_a_forward_only_esc_sweep_cannot_show_an_asymmetry(page: A
     rows = thruster_sweep(th)
     forward = rows["PWM (µs)"] > 1525.0
     write_csv({k: v[forward] for k, v in rows.items()}, tmp_path / "forward.csv", title="Thruster at 16 V")
-    open_tab(page, server, "model")
-    page.set_input_files("#m-log", str(tmp_path / "forward.csv"))
-    custom_params(page, th.params())
-    page.click("#m-diagnose")
-    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    diagnose_on_page(page, server, tmp_path / "forward.csv", th.params())
     text = page.inner_text("#m-blind")
     assert text == "This log cannot show drag_asymmetry, thrust_asymmetry: the log never reverses."
 
@@ -65,11 +57,7 @@ def test_the_page_notes_a_clipped_current(page: Any, server: Server, tmp_path: P
 
     log, _ = _clipped_log(64)
     write_log_csv(log, tmp_path / "clipped.csv")
-    open_tab(page, server, "model")
-    page.set_input_files("#m-log", str(tmp_path / "clipped.csv"))
-    custom_params(page, make_case(64).nominal)
-    page.click("#m-diagnose")
-    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    diagnose_on_page(page, server, tmp_path / "clipped.csv", make_case(64).nominal)
     blind = page.locator("#m-blind")
     lines = [blind.nth(k).inner_text() for k in range(blind.count())]
     (note,) = [t for t in lines if "clipped" in t]

@@ -14,7 +14,7 @@ import pytest
 from ocp.logs import Log, write_log_csv
 from ocp.model.params import load_params
 from tests.identify.test_one_command import P, step_log
-from tests.page.test_page import LONG, custom_params, open_tab
+from tests.page.test_page import LONG, diagnose_on_page, open_tab
 from tests.service.test_service_support import Server
 from tests.synthetic_rig import RigSpec, generate
 
@@ -41,10 +41,6 @@ def test_an_unresolved_constant_is_shown_as_kept_at_nominal(page: Any, server: S
 
 def test_constants_held_as_given_are_said_once(page: Any, server: Server, tmp_path: Path) -> None:
     write_log_csv(step_log(np.full(2000, 6.0), 1.0), tmp_path / "step.csv")
-    open_tab(page, server, "model")
-    page.set_input_files("#m-log", str(tmp_path / "step.csv"))
-    custom_params(page, P.model_dump())
-    page.click("#m-diagnose")
-    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    diagnose_on_page(page, server, tmp_path / "step.csv", P.model_dump())
     text = page.inner_text("#m-calibration")
     assert text.count("None applied: the nominal constants as given predict the held-out rows better") == 1

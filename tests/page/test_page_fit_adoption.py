@@ -13,7 +13,7 @@ import pytest
 
 from bench.modelcheck import case_log
 from ocp.logs import write_log_csv
-from tests.page.test_page import LONG, custom_params, downloaded, open_tab
+from tests.page.test_page import LONG, diagnose_on_page, downloaded
 from tests.proving_ground import make_case
 from tests.service.test_service_support import Server
 
@@ -23,11 +23,7 @@ pytestmark = pytest.mark.integration
 def test_a_refit_that_predicts_worse_is_said_not_adopted(page: Any, server: Server, tmp_path: Path) -> None:
     case = make_case(42101, "one")
     write_log_csv(case_log(case), tmp_path / "ripple.csv")
-    open_tab(page, server, "model")
-    page.set_input_files("#m-log", str(tmp_path / "ripple.csv"))
-    custom_params(page, case.nominal)
-    page.click("#m-diagnose")
-    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    diagnose_on_page(page, server, tmp_path / "ripple.csv", case.nominal)
     boxes = page.locator("#m-ranking input[type=checkbox]")
     for k in range(boxes.count()):
         boxes.nth(k).set_checked(boxes.nth(k).get_attribute("value") == "cogging")

@@ -14,7 +14,7 @@ from ocp.logs import write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.logfiles import Thruster, thruster_sweep, write_csv
-from tests.page.test_page import LONG, custom_params, open_tab, shot
+from tests.page.test_page import LONG, custom_params, diagnose_on_page, open_tab, shot
 from tests.proving_ground.experiment import draw, run_command, voltage_steps
 from tests.rig_log import rig_log
 from tests.service.test_service_support import Server
@@ -25,11 +25,7 @@ pytestmark = pytest.mark.integration
 def test_page_diagnoses_an_esc_sweep_and_lists_the_equations(page: Any, server: Server, tmp_path: Path) -> None:
     th = Thruster(ratio=0.8)
     write_csv(thruster_sweep(th), tmp_path / "sweep.csv", title="Thruster at 16 V")
-    open_tab(page, server, "model")
-    page.set_input_files("#m-log", str(tmp_path / "sweep.csv"))
-    custom_params(page, th.params())
-    page.click("#m-diagnose")
-    page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
+    diagnose_on_page(page, server, tmp_path / "sweep.csv", th.params())
     assert page.get_attribute("#m-verdict", "data-verdict") == "thrust_asymmetry"
     eq = page.locator("#m-diag-equations li")
     states = {eq.nth(k).get_attribute("data-equation"): eq.nth(k).get_attribute("data-checked")
