@@ -8,41 +8,41 @@ PWM period adds a fraction. The *alignment* is that lag, in samples, beyond the 
 Estimate: the armature equation over one held sample (eq. dc_electrical, exact under a zero-order
 hold) with free coefficients, so wrong nominal constants do not bias it, plus brush-drop, dead-band and
 offset terms: ``i[k+1] = a1 i[k] + a2 V[k - lag] + a3 w[k] + a3' w[k+1] + a4 sign(i) + a5 + a6 sign(V[k - lag])``
-(the speed at both ends free: a fast armature's end current shows the end's back-EMF, a slow one's the row's mean, and
-a tachometer's filter or a differenced encoder logs the speed late, to first order a share of its step; with their
-mean alone the fit moved the command to match, session 60: ``tests/identify/test_alignment_speed_lag.py``; no
-``sign(i)`` under one command magnitude: the command's sign on held rows, it fits the rows where the level changes at
-any lag, and a brush drop is a gain on such a command anyway, session 62), fitted by least squares (raw samples) for
-whole-sample lags up to :func:`search_range` (24 samples or 5 ms, whichever is longer, at most 64 samples), then on a
-grid of 1/8 sample around the best; the lag of the smallest residual, refined by a parabola through its neighbours, is
-the alignment (0 for a log whose row-k command drives k -> k+1). The dead-band term is the held commands' dead band
-shifted (the drive's nonlinearity acts on each held level before two of them share a sample), ``v_db tanh(V / v_db)``
-(the catalogue's form, eq. voltage_deadband) with its width searched per lag on :data:`DEAD_BAND_WIDTHS` (a width
-fixed at 5 % of the command's spread left a 2.3 V dead band under a 10 V PI command 8 A off inside the band, and the
-lag a sample short; proving ground 117). A minimum that is not sharp (residual within 1 % one sample either side) is a
-plateau: bounded inside the search and at most two samples wide (a slow two-level command, whose rare level changes
-tell the lag only to within about a sample), its midpoint is the alignment; wider or reaching an end of the search
-(slow, smooth excitation), the free fit cannot tell the lag: a smooth command delayed by ``d`` samples looks like one
-through an armature lag ``L/R`` longer by ``d`` samples, and the free ``a1`` takes either. The datasheet can, where
-the armature is fast: given the nominal ``L/R`` (at most :data:`NOMINAL_TAU` samples, so that a 50 % inductance error
-moves the lag by at most a sample) and ``k_e``, the search is repeated with both held at nominal, as an output error
-(the current simulated from the command through that first-order lag, eq. dc_electrical, with free gains: noise in the
-logged current then biases nothing): :func:`_nominal_curve`. A lag found so is reported as resting on the nominal
-armature (:attr:`Alignment.nominal`), and the caller must not judge ``L`` from the same log as if the timing were
-measured. Where that search is flat too (no fast enough command change at all), the lag is unidentifiable: none is
-assumed then, and none is called a delay. (On the tuning seeds, 15 of 516 fast-armature logs had a flat free search;
-the held one put 9 of them within a sample of the true lag. Used on every fast-armature log, as the geometric mean
-with the free fit's residual, it cut lag errors over a sample from 20 to 6, but moved two well-measured lags of 2.3
-samples past the conventions into false delays: not adopted.) Held at a slower armature's ``L/R`` of ``tau`` samples,
-a 50 % inductance error moves the lag by ``tau / 2`` (:data:`HELD_L_ERROR`, :attr:`Alignment.bias`): a lag found so
-beyond the conventions is a delay only where it predicts the held-out data better than the longer ``L/R`` that would
-explain it (the caller's test, :mod:`.diagnose`; :func:`gain` does not vouch for a held curve). Until session 53 a lag
-within that share was not offered to that test at all: the blind rig's seed 431 (a 5 kHz chirp, ``L/R`` 25 samples, a
-drawn lag of 10.9 held at 11.06, within a share of 12.6) then named ``L`` +45 %, the error that lag mimics, though the
+(the speed at both ends free: a fast armature's end current shows the end's back-EMF, a slow one's the row's mean,
+and a tachometer's filter or a differenced encoder logs the speed late, to first order a share of its step; with
+their mean alone the fit moved the command to match, session 60: ``tests/identify/test_alignment_speed_lag.py``),
+fitted by least squares (raw samples) for whole-sample lags up to :func:`search_range` (24 samples or 5 ms,
+whichever is longer, at most 64 samples), then on a grid of 1/8 sample around the best; the lag of the
+smallest residual, refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k
+command drives k -> k+1). The dead-band term is the held commands' dead band shifted (the drive's nonlinearity
+acts on each held level before two of them share a sample), ``v_db tanh(V / v_db)`` (the catalogue's form, eq.
+voltage_deadband) with its width searched per lag on :data:`DEAD_BAND_WIDTHS` (a width fixed at 5 % of the command's
+spread left a 2.3 V dead band under a 10 V PI command 8 A off inside the band, and the lag a sample short; proving
+ground 117). A minimum that is not sharp (residual within 1 % one
+sample either side) is a plateau: bounded inside the search and at most two samples wide (a slow two-level
+command, whose rare level changes tell the lag only to within about a sample), its midpoint is the alignment;
+wider or reaching an end of the search (slow, smooth excitation), the free fit cannot tell the lag: a smooth
+command delayed by ``d`` samples looks like one through an armature lag ``L/R`` longer by ``d`` samples, and the
+free ``a1`` takes either. The datasheet can, where the armature is fast: given the nominal ``L/R`` (at most
+:data:`NOMINAL_TAU` samples, so that a 50 % inductance error moves the lag by at most a sample) and ``k_e``, the
+search is repeated with both held at nominal, as an output error (the current simulated from the command through
+that first-order lag, eq. dc_electrical, with free gains: noise in the logged current then biases nothing):
+:func:`_nominal_curve`. A lag found so is reported as resting on the nominal armature (:attr:`Alignment.nominal`),
+and the caller must not judge ``L`` from the same log as if the timing were measured. Where that search is flat
+too (no fast enough command change at all), the lag is unidentifiable: none is assumed then, and none is called a
+delay. (On the tuning seeds, 15 of 516 fast-armature logs had a flat free search; the held one put 9 of them within
+a sample of the true lag. Used on every fast-armature log, as the geometric mean with the free fit's residual, it
+cut lag errors over a sample from 20 to 6, but moved two well-measured lags of 2.3 samples past the conventions
+into false delays: not adopted.) Held at a slower armature's ``L/R`` of ``tau`` samples, a 50 % inductance error
+moves the lag by ``tau / 2`` (:data:`HELD_L_ERROR`, :attr:`Alignment.bias`): a lag found so beyond the conventions
+is a delay only where it predicts the held-out data better than the longer ``L/R`` that would explain it (the
+caller's test, :mod:`.diagnose`; :func:`gain` does not vouch for a held curve). Until session 53 a lag within that
+share was not offered to that test at all: the blind rig's seed 431 (a 5 kHz chirp, ``L/R`` 25 samples, a drawn lag
+of 10.9 held at 11.06, within a share of 12.6) then named ``L`` +45 %, the error that lag mimics, though the
 armature's held-out current with the delay is 19 % better (each lag with its best ``L/R``). Of the 1,800
 proving-ground logs, 45 with a slow armature had a flat free search: six delays, of which this finds three, and no
-false one among the 39 others, nor with their inductance 50 % above nominal; with it twice nominal, one (measured with
-the share as a filter).
+false one among the 39 others, nor with their inductance 50 % above nominal; with it twice nominal, one (measured
+with the share as a filter).
 
 Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
 conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
@@ -195,7 +195,8 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
     ibar = 0.5 * (i[k] + i[k + 1])
     # the speed at both ends of the row, free: the back-EMF at the row's end (a fast armature's end current) or its
     # mean (a slow one's), and a speed sensor's lag to first order (a tachometer's filter, a differenced encoder); a
-    # brush drop's current sign but under one command magnitude (module doc; a square wave was flat over 0-0.875)
+    # brush drop's current sign but under one command magnitude (there a drop is a gain, and the sign, the command's
+    # on held rows, fits the level changes at any lag: a square wave flat from 0 to 0.875 samples, session 62)
     sign = [np.tanh(ibar / (0.05 * np.std(i) + 1e-12))] if voltage_spread(v) < ONE_MAGNITUDE else []
     cols = np.column_stack([i[k], w[k], w[k + 1], *sign, np.ones(k.size)])
     gram, cross = np.einsum("mp,mq->pq", cols, cols), np.einsum("mp,m->p", cols, i[k + 1])
