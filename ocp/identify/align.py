@@ -88,7 +88,6 @@ HELD_L_ERROR = 0.5
 DELAY_GAIN = 2.0
 #: the dead band's widths tried in the free search [fractions of the command's standard deviation] (module doc)
 DEAD_BAND_WIDTHS = (0.05, 0.1, 0.2, 0.3, 0.5)
-ONE_MAGNITUDE = 0.5  # a magnitudes' spread (:func:`voltage_spread`) from here up: the command holds one magnitude
 #: the armature time constants L/R tried by :func:`armature_error` [x nominal]: a factor four either way, wider than
 #: the factor-two prior, so that the conventions' lag has every longer L/R to mimic a delay with
 ARMATURE_TAUS = tuple(float(x) for x in np.geomspace(0.25, 4.0, 33))
@@ -194,11 +193,8 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
     k = np.arange(top + 10, max(top + 20, log.n - 10))
     ibar = 0.5 * (i[k] + i[k + 1])
     # the speed at both ends of the row, free: the back-EMF at the row's end (a fast armature's end current) or its
-    # mean (a slow one's), and a speed sensor's lag to first order (a tachometer's filter, a differenced encoder); a
-    # brush drop's current sign but under one command magnitude (there a drop is a gain, and the sign, the command's
-    # on held rows, fits the level changes at any lag: a square wave flat from 0 to 0.875 samples, session 62)
-    sign = [np.tanh(ibar / (0.05 * np.std(i) + 1e-12))] if voltage_spread(v) < ONE_MAGNITUDE else []
-    cols = np.column_stack([i[k], w[k], w[k + 1], *sign, np.ones(k.size)])
+    # mean (a slow one's), and a speed sensor's lag to first order (a tachometer's filter, a differenced encoder)
+    cols = np.column_stack([i[k], w[k], w[k + 1], np.tanh(ibar / (0.05 * np.std(i) + 1e-12)), np.ones(k.size)])
     gram, cross = np.einsum("mp,mq->pq", cols, cols), np.einsum("mp,m->p", cols, i[k + 1])
     # the drive's dead band acts on each held command, before the held commands share a sample: shifted after
     # the nonlinearity (else, for a two-level command, it is a free column on the rows where the level changes,
@@ -390,14 +386,6 @@ def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
                      "search did not predict the held-out data better than one within the conventions, so the "
                      "best lag within them is used and no input_delay is called", align.curve, known,
                      align.nominal and known)
-
-
-def voltage_spread(v: np.ndarray) -> float:
-    """The spread of a command's magnitudes ``v`` (N,) [V]: the 10th over the 90th percentile of ``|v|`` over the rows
-    above 1 % of its peak; :data:`ONE_MAGNITUDE` or more is one magnitude (a two-level command, +-V0 or 0 and V0)."""
-    a = np.abs(v)
-    on = a[a > 0.01 * float(np.max(a))] if a.size else a
-    return float(np.percentile(on, 10) / max(float(np.percentile(on, 90)), 1e-300)) if on.size else 1.0
 
 
 def switched(samples: float, tau: float, top: float = math.inf) -> float:
