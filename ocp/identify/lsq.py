@@ -111,6 +111,11 @@ def score(design: Design, ms: np.ndarray) -> float:
     return float(np.sqrt(np.mean(np.maximum(ms[live], 0.0)))) if live.any() else math.inf
 
 
+def calibrated_columns(design: Design) -> list[int]:
+    """The columns every model fits (the constants' and the nuisances'), in the design's order."""
+    return [j for c in (*CONSTANTS, *NUISANCES) for j in design.index(c)]
+
+
 def as_given(design: Design, calibrated: Fitted) -> Fitted:
     """The nominal model as given where it scores better than ``calibrated`` (the fit of no item,
     :func:`.select.fit_model`), else ``calibrated``: the forward rounds' start. As given, every constant is at nominal
@@ -121,7 +126,7 @@ def as_given(design: Design, calibrated: Fitted) -> Fitted:
     leave the unresolved ``L`` and the current's lag free, the differentiated current's noise pulled ``L`` to its -80 %
     box and the lag to 5 samples, and the fold that held the spin-up out read 24 noise units where the nominal model
     reads 1.1; a current offset cut that and was named)."""
-    cols = tuple(j for c in (*CONSTANTS, *NUISANCES) for j in design.index(c))
+    cols = tuple(calibrated_columns(design))
     ms = design.c_test / np.maximum(design.n_test, 1)
     one = Fitted((), cols, np.zeros(len(cols)), float(design.c_train.sum()), score(design, ms),
                  np.sqrt(np.maximum(ms, 0.0)), as_given=True)

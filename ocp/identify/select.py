@@ -79,8 +79,8 @@ from ocp.identify.evidence import (
     scatter,
     worst,
 )
-from ocp.identify.lsq import SATURATING, as_given, score, solve
-from ocp.identify.regression import CONSTANTS, DROPS, DRY, NUISANCES, Design
+from ocp.identify.lsq import SATURATING, as_given, calibrated_columns, score, solve
+from ocp.identify.regression import CONSTANTS, DROPS, DRY, Design
 from ocp.identify.shape_choice import neighbours, preferred
 
 #: a pair of items is tried among this many best single challengers when none clears the test alone (:func:`_pair`)
@@ -99,7 +99,7 @@ ROOM_FALL = 0.5
 def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
     """Fit a model (module doc): shaped effects take their best grid column by training cost and its better
     neighbour (:func:`_shape_columns`)."""
-    base = [j for c in (*CONSTANTS, *NUISANCES) for j in design.index(c)]
+    base = calibrated_columns(design)
     named = {i for i in items if i in (*CONSTANTS, COMMON_GAIN)}  # (the common gain of .gain: a constant)
     chosen: list[int] = list(base)
     for item in sorted(items, key=lambda i: i == "stribeck"):  # (Stribeck's band and decay beside a Coulomb level)
