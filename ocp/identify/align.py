@@ -5,55 +5,54 @@ applies it over the following sample (half a sample on average), a loop that log
 about to write next to the sensors it just read adds a whole sample, a drive that latches on the next
 PWM period adds a fraction. The *alignment* is that lag, in samples, beyond the zero-order hold.
 
-Estimate: the armature equation over one held sample (eq. dc_electrical, exact under a zero-order
-hold) with free coefficients, so wrong nominal constants do not bias it, plus brush-drop, dead-band and
-offset terms: ``i[k+1] = a1 i[k] + a2 V[k - lag] + a3 w[k] + a3' w[k+1] + a4 sign(i) + a5 + a6 sign(V[k - lag])``
-(the speed at both ends free: a fast armature's end current shows the end's back-EMF, a slow one's the row's mean,
-and a tachometer's filter or a differenced encoder logs the speed late, to first order a share of its step; with
-their mean alone the fit moved the command to match, session 60: ``tests/identify/test_alignment_speed_lag.py``),
-fitted by least squares (raw samples) for whole-sample lags up to :func:`search_range` (24 samples or 5 ms,
-whichever is longer, at most 64 samples), then on a grid of 1/8 sample around the best; the lag of the
-smallest residual, refined by a parabola through its neighbours, is the alignment (0 for a log whose row-k
-command drives k -> k+1). The dead-band term is the held commands' dead band shifted (the drive's nonlinearity
-acts on each held level before two of them share a sample), ``v_db tanh(V / v_db)`` (the catalogue's form, eq.
-voltage_deadband) with its width searched per lag on :data:`DEAD_BAND_WIDTHS` (a width fixed at 5 % of the command's
-spread left a 2.3 V dead band under a 10 V PI command 8 A off inside the band, and the lag a sample short; proving
-ground 117). A minimum that is not sharp (residual within 1 % one
-sample either side) is a plateau: bounded inside the search and at most two samples wide (a slow two-level
-command, whose rare level changes tell the lag only to within about a sample), its midpoint is the alignment;
-wider or reaching an end of the search (slow, smooth excitation), the free fit cannot tell the lag: a smooth
-command delayed by ``d`` samples looks like one through an armature lag ``L/R`` longer by ``d`` samples, and the
-free ``a1`` takes either. The datasheet can, where the armature is fast: given the nominal ``L/R`` (at most
-:data:`NOMINAL_TAU` samples, so that a 50 % inductance error moves the lag by at most a sample) and ``k_e``, the
-search is repeated with both held at nominal, as an output error (the current simulated from the command through
-that first-order lag, eq. dc_electrical, with free gains: noise in the logged current then biases nothing):
-:func:`_nominal_curve`. A lag found so is reported as resting on the nominal armature (:attr:`Alignment.nominal`),
-and the caller must not judge ``L`` from the same log as if the timing were measured. Where that search is flat
-too (no fast enough command change at all), the lag is unidentifiable: none is assumed then, and none is called a
-delay. (On the tuning seeds, 15 of 516 fast-armature logs had a flat free search; the held one put 9 of them within
-a sample of the true lag. Used on every fast-armature log, as the geometric mean with the free fit's residual, it
-cut lag errors over a sample from 20 to 6, but moved two well-measured lags of 2.3 samples past the conventions
-into false delays: not adopted.) Held at a slower armature's ``L/R`` of ``tau`` samples, a 50 % inductance error
-moves the lag by ``tau / 2`` (:data:`HELD_L_ERROR`, :attr:`Alignment.bias`): a lag found so beyond the conventions
-is a delay only where it predicts the held-out data better than the longer ``L/R`` that would explain it (the
-caller's test, :mod:`.diagnose`; :func:`gain` does not vouch for a held curve). Until session 53 a lag within that
-share was not offered to that test at all: the blind rig's seed 431 (a 5 kHz chirp, ``L/R`` 25 samples, a drawn lag
-of 10.9 held at 11.06, within a share of 12.6) then named ``L`` +45 %, the error that lag mimics, though the
-armature's held-out current with the delay is 19 % better (each lag with its best ``L/R``). Of the 1,800
-proving-ground logs, 45 with a slow armature had a flat free search: six delays, of which this finds three, and no
-false one among the 39 others, nor with their inductance 50 % above nominal; with it twice nominal, one (measured
-with the share as a filter).
+Estimate: the armature equation over one held sample (eq. dc_electrical, exact under a zero-order hold) with free
+coefficients, so wrong nominal constants do not bias it, plus brush-drop, dead-band and offset terms: ``i[k+1] = a1
+i[k] + a2 V[k - lag] + a3 w[k] + a3' w[k+1] + a4 sign(i) + a5 + a6 sign(V[k - lag])`` (the speed at both ends free: a
+fast armature's end current shows the end's back-EMF, a slow one's the row's mean, and a tachometer's filter or a
+differenced encoder logs the speed late, to first order a share of its step; with their mean alone the fit moved the
+command to match, session 60: ``tests/identify/test_alignment_speed_lag.py``), fitted by least squares (raw samples)
+for whole-sample lags up to :func:`search_range` (24 samples or 5 ms, whichever is longer, at most 64 samples), then
+on a grid of 1/8 sample around the best; the lag of the smallest residual, refined by a parabola through its
+neighbours, is the alignment (0 for a log whose row-k command drives k -> k+1). The dead-band term is the held
+commands' dead band shifted (the drive's nonlinearity acts on each held level before two of them share a sample),
+``v_db tanh(V / v_db)`` (the catalogue's form, eq. voltage_deadband) with its width searched per lag on
+:data:`DEAD_BAND_WIDTHS` (a width fixed at 5 % of the command's spread left a 2.3 V dead band under a 10 V PI command
+8 A off inside the band, and the lag a sample short; proving ground 117). The current-sign column is left out under
+one command magnitude (:func:`voltage_spread`: a square wave, a PRBS), where the sign is the command's on every held
+row and fits its level changes at any lag (a square wave's residual was flat from 0 to 0.875 samples, session 62), and
+a drop is a gain on the command anyway. Residuals under :data:`RESOLUTION` of the current's spread count as equal (a
+noise-free step after 25 rows at rest passed 1 % differences of the integrator's error as a sharp minimum: a 12-sample
+delay, session 63). A minimum that is not sharp (residual within 1 % one sample either side) is a plateau: bounded
+inside the search and at most two samples wide (a slow two-level command, whose rare level changes tell the lag only
+to within about a sample), its midpoint is the alignment; wider or reaching an end of the search (slow, smooth
+excitation), the free fit cannot tell the lag: a smooth command delayed by ``d`` samples looks like one through an
+armature lag ``L/R`` longer by ``d`` samples, and the free ``a1`` takes either. The datasheet can, where the armature
+is fast: given the nominal ``L/R`` (at most :data:`NOMINAL_TAU` samples, so that a 50 % inductance error moves the lag
+by at most a sample) and ``k_e``, the search is repeated with both held at nominal, as an output error (the current
+simulated from the command through that first-order lag, eq. dc_electrical, with free gains: noise in the logged
+current then biases nothing): :func:`_nominal_curve`. A lag found so is reported as resting on the nominal armature
+(:attr:`Alignment.nominal`), and the caller must not judge ``L`` from the same log as if the timing were measured.
+Where that search is flat too (no fast enough command change at all), the lag is unidentifiable: none is assumed then,
+and none is called a delay. (Used on every fast-armature log, as the geometric mean with the free fit's residual, the
+held search cut lag errors over a sample from 20 to 6 but made two lags of 2.3 samples false delays: not adopted.)
+Held at a slower armature's ``L/R`` of ``tau`` samples, a 50 % inductance error moves the lag by ``tau / 2``
+(:data:`HELD_L_ERROR`, :attr:`Alignment.bias`): a lag found so beyond the conventions is a delay only where it
+predicts the held-out data better than the longer ``L/R`` that would explain it (the caller's test, :mod:`.diagnose`;
+:func:`gain` does not vouch for a held curve). (Until session 53 a lag within that share was not offered to that test:
+blind seed 431's was named ``L`` +45 %.) Of the 1,800 proving-ground logs, 45 with a slow armature had a flat free
+search: six delays, of which this finds three, and no false one among the 39 others, nor with their inductance 50 %
+above nominal; with it twice nominal, one (measured with the share as a filter).
 
-Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging
-conventions explain (default 2 samples: a command logged up to two rows early, plus a fraction for the
-drive's update instant); it is removed from the log (its fraction of a sample as the drive switching within the
-row, :func:`switched`) and reported as ``alignment``. Beyond that, the lag is
-a transport delay: ``input_delay`` enters the verdict with ``delay`` = the whole lag [s] -- when it predicts
-the held-out data better than the best lag within the conventions (:func:`within`; the test is the
-caller's, :mod:`.diagnose`), or when the search's residual there is :data:`DELAY_GAIN` times that of the best lag
-within them (:func:`gain`). (The free runs of the held-out test use the nominal constants: a 34 % inertia error or
-a dead band beside a delay swamped it on 4 of the 100 delayed logs among 1,200 benchmark logs, whose gains were 2.3
-to 12; the largest gain of a lag beyond the conventions on the 1,100 logs without a delay was 1.45.)
+Rule (stated, user-settable): an alignment up to ``max_logging_skew + 0.75`` samples is what logging conventions
+explain (default 2 samples: a command logged up to two rows early, plus a fraction for the drive's update instant); it
+is removed from the log (its fraction of a sample as the drive switching within the row, :func:`switched`) and
+reported as ``alignment``. Beyond that, the lag is a transport delay: ``input_delay`` enters the verdict with
+``delay`` = the whole lag [s] -- when it predicts the held-out data better than the best lag within the conventions
+(:func:`within`; the test is the caller's, :mod:`.diagnose`), or when the search's residual there is
+:data:`DELAY_GAIN` times that of the best lag within them (:func:`gain`). (The free runs of the held-out test use the
+nominal constants: a 34 % inertia error or a dead band beside a delay swamped it on 4 of the 100 delayed logs among
+1,200 benchmark logs, whose gains were 2.3 to 12; the largest gain of a lag beyond the conventions on the 1,100 logs
+without a delay was 1.45.)
 """
 
 from __future__ import annotations
@@ -88,12 +87,16 @@ HELD_L_ERROR = 0.5
 DELAY_GAIN = 2.0
 #: the dead band's widths tried in the free search [fractions of the command's standard deviation] (module doc)
 DEAD_BAND_WIDTHS = (0.05, 0.1, 0.2, 0.3, 0.5)
+ONE_MAGNITUDE = 0.5  # a magnitudes' spread (:func:`voltage_spread`) from here up: the command holds one magnitude
 #: the armature time constants L/R tried by :func:`armature_error` [x nominal]: a factor four either way, wider than
 #: the factor-two prior, so that the conventions' lag has every longer L/R to mimic a delay with
 ARMATURE_TAUS = tuple(float(x) for x in np.geomspace(0.25, 4.0, 33))
 #: widest flat minimum [samples] taken as a measured lag (its midpoint): a level change of a two-level command
 #: pins the lag to within about a sample on either side; a wider one is a smooth excitation's (no lag measured)
 PLATEAU = 2.0
+#: the finest current residual a search tells apart [x the logged current's standard deviation]: a 13-bit logger's
+#: quantization; below it, a 1 % difference is the integrator's or the float's error, not the timing
+RESOLUTION = 1e-4
 
 
 @dataclass(frozen=True)
@@ -192,9 +195,10 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
     top = min(search_range(log.dt), max(log.n // 4 - 12, 1))
     k = np.arange(top + 10, max(top + 20, log.n - 10))
     ibar = 0.5 * (i[k] + i[k + 1])
-    # the speed at both ends of the row, free: the back-EMF at the row's end (a fast armature's end current) or its
-    # mean (a slow one's), and a speed sensor's lag to first order (a tachometer's filter, a differenced encoder)
-    cols = np.column_stack([i[k], w[k], w[k + 1], np.tanh(ibar / (0.05 * np.std(i) + 1e-12)), np.ones(k.size)])
+    # the speed at both ends of the row, free: the back-EMF at the row's end (a fast armature's end current) or its mean
+    # (a slow one's), a speed sensor's lag to first order; a brush drop's current sign but under one magnitude (doc)
+    sign = [np.tanh(ibar / (0.05 * np.std(i) + 1e-12))] if voltage_spread(v) < ONE_MAGNITUDE else []
+    cols = np.column_stack([i[k], w[k], w[k + 1], *sign, np.ones(k.size)])
     gram, cross = np.einsum("mp,mq->pq", cols, cols), np.einsum("mp,m->p", cols, i[k + 1])
     # the drive's dead band acts on each held command, before the held commands share a sample: shifted after
     # the nonlinearity (else, for a two-level command, it is a free column on the rows where the level changes,
@@ -205,12 +209,12 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
         return np.array(list(ordered(
             lambda lag: _residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k], shifted(bands, lag)[k]), lags)))
 
-    lags, res = _search(curve, top)
+    lags, res = _search(curve, top, RESOLUTION * float(np.std(i)))
     samples, sharp = _pick(lags, res)
     nominal, bias = False, 0.0
     if not sharp and armature is not None:
         tau = armature[0] / log.dt
-        lags, res = _search(_nominal_curve(log, tau, armature[1], k), top)
+        lags, res = _search(_nominal_curve(log, tau, armature[1], k), top, RESOLUTION * float(np.std(i)))
         held, sharp = _pick(lags, res)
         # a slower armature's lag is taken only as a delay candidate (a HELD_L_ERROR inductance error moves it by
         # bias): the caller claims it where it predicts held-out data better than a longer L/R (.diagnose._delay_wins)
@@ -229,15 +233,15 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
                      plot, sharp, nominal, bias if nominal else 0.0)
 
 
-def _search(curve: Callable[[np.ndarray], np.ndarray], top: int) -> tuple[np.ndarray, np.ndarray]:
+def _search(curve: Callable[[np.ndarray], np.ndarray], top: int, floor: float) -> tuple[np.ndarray, np.ndarray]:
     """``curve`` (residual per lag) over whole samples 0..``top``, then every 1/8 sample within 1.5 samples of
-    the best: the lags (K,) increasing and their residuals (K,)."""
+    the best: the lags (K,) increasing and their residuals (K,), none below ``floor`` (:data:`RESOLUTION`)."""
     coarse = np.arange(0.0, top + 1e-9, 1.0)
     res = curve(coarse)
     best = float(coarse[int(np.argmin(res))])
     fine = np.setdiff1d(np.arange(max(best - 1.5, 0.0), min(best + 1.5, top) + 1e-9, LAG_STEP), coarse)
     order = np.argsort(np.concatenate([coarse, fine]))
-    return np.concatenate([coarse, fine])[order], np.concatenate([res, curve(fine)])[order]
+    return np.concatenate([coarse, fine])[order], np.maximum(np.concatenate([res, curve(fine)])[order], floor)
 
 
 def _nominal_curve(log: Log, tau: float, k_e: float, k: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
@@ -386,6 +390,14 @@ def within(align: Alignment, max_logging_skew: float, dt: float) -> Alignment:
                      "search did not predict the held-out data better than one within the conventions, so the "
                      "best lag within them is used and no input_delay is called", align.curve, known,
                      align.nominal and known)
+
+
+def voltage_spread(v: np.ndarray) -> float:
+    """The spread of a command's magnitudes ``v`` (N,) [V]: the 10th over the 90th percentile of ``|v|`` over the rows
+    above 1 % of its peak; :data:`ONE_MAGNITUDE` or more is one magnitude (a two-level command, +-V0 or 0 and V0)."""
+    a = np.abs(v)
+    on = a[a > 0.01 * float(np.max(a))] if a.size else a
+    return float(np.percentile(on, 10) / max(float(np.percentile(on, 90)), 1e-300)) if on.size else 1.0
 
 
 def switched(samples: float, tau: float, top: float = math.inf) -> float:

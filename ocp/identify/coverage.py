@@ -11,6 +11,7 @@ from typing import Any, cast
 
 import numpy as np
 
+from ocp.identify.align import ONE_MAGNITUDE, voltage_spread
 from ocp.identify.angle import MAX_PERIODS, angle_limits, rotor_angle
 from ocp.identify.clipping import clip_spot
 from ocp.logs import Log, LogKind
@@ -70,11 +71,9 @@ def coverage(log: Log) -> dict[str, Any]:
     w = np.abs(log.omega)
     pos, neg, low = directions(log.omega)
     spread = float(np.percentile(w, 10) / max(float(np.percentile(w, 90)), 1e-300))
-    v = np.abs(log.voltage)
-    on = v[v > 0.01 * float(np.max(v))]
-    levels = float(np.percentile(on, 10) / max(float(np.percentile(on, 90)), 1e-300)) if on.size else 1.0
+    levels = voltage_spread(log.voltage)
     return {"reversal": min(pos, neg) > 0.05, "forward": pos >= SEEN_ROWS, "low_speed": low > 0.05,
-            "speed_range": spread < 0.5, "ripple_reach": slow >= RIPPLE_ROWS, "voltage_range": levels < 0.5,
+            "speed_range": spread < 0.5, "ripple_reach": slow >= RIPPLE_ROWS, "voltage_range": levels < ONE_MAGNITUDE,
             "forward_fraction": pos, "reverse_fraction": neg, "low_speed_fraction": low, "speed_spread": spread,
             "ripple_rows": slow, "ripple_periods": reach, "voltage_spread": levels}
 
