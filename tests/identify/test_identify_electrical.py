@@ -15,7 +15,17 @@ import numpy as np
 import pytest
 
 from ocp.identify import DiagnoseOptions, diagnose
-from ocp.identify.align import DELAY_GAIN, Alignment, armature_error, estimate, gain, realign, search_range, shifted, within
+from ocp.identify.align import (
+    DELAY_GAIN,
+    Alignment,
+    armature_error,
+    estimate,
+    gain,
+    realign,
+    search_range,
+    shifted,
+    within,
+)
 from ocp.identify.diagnose import _delay_wins, split
 from ocp.identify.predict import noise_levels
 from ocp.logs import Log, log_from_arrays

@@ -2,10 +2,11 @@
 
 To first order a first-order lag ``tau`` leaves ``-tau F'`` in the thrust map, and so does a speed read ``tau / dt``
 samples late (the ``speed_lag`` nuisance, at most two samples). Where the alignment left a PRBS log's armature
-equation with a sub-sample timing error (until session 63), ``speed_lag`` went to its bound there and the thrust map's disagreement
-with it was named ``thrust_lag``, fitted at the grid's shortest time constant under a unit coefficient: 1.5-1.8
-samples (proving-ground 14000, a cogging log at 2 kHz, with and without its angle column; 23196 likewise). Of 40
-drawn wake lags the shortest, four samples at 50-100 Hz, came out at 3.3-3.9 (:func:`ocp.identify.explain.wake_lag`).
+equation with a sub-sample timing error (until session 63), ``speed_lag`` went to its bound there and the thrust
+map's disagreement with it was named ``thrust_lag``, fitted at the grid's shortest time constant under a unit
+coefficient: 1.5-1.8 samples (proving-ground 14000, a cogging log at 2 kHz, with and without its angle column;
+23196 likewise). Of 40 drawn wake lags the shortest, four samples at 50-100 Hz, came out at 3.3-3.9
+(:func:`ocp.identify.explain.wake_lag`).
 
 Nor is a lag fitted at the longest time constant its columns hold (session 52): there the grid, not the log, sets it.
 On the blind rig (``bench/blindrig``: its own integrator, effect formulas and loggers), seed 505 (a 1 kHz PRBS, the
