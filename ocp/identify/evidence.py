@@ -40,6 +40,9 @@ ESTIMATE_MARGIN = 0.5
 #: ... and the held-out blocks agreeing at this one-sided level (a standard 2.5 %, chosen after looking at 6019 in
 #: :func:`estimate_agrees`'s doc, where 5 % named a clean log's bias)
 ESTIMATE_ALPHA = 0.025
+#: an equation's held-out error under this many noise units is counted at it where an effect's fall is judged
+#: (:func:`resolved`): below it the residual is the method's own (filters, integrator), not a missing effect
+RESOLVED = 0.2
 
 
 @dataclass(frozen=True)
@@ -95,15 +98,16 @@ def ripple_beyond(design: Design, before: Fitted, after: Fitted) -> bool:
 
 
 def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[str], min_improvement: float) -> bool:
-    """Whether ``after`` (``before`` plus the effects ``items``) cuts the held-out score by ``min_improvement``
-    (an effect's materiality), the score taken with every equation that no column of ``items`` enters counted at
-    most at its noise level (:func:`capped_score`): an error there (a command timing the alignment left in the
-    armature equation, say) is one these effects can neither explain nor be blamed for, and averaged into the
-    score it would dilute the fall they bring where they act (a torque ripple halving the torque equation's
-    error beside an armature equation at 18 noise units moved the pooled score by 0.5 %). A banded effect (a
-    Stribeck band, :data:`.footprint.BANDED`) acts on a few rows of those equations too: its fall counts as well on
-    the held-out rows where its column acts (:func:`band_score`; proving-ground seed 6003, 2 kHz: 21 mN m of Stribeck
-    friction acting on 5 % of the held-out rows cut the torque equation's error there by 24 %, the score by 11 %)."""
+    """Whether ``after`` (``before`` plus the effects ``items``) cuts the held-out score by ``min_improvement`` (an
+    effect's materiality), the score taken with every equation that no column of ``items`` enters counted at most at
+    its noise level and those they enter at least at :data:`RESOLVED` (:func:`capped_score`): an error there (a
+    command timing the alignment left in the armature equation, say) is one these effects can neither explain nor be
+    blamed for, and averaged into the score it would dilute the fall they bring where they act (a torque ripple
+    halving the torque equation's error beside an armature equation at 18 noise units moved the pooled score by
+    0.5 %). A banded effect (a Stribeck band, :data:`.footprint.BANDED`) acts on a few rows of those equations too:
+    its fall counts as well on the held-out rows where its column acts (:func:`band_score`; proving-ground seed
+    6003, 2 kHz: 21 mN m of Stribeck friction acting on 5 % of the held-out rows cut the torque equation's error
+    there by 24 %, the score by 11 %)."""
     acts = equations_of(design, items)
     if capped_score(design, after, acts) <= (1.0 - min_improvement) * capped_score(design, before, acts):
         return True
@@ -118,11 +122,11 @@ def own_material(design: Design, before: Fitted, after: Fitted, items: Sequence[
     sampling noise or by the likelihood ratio (:func:`.select._wins`). Counted at the noise level, the equations it
     cannot enter dilute its fall wherever its own equation reads near or under one noise unit, which is an estimate:
     the blind rig's seed 368 (5 kHz), an 18-period ripple took the torque equation from 0.68 to 0.18 noise units, a
-    capped score's fall of 8 %."""
+    capped score's fall of 8 %. Each equation is counted at least at :data:`RESOLVED`."""
     live = equations_of(design, items) & (design.n_test > 0)
     if not live.any():
         return False
-    was, now = (float(np.sqrt(np.mean(f.per_eq[live] ** 2))) for f in (before, after))
+    was, now = (float(np.sqrt(np.mean(resolved(f.per_eq[live]) ** 2))) for f in (before, after))
     return now <= (1.0 - min_improvement) * was
 
 
@@ -149,13 +153,15 @@ def band_fall(design: Design, before: Fitted, after: Fitted, item: str) -> tuple
 
 def band_score(design: Design, f: Fitted, j: int, acts: np.ndarray) -> float:
     """The held-out score of ``f`` on the rows where banded column ``j`` acts (:attr:`.regression.Design.footprint`)
-    in the equations ``acts`` (3,): each fold's rows scored by the model fitted without them."""
+    in the equations ``acts`` (3,): each fold's rows scored by the model fitted without them, each equation counted
+    at least at :data:`RESOLVED`."""
     assert design.footprint is not None  # (a fold's design has none: scored at the top level only)
     g, h, c, n = design.footprint.grams(j)
     total = held_sse(f, g, h, c)
     rows = n.sum(axis=0)
     live = acts & (rows > 0)
-    return float(np.sqrt(np.mean(np.maximum(total[live], 0.0) / rows[live]))) if live.any() else math.inf
+    return float(np.sqrt(np.mean(resolved(np.sqrt(np.maximum(total[live], 0.0) / rows[live])) ** 2))) \
+        if live.any() else math.inf
 
 
 def off_band_fall(design: Design, before: Fitted, after: Fitted) -> float:
@@ -224,8 +230,13 @@ def capped_score(design: Design, f: Fitted, acts: np.ndarray) -> float:
     live = design.n_test > 0
     if not live.any():
         return math.inf
-    per_eq = np.where(acts, f.per_eq, np.minimum(f.per_eq, 1.0))
+    per_eq = np.where(acts, resolved(f.per_eq), np.minimum(f.per_eq, 1.0))
     return float(np.sqrt(np.mean(per_eq[live] ** 2)))
+
+
+def resolved(per_eq: np.ndarray) -> np.ndarray:
+    """Held-out errors ``per_eq`` (noise units) counted at least at :data:`RESOLVED`."""
+    return np.maximum(per_eq, RESOLVED)
 
 
 def blocks_agree(design: Design, current: Fitted, item: str, f: Fitted) -> bool:

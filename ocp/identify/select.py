@@ -35,12 +35,11 @@ the band does not act on too (:func:`.evidence.ripple_off_band`), in a pair as a
 After the forward rounds, each adopted constant, then each effect but the last one adopted, is tested again beside all
 the other adopted items, and dropped (a constant: calibrated, not named) where it no longer wins: a greedy first pick
 that stood for a mix of the items adopted after it (a thrust asymmetry taken first for a wake lag and a force offset)
-leaves nothing of its own once they are in.
-Where no item clears that alone, two that clear it only together (and each against the other alone) are adopted as a
-pair (:func:`_pair`). Where the forward rounds end with an equation still far from its noise (``RESCUE``), the best pair
-of the first round's best single effects starts the rounds again, if it beats their end and either effect alone
-(:func:`_rescue`): a constant can win the first round with a share of two overlapping effects.
-A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` (beyond its fit's uncertainty,
+leaves nothing of its own once they are in. Where no item clears that alone, two that clear it only together (and each
+against the other alone) are adopted as a pair (:func:`_pair`). Where the forward rounds end with an equation still far
+from its noise (``RESCUE``), the best pair of the first round's best single effects starts the rounds again, if it beats
+their end and either effect alone (:func:`_rescue`): a constant can win the first round with a share of two overlapping
+effects. A constant that would have to be off by more than :data:`IMPLAUSIBLE_FACTOR` (beyond its fit's uncertainty,
 :func:`.evidence.implausible_factor`) yields to an effect that fits as well (a prior on constant errors:
 :func:`_prefer_effects`). Then every adopted item is challenged: an alternative that swaps it for another item, scores
 within ``ambiguity_margin``, fits the item's own equations as well and wins in its place by the item's test
@@ -74,6 +73,7 @@ from ocp.identify.evidence import (
     off_band_fall,
     own_material,
     ratio_agrees,
+    resolved,
     ripple_beyond,
     ripple_off_band,
     scatter,
@@ -340,9 +340,9 @@ def _room(design: Design, current: Fitted, items: Sequence[str], noise_floor: fl
 
 def _halves(design: Design, current: Fitted, items: Sequence[str], after: Fitted) -> bool:
     """Whether ``after`` (``current`` with ``items``) cuts the held-out RMS of an equation ``items`` enter by
-    :data:`ROOM_FALL`: that equation was not at its noise, whatever its noise units read (:func:`_room`)."""
+    :data:`ROOM_FALL` (both over :data:`.evidence.RESOLVED`): that equation was not at its noise (:func:`_room`)."""
     live = (design.n_test > 0) & equations_of(design, items)
-    return bool(np.any(live & (after.per_eq <= (1.0 - ROOM_FALL) * current.per_eq)))
+    return bool(np.any(live & (resolved(after.per_eq) <= (1.0 - ROOM_FALL) * resolved(current.per_eq))))
 
 
 def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float) -> bool:

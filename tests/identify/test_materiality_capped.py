@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 
 from ocp.identify import diagnose
-from ocp.identify.evidence import capped_score, is_material, own_material
+from ocp.identify.evidence import RESOLVED, capped_score, is_material, own_material
+from ocp.identify.select import _halves
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams
@@ -87,3 +88,17 @@ def test_a_fall_under_one_noise_unit_is_material_on_its_own_equation() -> None:
     # its own equation's small fall stays small, and an item that enters no equation has none
     assert not own_material(d, _Fit([1.2, 0.9, 0.9]), _Fit([1.1, 0.9, 0.9]), ("ripple",), 0.12)  # type: ignore[arg-type]
     assert not own_material(d, before, after, ("other",), 0.12)  # type: ignore[arg-type]
+
+
+def test_an_equation_under_the_resolution_is_counted_at_it() -> None:
+    """Closed forms of :data:`RESOLVED` (0.2 noise units; ``test_noise_free.py``): the noise-free square wave's
+    torque equation, 0.137 -> 0.04, falls by nothing on any test; seed 368's 0.68 -> 0.18 (above) and the blind rig's
+    227, 0.65 -> 0.23 halved (:func:`.select._halves`), still fall."""
+    d = _Design()
+    acts = np.array([True, False, False])
+    assert capped_score(d, _Fit([0.1, 18.5, 1.08]), acts) == pytest.approx(np.sqrt((RESOLVED**2 + 2) / 3))  # type: ignore[arg-type]
+    before, after = _Fit([0.137, 0.82, 1.26]), _Fit([0.04, 0.82, 1.26])
+    for judged in (is_material, own_material):
+        assert not judged(d, before, after, ("ripple",), 0.12)  # type: ignore[arg-type]
+    assert not _halves(d, before, ("ripple",), after)  # type: ignore[arg-type]
+    assert _halves(d, _Fit([0.65, 0.9, 0.9]), ("ripple",), _Fit([0.23, 0.9, 0.9]))  # type: ignore[arg-type]
