@@ -97,8 +97,7 @@ ROOM_FALL = 0.5
 
 
 def fit_model(design: Design, items: Sequence[str], tol: float) -> Fitted:
-    """Fit a model (module doc): shaped effects take their best grid column by training cost and its better
-    neighbour (:func:`_shape_columns`)."""
+    """Fit a model (module doc): shaped effects take their best grid column by cost and its better neighbour."""
     base = calibrated_columns(design)
     named = {i for i in items if i in (*CONSTANTS, COMMON_GAIN)}  # (the common gain of .gain: a constant)
     chosen: list[int] = list(base)
@@ -340,9 +339,10 @@ def _room(design: Design, current: Fitted, items: Sequence[str], noise_floor: fl
 
 def _halves(design: Design, current: Fitted, items: Sequence[str], after: Fitted) -> bool:
     """Whether ``after`` (``current`` with ``items``) cuts the held-out RMS of an equation ``items`` enter by
-    :data:`ROOM_FALL` (both over :data:`.evidence.RESOLVED`): that equation was not at its noise (:func:`_room`)."""
+    :data:`ROOM_FALL`, an effect's both over :data:`.evidence.RESOLVED`: it was not at its noise (:func:`_room`)."""
+    at = resolved if any(i not in CONSTANTS for i in items) else np.asarray
     live = (design.n_test > 0) & equations_of(design, items)
-    return bool(np.any(live & (resolved(after.per_eq) <= (1.0 - ROOM_FALL) * resolved(current.per_eq))))
+    return bool(np.any(live & (at(after.per_eq) <= (1.0 - ROOM_FALL) * at(current.per_eq))))
 
 
 def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float) -> bool:

@@ -23,9 +23,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from bench.modelcheck import case_log, noise_free
 from ocp.identify import diagnose
+from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.identify.test_one_command import P, step_log
+from tests.proving_ground import make_case
 
 N = 3000
 T = np.arange(N) * 1e-3
@@ -43,3 +46,12 @@ def test_a_noise_free_square_wave_is_clean() -> None:
                                np.where(np.arange(N) < 1500, 6.0, 2.0)], ids=["square-0-6", "sine", "step-down"])
 def test_noise_free_commands_whose_method_error_exceeds_the_curvature_are_clean(u: np.ndarray) -> None:
     assert diagnose(DCMotorPlant(P), step_log(u, 0.0)).verdict == []
+
+
+def test_a_constant_under_the_floor_is_still_named() -> None:
+    """Proving-ground 150 without noise (``bench/modelcheck.py --noise-free``: a 10 kHz log, cogging and ``B`` drawn
+    off): ``B`` takes the torque equation from 0.05 noise units to 0. The floor is an effect's; a constant's
+    materiality is the tolerance, and with the floor on it too ``B`` went unnamed."""
+    case = noise_free(make_case(150))
+    assert case.expected == {"cogging", "param:B"}
+    assert diagnose(DCMotorPlant(MotorParams(**case.nominal)), case_log(case)).verdict == ["cogging", "param:B"]
