@@ -6,38 +6,36 @@ about to write next to the sensors it just read adds a whole sample, a drive tha
 PWM period adds a fraction. The *alignment* is that lag, in samples, beyond the zero-order hold.
 
 Estimate: the armature equation over one held sample (eq. dc_electrical, exact under a zero-order hold) with free
-coefficients, so wrong nominal constants do not bias it, plus brush-drop, dead-band and offset terms: ``i[k+1] = a1
-i[k] + a2 V[k - lag] + a3 w[k] + a3' w[k+1] + a4 sign(i) + a5 + a6 sign(V[k - lag])`` (the speed at both ends free: a
-fast armature's end current shows the end's back-EMF, a slow one's the row's mean, and a tachometer's filter or a
-differenced encoder logs the speed late, to first order a share of its step; with their mean alone the fit moved the
-command to match, session 60: ``tests/identify/test_alignment_speed_lag.py``), fitted by least squares (raw samples)
-for whole-sample lags up to :func:`search_range` (24 samples or 5 ms, whichever is longer, at most 64 samples), then
-on a grid of 1/8 sample around the best; the lag of the smallest residual, refined by a parabola through its
-neighbours, is the alignment (0 for a log whose row-k command drives k -> k+1). The dead-band term is the held
-commands' dead band shifted (the drive's nonlinearity acts on each held level before two of them share a sample),
-``v_db tanh(V / v_db)`` (the catalogue's form, eq. voltage_deadband) with its width searched per lag on
-:data:`DEAD_BAND_WIDTHS` (a width fixed at 5 % of the command's spread left a 2.3 V dead band under a 10 V PI command
-8 A off inside the band, and the lag a sample short; proving ground 117). The current-sign column is left out under
-one command magnitude (:func:`voltage_spread`: a square wave, a PRBS), where the sign is the command's on every held
-row and fits its level changes at any lag (a square wave's residual was flat from 0 to 0.875 samples, session 62), and
-a drop is a gain on the command anyway. Residuals under :data:`RESOLUTION` of the current's spread count as equal (a
-noise-free step after 25 rows at rest passed 1 % differences of the integrator's error as a sharp minimum: a 12-sample
-delay, session 63). A minimum that is not sharp (residual within 1 % one sample either side) is a plateau: bounded
-inside the search and at most two samples wide (a slow two-level command, whose rare level changes tell the lag only
-to within about a sample), its midpoint is the alignment; wider or reaching an end of the search (slow, smooth
-excitation), the free fit cannot tell the lag: a smooth command delayed by ``d`` samples looks like one through an
-armature lag ``L/R`` longer by ``d`` samples, and the free ``a1`` takes either. The datasheet can, where the armature
-is fast: given the nominal ``L/R`` (at most :data:`NOMINAL_TAU` samples, so that a 50 % inductance error moves the lag
-by at most a sample) and ``k_e``, the search is repeated with both held at nominal, as an output error (the current
-simulated from the command through that first-order lag, eq. dc_electrical, with free gains: noise in the logged
-current then biases nothing): :func:`_nominal_curve`. A lag found so is reported as resting on the nominal armature
-(:attr:`Alignment.nominal`), and the caller must not judge ``L`` from the same log as if the timing were measured.
-Where that search is flat too (no fast enough command change at all), the lag is unidentifiable: none is assumed then,
-and none is called a delay. (Used on every fast-armature log, as the geometric mean with the free fit's residual, the
-held search cut lag errors over a sample from 20 to 6 but made two lags of 2.3 samples false delays: not adopted.)
-Held at a slower armature's ``L/R`` of ``tau`` samples, a 50 % inductance error moves the lag by ``tau / 2``
-(:data:`HELD_L_ERROR`, :attr:`Alignment.bias`): a lag found so beyond the conventions is a delay only where it
-predicts the held-out data better than the longer ``L/R`` that would explain it (the caller's test, :mod:`.diagnose`;
+coefficients, so wrong nominal constants do not bias it, plus brush-drop, dead-band and offset terms:
+``i[k+1] = a1 i[k] + a2 V[k - lag] + a3 w[k] + a3' w[k+1] + a4 sign(i) + a5 + a6 sign(V[k - lag])`` (the speed at both
+ends free: a fast armature's end current shows the end's back-EMF, a slow one's the row's mean, and a tachometer's
+filter or a differenced encoder logs the speed late, to first order a share of its step; with their mean alone the fit
+moved the command to match, session 60: ``tests/identify/test_alignment_speed_lag.py``), fitted by least squares (raw
+samples) for whole-sample lags up to :func:`search_range` (24 samples or 5 ms, whichever is longer, at most 64 samples),
+then on a grid of 1/8 sample around the best; the lag of the smallest residual, refined by a parabola through its
+neighbours, is the alignment (0 for a log whose row-k command drives k -> k+1). The dead-band term is the held commands'
+dead band shifted (the drive's nonlinearity acts on each held level before two of them share a sample), ``v_db tanh(V /
+v_db)`` (the catalogue's form, eq. voltage_deadband) with its width searched per lag on :data:`DEAD_BAND_WIDTHS` (a
+width fixed at 5 % of the command's spread left a 2.3 V dead band under a 10 V PI command 8 A off inside the band, and
+the lag a sample short; proving ground 117). The current-sign column is left out under one command magnitude
+(:func:`voltage_spread`: a square wave, a PRBS), where the sign is the command's on every held row and fits its level
+changes at any lag (a square wave's residual was flat from 0 to 0.875 samples, session 62), and a drop is a gain on the
+command anyway. Residuals under :data:`RESOLUTION` of the current's spread count as equal (a noise-free step after 25
+rows at rest passed 1 % differences of the integrator's error as a sharp minimum: a 12-sample delay, session 63). A
+minimum that is not sharp (residual within 1 % one sample either side) is a plateau: bounded inside the search and at
+most two samples wide (a slow two-level command, whose rare level changes tell the lag only to within about a sample),
+its midpoint is the alignment; wider or reaching an end of the search (slow, smooth excitation), the free fit cannot
+tell the lag: a smooth command delayed by ``d`` samples looks like one through an armature lag ``L/R`` longer by ``d``
+samples, and the free ``a1`` takes either. The datasheet can, where the armature is fast: given the nominal ``L/R`` (at
+most :data:`NOMINAL_TAU` samples, so that a 50 % inductance error moves the lag by at most a sample) and ``k_e``, the
+search is repeated with both held at nominal, as an output error (the current simulated from the command through that
+first-order lag, eq. dc_electrical, with free gains: noise in the logged current then biases nothing):
+:func:`_nominal_curve`. A lag found so is reported as resting on the nominal armature (:attr:`Alignment.nominal`), and
+the caller must not judge ``L`` from the same log as if the timing were measured. Where that search is flat too (no fast
+enough command change at all), the lag is unidentifiable: none is assumed then, and none is called a delay. Held at a
+slower armature's ``L/R`` of ``tau`` samples, a 50 % inductance error moves the lag by ``tau / 2``
+(:data:`HELD_L_ERROR`, :attr:`Alignment.bias`): a lag found so beyond the conventions is a delay only where it predicts
+the held-out data better than the longer ``L/R`` that would explain it (the caller's test, :mod:`.diagnose`;
 :func:`gain` does not vouch for a held curve). (Until session 53 a lag within that share was not offered to that test:
 blind seed 431's was named ``L`` +45 %.) Of the 1,800 proving-ground logs, 45 with a slow armature had a flat free
 search: six delays, of which this finds three, and no false one among the 39 others, nor with their inductance 50 %
@@ -87,7 +85,8 @@ HELD_L_ERROR = 0.5
 DELAY_GAIN = 2.0
 #: the dead band's widths tried in the free search [fractions of the command's standard deviation] (module doc)
 DEAD_BAND_WIDTHS = (0.05, 0.1, 0.2, 0.3, 0.5)
-ONE_MAGNITUDE = 0.5  # a magnitudes' spread (:func:`voltage_spread`) from here up: the command holds one magnitude
+#: a magnitudes' spread (:func:`voltage_spread`) from here up is one command magnitude (a two-level command)
+ONE_MAGNITUDE = 0.5
 #: the armature time constants L/R tried by :func:`armature_error` [x nominal]: a factor four either way, wider than
 #: the factor-two prior, so that the conventions' lag has every longer L/R to mimic a delay with
 ARMATURE_TAUS = tuple(float(x) for x in np.geomspace(0.25, 4.0, 33))
@@ -196,7 +195,7 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
     k = np.arange(top + 10, max(top + 20, log.n - 10))
     ibar = 0.5 * (i[k] + i[k + 1])
     # the speed at both ends of the row, free: the back-EMF at the row's end (a fast armature's end current) or its mean
-    # (a slow one's), a speed sensor's lag to first order; a brush drop's current sign but under one magnitude (doc)
+    # (a slow one's), a speed sensor's lag to first order; a brush drop's current sign, not under one magnitude (doc)
     sign = [np.tanh(ibar / (0.05 * np.std(i) + 1e-12))] if voltage_spread(v) < ONE_MAGNITUDE else []
     cols = np.column_stack([i[k], w[k], w[k + 1], *sign, np.ones(k.size)])
     gram, cross = np.einsum("mp,mq->pq", cols, cols), np.einsum("mp,m->p", cols, i[k + 1])
@@ -209,12 +208,13 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
         return np.array(list(ordered(
             lambda lag: _residual(i[k + 1], gram, cross, cols, shifted(v, lag)[k], shifted(bands, lag)[k]), lags)))
 
-    lags, res = _search(curve, top, RESOLUTION * float(np.std(i)))
+    floor = RESOLUTION * float(np.std(i))
+    lags, res = _search(curve, top, floor)
     samples, sharp = _pick(lags, res)
     nominal, bias = False, 0.0
     if not sharp and armature is not None:
         tau = armature[0] / log.dt
-        lags, res = _search(_nominal_curve(log, tau, armature[1], k), top, RESOLUTION * float(np.std(i)))
+        lags, res = _search(_nominal_curve(log, tau, armature[1], k), top, floor)
         held, sharp = _pick(lags, res)
         # a slower armature's lag is taken only as a delay candidate (a HELD_L_ERROR inductance error moves it by
         # bias): the caller claims it where it predicts held-out data better than a longer L/R (.diagnose._delay_wins)
