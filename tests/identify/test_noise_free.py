@@ -1,21 +1,23 @@
 """Model-exact logs without noise (session 63: a user who simulates the plant first; issue #11).
 
 The catalogue's own ZOH run of ``tests/identify/test_one_command.py``'s plant, logged without noise, is diagnosed
-against that very plant, so the right verdict is the empty one. The noise levels
-(:func:`ocp.identify.predict.noise_levels`: second differences) are then read from the signals' own curvature, and the
-method's own errors (derivative filters, the integrator, sub-sample timing) are what the equations hold, in those
-units. An equation's held-out error under :data:`ocp.identify.evidence.RESOLVED` noise units is counted at it where an
-effect's fall is judged: below it a fall is the method's, not a missing effect's. That fixed the +-6 V square wave
-(its torque equation at 0.137 noise units: a Stribeck band and a ripple were named on falls from there to 0.04); with
-the loggers' noise at a tenth of the usual level every command here is clean.
+against that very plant, so the right verdict is the empty one. What the equations then hold is the method's own error
+(derivative filters, the integrator, sub-sample timing), and their noise units are themselves made of it: each
+equation's level is what the richest fit (every effect) leaves on the training rows
+(:func:`ocp.identify.regression.build`), the torque equation's floored by the channels' noise read from their second
+differences (:func:`ocp.identify.predict.noise_levels`: here the signals' own curvature). An equation's held-out error
+under :data:`ocp.identify.evidence.RESOLVED` noise units is counted at it where an effect's fall is judged: below it a
+fall is the method's, not a missing effect's. That fixed the +-6 V square wave (its torque equation at 0.137 noise
+units: a Stribeck band and a ripple were named on falls from there to 0.04); with the loggers' noise at a tenth of the
+usual level every command here is clean.
 
-Not fixed (strict expected failures, measured): where the method's error is ABOVE the noise read from the curvature,
-no floor on falls helps. A 0/6 V square wave leaves the torque equation at 2.0 noise units, and a drag asymmetry
-(acting near zero speed through its smooth sign, on a rotor that never reverses) takes it to 0.74; a 1 Hz sine leaves
-the armature equation at 1,039 noise units (current noise read as 6.9e-5 A) and a Stribeck band is named on the
-torque equation's band rows; a step down from 6 to 2 V leaves the torque equation at 12.2 and names a current offset
-and a Stribeck band. The lead: scale each equation's noise by what the method reads on the nominal plant's own
-simulated run of the logged command (its error where the model is exact by construction).
+Not fixed (strict expected failures, measured): where the part of the method's error that effects can absorb is ABOVE
+that level, no floor on falls helps. A 0/6 V square wave leaves the torque equation at 2.0 noise units, and a drag
+asymmetry (acting near zero speed through its smooth sign, on a rotor that never reverses) takes it to 0.74; a 1 Hz
+sine leaves the armature equation at 1,039 noise units and a Stribeck band is named on the torque equation's band rows;
+a step down from 6 to 2 V leaves the torque equation at 12.2 and names a current offset and a Stribeck band. The lead:
+scale each equation's noise by what the method reads on the nominal plant's own simulated run of the logged command
+(its error where the model is exact by construction).
 """
 
 from __future__ import annotations
@@ -39,12 +41,12 @@ def test_a_noise_free_square_wave_is_clean() -> None:
     assert diagnose(DCMotorPlant(P), step_log(u, 0.0)).verdict == []
 
 
-@pytest.mark.xfail(strict=True, reason="session 63: the method's own error is above the noise read from the "
-                                       "signals' curvature (module doc)")
+@pytest.mark.xfail(strict=True, reason="session 63: the method's own error, which effects absorb, is above "
+                                       "the level its richest fit leaves (module doc)")
 @pytest.mark.parametrize("u", [np.where(np.sin(2 * np.pi * 2.0 * T) > 0, 6.0, 0.0),
                                6.0 * np.sin(2 * np.pi * 1.0 * T),
                                np.where(np.arange(N) < 1500, 6.0, 2.0)], ids=["square-0-6", "sine", "step-down"])
-def test_noise_free_commands_whose_method_error_exceeds_the_curvature_are_clean(u: np.ndarray) -> None:
+def test_noise_free_commands_whose_absorbable_method_error_exceeds_the_level_are_clean(u: np.ndarray) -> None:
     assert diagnose(DCMotorPlant(P), step_log(u, 0.0)).verdict == []
 
 
