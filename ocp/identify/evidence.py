@@ -160,8 +160,7 @@ def band_score(design: Design, f: Fitted, j: int, acts: np.ndarray) -> float:
     total = held_sse(f, g, h, c)
     rows = n.sum(axis=0)
     live = acts & (rows > 0)
-    return float(np.sqrt(np.mean(resolved(np.sqrt(np.maximum(total[live], 0.0) / rows[live])) ** 2))) \
-        if live.any() else math.inf
+    return float(np.sqrt(np.mean(np.maximum(total[live] / rows[live], RESOLVED**2)))) if live.any() else math.inf
 
 
 def off_band_fall(design: Design, before: Fitted, after: Fitted) -> float:
