@@ -1,9 +1,10 @@
 """A proving-ground case diagnosed, with what the last explanation fitted (for tests that read a nuisance's or an
-effect's coefficient): the diagnosis's ``_explain`` is watched for the run; and a blind-rig case regenerated and
-diagnosed as a user would (its CSV and parameter file read back)."""
+effect's coefficient): the diagnosis's ``_explain`` is watched for the run; its alignment set by hand; and a blind-rig
+case regenerated and diagnosed as a user would (its CSV and parameter file read back)."""
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import sys
 from pathlib import Path
@@ -37,6 +38,15 @@ def diagnosed(seed: int, angle: bool, monkeypatch: pytest.MonkeyPatch) -> tuple[
     case = make_case(seed)
     res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), case_log(case, angle=angle))
     return case, res, seen["design"], seen["sel"].final
+
+
+def aligned_late(monkeypatch: pytest.MonkeyPatch, samples: float) -> None:
+    """The diagnosis's alignment estimate replaced by ``samples`` [samples] of lag, everything else as estimated: a
+    timing error set by hand (session 62's, before session 63 mended the search)."""
+    module = sys.modules["ocp.identify.diagnose"]
+    estimate = module.estimate
+    monkeypatch.setattr(module, "estimate", lambda log, *a, **k: dataclasses.replace(
+        estimate(log, *a, **k), samples=samples, seconds=samples * log.dt))
 
 
 def blind(seed: int, directory: Path) -> tuple[DiagnoseResult, dict[str, Any]]:

@@ -11,9 +11,6 @@ ripple does not enter counted at most at the noise level, its fall is material a
 
 from __future__ import annotations
 
-import dataclasses
-import sys
-
 import numpy as np
 import pytest
 
@@ -24,6 +21,7 @@ from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
+from tests.identify.diagnosed import aligned_late
 from tests.proving_ground import make_case
 
 
@@ -33,10 +31,7 @@ def test_ripple_named_beside_an_armature_error_it_cannot_touch(late: bool, monke
     alignment's free search fitted the command's level changes at any lag), the armature error that premise needs;
     aligned as measured now (0), the ripple's fall is material in the pooled score too."""
     if late:
-        module = sys.modules["ocp.identify.diagnose"]
-        estimate = module.estimate
-        monkeypatch.setattr(module, "estimate", lambda log, *a, **k: dataclasses.replace(
-            estimate(log, *a, **k), samples=0.94, seconds=0.94 * log.dt))
+        aligned_late(monkeypatch, 0.94)
     case = make_case(1130)
     assert case.expected == {"cogging"} and case.logger.speed == "tacho"
     t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)

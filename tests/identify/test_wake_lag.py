@@ -29,7 +29,7 @@ import pytest
 
 from ocp.identify.evidence import Fitted
 from ocp.identify.explain import physical, wake_lag
-from tests.identify.diagnosed import blind, diagnosed
+from tests.identify.diagnosed import aligned_late, blind, diagnosed
 
 
 def _diagnose(seed: int, angle: bool, monkeypatch: pytest.MonkeyPatch) -> tuple[Any, list[str], float]:
@@ -50,10 +50,7 @@ def test_a_timing_error_is_named_a_wake_only_without_the_rule(rule: bool, monkey
     """The guard: the same log aligned 0.81 samples late, as it was until session 63 (a current-sign column in the
     alignment's free search, :mod:`ocp.identify.align`, fitted the square command's level changes at any lag), is
     clean with the rule and with every thrust lag let through names one, shorter than two samples."""
-    module = sys.modules["ocp.identify.diagnose"]
-    estimate = module.estimate
-    monkeypatch.setattr(module, "estimate", lambda log, *a, **k: dataclasses.replace(
-        estimate(log, *a, **k), samples=0.81, seconds=0.81 * log.dt))
+    aligned_late(monkeypatch, 0.81)
     if not rule:
         monkeypatch.setattr(sys.modules["ocp.identify.explain"], "wake_lag", lambda design, f: True)
     _, verdict, lag = _diagnose(14000, False, monkeypatch)
