@@ -79,6 +79,7 @@ from ocp.identify.inductance import (
 )
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels, read_current
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
+from ocp.identify.replica import unmasked
 from ocp.identify.select import Selection, select
 from ocp.identify.signs import check_signs
 from ocp.logs import Log, LogKind
@@ -94,8 +95,7 @@ class DiagnoseOptions(BaseModel):
 
     segment_s: float = Field(default=0.5, gt=0)
     holdout_every: int = Field(default=3, ge=2)
-    # models scored by cross-validation (each segment class held out in turn), not on one class (item 2 above)
-    cross_validate: bool = True
+    cross_validate: bool = True  # models scored by cross-validation (each segment class held out in turn, item 2)
     min_improvement: float = Field(default=0.12, gt=0, lt=1)  # an effect's held-out score must fall by this
     # [noise units] a model with every equation within this of its noise level (1) is done (session 10: not 1.15); a
     # constant is named only for an equation above it, an effect's material fall may show a noise level overestimated
@@ -219,9 +219,8 @@ def _pool(plant: DCMotorPlant, opt: DiagnoseOptions) -> tuple[tuple[str, ...], l
     """Effects to build columns for, and the selection pool (effects + constants) as regression names."""
     present = {e.name for e in plant.effects}
     wanted = opt.candidates
-    if wanted is not None:
-        for n in wanted:
-            candidate(n)  # unknown names raise, naming them
+    for n in wanted or ():
+        candidate(n)  # unknown names raise, naming them
     effects = tuple(n for n in REGRESSED if n not in present and (wanted is None or n in wanted))
     consts = [c for c in CONSTANTS if opt.include_params and (wanted is None or f"param:{c}" in wanted
                                                                or any(f"param:{k}" in wanted for k in KEYS[c]))]
@@ -363,7 +362,8 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
     ``L``), ``L`` is judged beside the timing error it cannot be told from (:func:`.inductance.open_timing`).
     A measured one: ``L`` named only where ``judged`` gives no reason against it (:func:`.inductance.inductance_wins`,
     :func:`.inductance.filter_mimics`); else it is unresolved, or free above nominal again, the selection redone. No
-    model is adopted with a dry friction or a ripple beyond ``stall`` [N m] (:func:`.explain.stall_torque`)."""
+    model is adopted with a dry friction or a ripple beyond ``stall`` [N m] (:func:`.explain.stall_torque`), nor an
+    effect that takes as much of the nominal plant's noise-free replica of the log (:func:`.replica.unmasked`)."""
     design = build(plant.params, log, sp.train, sp.test, effects, noise, raw_torque=True, held=held,
                    folds=list(sp.folds) or None)
     if log.kind is LogKind.TIME_SERIES:
@@ -374,9 +374,10 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
         filter_headroom(design, plant, log)
     if progress is not None:
         progress(0.2)
-    ok = functools.partial(physical, design, stall=stall)
-    sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
-                 opt.ambiguity_margin, None if progress is None else (lambda f: progress(0.2 + 0.6 * f)), ok)
+    redo = functools.partial(select, design, tol=opt.tolerance, min_improvement=opt.min_improvement,
+                             noise_floor=opt.noise_floor, max_items=opt.max_effects - delayed,
+                             margin=opt.ambiguity_margin, physical=functools.partial(physical, design, stall=stall))
+    sel = redo(pool, progress=None if progress is None else (lambda f: progress(0.2 + 0.6 * f)))
     why = None
     if "L" in sel.final.items and implausible_factor(design, sel.final, "L") is not None:
         # beyond a factor two: a timing error (an unconfirmed delay under an open timing; a command skew or a current
@@ -394,9 +395,8 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
             box.pop("L", None)
         design.unresolved["L"] = why
     if why is not None:
-        sel = select(design, pool, opt.tolerance, opt.min_improvement, opt.noise_floor, opt.max_effects - delayed,
-                     opt.ambiguity_margin, physical=ok)
-    return design, sel
+        sel = redo(pool)
+    return design, unmasked(plant, log, design, sel, pool, redo, opt.tolerance, opt.min_improvement, sp)
 
 
 def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt: DiagnoseOptions, sp: Split,
