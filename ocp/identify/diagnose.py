@@ -299,8 +299,8 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
         return FILTER_MIMICS if mimic else None
 
     stall = stall_torque(plant.params, log.voltage)
-    design, sel = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align, held,
-                           judged, stall)
+    design, sel, aside = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align,
+                                  held, judged, stall)
     base = score(plant, work, sp.test, noise, seg)
     rounds, verdict, explanations = [], [], []
     if delay is not None:
@@ -346,7 +346,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     gain = gain_rival(design, sel.final, opt.tolerance, opt.ambiguity_margin, not cov["voltage_range"])
     ambiguous += [r for r in (rival, gain) if r] + unseen_rivals(design.unseen, verdict, sel.final.score)
     spots = blind_spots(log, verdict, gain=gain is not None, cov=cov)
-    return DiagnoseResult(verdict, rounds, final, noise, explanations, align,
+    return DiagnoseResult(verdict, rounds, final, noise, explanations + aside, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
                           spectrum_peak(design, stall, sel.ripple), opt.tolerance, spots)
 
@@ -355,7 +355,7 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
              noise: dict[str, float], opt: DiagnoseOptions, delayed: bool,
              progress: Callable[[float], None] | None, align: Alignment,
              held: tuple[np.ndarray, float] | None = None, judged: Callable[[Design, Fitted], str | None] | None = None,
-             stall: float = math.inf) -> tuple[Design, Selection]:
+             stall: float = math.inf) -> tuple[Design, Selection, list[str]]:
     """Regression and selection; where an angle is logged, the torque equation on the raw rows (a torque
     ripple faster than the low-pass kept, :mod:`.regression`). Where the alignment is not identified (flat
     search residual) or was found only with the nominal armature (:attr:`.align.Alignment.nominal`: it assumed
@@ -396,7 +396,7 @@ def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...],
         design.unresolved["L"] = why
     if why is not None:
         sel = redo(pool)
-    return design, unmasked(plant, log, design, sel, pool, redo, opt.tolerance, opt.min_improvement, sp)
+    return (design, *unmasked(plant, log, design, sel, pool, redo, opt.tolerance, opt.min_improvement, sp))
 
 
 def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt: DiagnoseOptions, sp: Split,

@@ -75,10 +75,16 @@ def artifacts(plant: DCMotorPlant, log: Log, design: Design, final: Fitted, tol:
 
 
 def unmasked(plant: DCMotorPlant, log: Log, design: Design, sel: Selection, pool: list[str],
-             redo: Callable[[list[str]], Selection], tol: float, share: float, sp: Split) -> Selection:
+             redo: Callable[[list[str]], Selection], tol: float, share: float,
+             sp: Split) -> tuple[Selection, list[str]]:
     """``sel`` (a selection over ``pool`` on ``design``) redone by ``redo(pool)`` with its final model's
-    :func:`artifacts` (on the rows of ``sp``) left out of the pool, until it adopts none."""
+    :func:`artifacts` (on the rows of ``sp``) left out of the pool, until it adopts none; and a sentence for each
+    effect so set aside."""
+    said = []
     while fake := artifacts(plant, log, design, sel.final, tol, share, sp):
         pool = [c for c in pool if c not in fake]
+        said += [f"{e} is not named: it takes no more of this log's held-out error than of the nominal plant's own "
+                 f"noise-free run under the logged command (the method's error under this command, not a missing "
+                 f"effect)" for e in fake]
         sel = redo(pool)
-    return sel
+    return sel, said

@@ -49,8 +49,9 @@ def test_a_noise_free_square_wave_is_clean() -> None:
 def test_a_noise_free_step_down_is_clean() -> None:
     """Session 63 named a current offset and a Stribeck band here; the current offset takes no more of the log's
     held-out error than of the nominal plant's replica (:func:`ocp.identify.replica.artifacts`), and without it
-    nothing is adopted."""
-    assert diagnose(DCMotorPlant(P), step_log(np.where(np.arange(N) < 1500, 6.0, 2.0), 0.0)).verdict == []
+    nothing is adopted; the answer says so."""
+    d = diagnose(DCMotorPlant(P), step_log(np.where(np.arange(N) < 1500, 6.0, 2.0), 0.0))
+    assert d.verdict == [] and [e.split(":")[0] for e in d.explanations] == ["current_offset is not named"]
 
 
 @pytest.mark.xfail(strict=True, reason="session 64: the replica's ripple is not the log's; the sine's alignment is "
