@@ -35,7 +35,7 @@ def replica(plant: DCMotorPlant, log: Log) -> Log:
     i0 = float(log.current[0]) if log.has("current") else 0.0
     run = simulate_zoh(plant, log.t, log.voltage, [float(log.omega[0]), i0])
     theta = None if log.theta is None else log.theta[0] + run.theta
-    derived = theta is not None and log.theta is not None and np.allclose(log.omega, np.gradient(log.theta, log.t))
+    derived = log.theta is not None and np.allclose(log.omega, np.gradient(log.theta, log.t))
     nan = np.full(log.n, np.nan)
     return replace(log, current=run.x[1] if log.has("current") else nan,
                    thrust=run.thrust if log.has("thrust") else nan,
