@@ -209,8 +209,8 @@ class DiagnoseResult:
 
 
 def _message(verdict: list[str], explanations: list[str], ambiguous: list[dict[str, Any]]) -> str:
-    if not verdict:
-        return "nothing missing"
+    if not verdict:  # (what was set aside is said too: the page shows the message alone)
+        return "; ".join(["nothing missing", *explanations])
     text = "; ".join(explanations)
     return "ambiguous: " + "; ".join(str(a["reason"]) for a in ambiguous) + ". " + text if ambiguous else text
 

@@ -52,6 +52,7 @@ def test_a_noise_free_step_down_is_clean() -> None:
     nothing is adopted; the answer says so."""
     d = diagnose(DCMotorPlant(P), step_log(np.where(np.arange(N) < 1500, 6.0, 2.0), 0.0))
     assert d.verdict == [] and [e.split(":")[0] for e in d.explanations] == ["current_offset is not named"]
+    assert d.to_dict()["message"] == "nothing missing; " + d.explanations[0]
 
 
 @pytest.mark.xfail(strict=True, reason="session 64: the replica's ripple is not the log's; the sine's alignment is "
