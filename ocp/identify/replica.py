@@ -13,6 +13,7 @@ log's noise units, so on a noisy log the replica's is far below any effect's and
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import replace
 
@@ -48,21 +49,29 @@ def _falls(design: Design, before: Fitted, after: Fitted, sigma: np.ndarray) -> 
     return float(np.sum((before.per_eq ** 2 - after.per_eq ** 2) * (design.sigma / sigma) ** 2))
 
 
-def artifacts(plant: DCMotorPlant, log: Log, design: Design, final: Fitted, tol: float, share: float,
-              sp: Split) -> list[str]:
+def simulated(plant: DCMotorPlant, log: Log) -> Log | None:
+    """:func:`replica` of a time series with a command; None for a steady-state sweep, a log without voltage or a
+    plant too stiff to run over the log."""
+    if log.kind is not LogKind.TIME_SERIES or not log.has("voltage"):
+        return None
+    try:
+        return replica(plant, log)
+    except (MissionError, SolverError):
+        return None
+
+
+def artifacts(plant: DCMotorPlant, copy: Callable[[], Log | None], design: Design, final: Fitted, tol: float,
+              share: float, sp: Split) -> list[str]:
     """The effects of ``final`` (adopted on ``design``, the log's equations on the rows of ``sp``) whose fall on
     the log's held-out error (beside the other items) is not ``share`` beyond the fall the same model takes of the
-    nominal plant's replica of the log (:func:`replica`), both in the log's noise units: the method's own error, not
-    a missing effect. ``share``: the selection's ``min_improvement`` (that much of an effect's fall must be its own).
-    None is judged on a steady-state sweep or a plant too stiff to run over the log."""
+    nominal plant's replica of the log (``copy()``, :func:`simulated`; asked only where ``final`` holds an effect),
+    both in the log's noise units: the method's own error, not a missing effect. ``share``: the selection's
+    ``min_improvement`` (that much of an effect's fall must be its own). None is judged without a replica."""
     effects = [i for i in final.items if i not in CONSTANTS]
-    if not effects or log.kind is not LogKind.TIME_SERIES or not log.has("voltage"):
+    run = copy() if effects else None
+    if run is None:
         return []
-    try:
-        copy = replica(plant, log)
-    except (MissionError, SolverError):
-        return []
-    rep = build(plant.params, copy, sp.train, sp.test, tuple(effects), None, raw_torque=True,
+    rep = build(plant.params, run, sp.train, sp.test, tuple(effects), None, raw_torque=True,
                 folds=list(sp.folds) or None)
     on_rep = fit_model(rep, final.items, tol)
     out = []
@@ -79,9 +88,9 @@ def unmasked(plant: DCMotorPlant, log: Log, design: Design, sel: Selection, pool
              sp: Split) -> tuple[Selection, list[str]]:
     """``sel`` (a selection over ``pool`` on ``design``) redone by ``redo(pool)`` with its final model's
     :func:`artifacts` (on the rows of ``sp``) left out of the pool, until it adopts none; and a sentence for each
-    effect so set aside."""
-    said = []
-    while fake := artifacts(plant, log, design, sel.final, tol, share, sp):
+    effect so set aside. The replica is run once, where first asked for."""
+    said, copy = [], functools.cache(lambda: simulated(plant, log))
+    while fake := artifacts(plant, copy, design, sel.final, tol, share, sp):
         pool = [c for c in pool if c not in fake]
         said += [f"{e} is not named: it takes no more of this log's held-out error than of the nominal plant's own "
                  f"noise-free run under the logged command (the method's error under this command, not a missing "
