@@ -11,6 +11,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import special
 
 from ocp.identify.align import cutoff_hz, smooth
 from ocp.identify.angle import drift_windows, interval_ripple, rotor_angle, track_phase
@@ -89,6 +90,9 @@ class Signals:
     bend: np.ndarray | None = None
     #: the speed is the identifier's own central derivative of a logged angle: no logger's lag (``speed_lag``)
     from_angle: bool = False
+    #: (M,) [rad^2/s^2] ``w|w|`` at the interval's start as the thrust's low-pass sees it (:func:`speed_square`); None:
+    #: ``w0 |w0|``
+    square: np.ndarray | None = None
 
 
 def raw_signals(log: Log, theta: np.ndarray) -> Signals:
@@ -116,10 +120,44 @@ def signals(log: Log, p: MotorParams) -> Signals:
     dt, fc = log.dt, cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e))
     i, v, f = (smooth(getattr(log, ch), dt, fc) for ch in ("current", "voltage", "thrust"))
     # a logged angle gives the speed without the lag of a backward-differenced or filtered speed column
-    w = smooth(np.gradient(log.theta, dt) if log.theta is not None else log.omega, dt, fc)
+    raw = np.gradient(log.theta, dt) if log.theta is not None else log.omega
+    w = smooth(raw, dt, fc)
+    # eq. thrust_model on the low-passed thrust: the low-pass of c_f w|w|, not c_f times the square of the low-passed
+    # speed (their difference, the speed's variance within the low-pass, does not fall with the sample time)
+    square = smooth(raw * np.abs(raw), dt, fc) - square_bias(w, _speed_noise(raw, w, dt, fc))
     theta = rotor_angle(log)
     return Signals(w[:-1], w[1:], i[:-1], i[1:], 0.5 * (w[:-1] + w[1:]), 0.5 * (i[:-1] + i[1:]), v[:-1], f[:-1],
-                   theta[:-1], log.t[:-1], dt, from_angle=log.theta is not None)
+                   theta[:-1], log.t[:-1], dt, from_angle=log.theta is not None, square=square[:-1])
+
+
+def _speed_noise(raw: np.ndarray, low: np.ndarray, dt: float, fc: float) -> float:
+    """The white noise [rad/s] of the speed ``raw`` (N,) whose low-pass at ``fc`` [Hz] is ``low`` (N,): the smaller of
+    its second differences' (:func:`.noise_level.white_noise`, high where the signal bends at the sample scale) and
+    what the low-pass removes, scaled by the share of white noise's variance it removes, ``1 - 2 h_0 + sum h^2`` for
+    its impulse response ``h`` (high where the signal has content above ``fc``)."""
+    pulse = np.zeros(min(raw.size, 2 * int(20.0 / (fc * dt)) + 1))
+    pulse[pulse.size // 2] = 1.0
+    h = smooth(pulse, dt, fc)
+    removed = 1.0 - 2.0 * h[pulse.size // 2] + float(np.sum(h * h))
+    return min(white_noise(raw), float(np.std(raw - low)) / math.sqrt(max(removed, 1e-12)))
+
+
+def square_bias(mu: np.ndarray, sigma: float) -> np.ndarray:
+    """``E[x|x|] - mu|mu|`` (M,) [rad^2/s^2] for ``x`` Gaussian about ``mu`` (M,) [rad/s] with standard deviation
+    ``sigma`` [rad/s]: what a speed's white noise adds to ``w|w|`` (``sign(mu) sigma^2`` away from zero, smooth through
+    it). ``E[x|x|] = (mu^2 + sigma^2)(2 Phi(mu/sigma) - 1) + 2 mu sigma phi(mu/sigma)``."""
+    if sigma <= 0.0:
+        return np.zeros_like(mu)
+    z = mu / sigma
+    return ((mu * mu + sigma * sigma) * special.erf(z / math.sqrt(2.0))
+            + 2.0 * mu * sigma * np.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi) - mu * np.abs(mu))
+
+
+def speed_square(s: Signals) -> np.ndarray:
+    """(M,) [rad^2/s^2] ``w|w|`` at each interval's start, for eq. thrust_model: on low-passed rows the low-pass of the
+    raw speed's ``w|w|`` less its noise's bias (:func:`square_bias`), which the low-passed thrust is to be compared
+    with; else ``w0 |w0|``."""
+    return s.w0 * np.abs(s.w0) if s.square is None else s.square
 
 
 #: the rotor is taken at rest over runs of at least REST_ROWS rows whose low-passed speed stays within REST_NOISE
@@ -213,7 +251,7 @@ def targets(p: MotorParams, s: Signals) -> np.ndarray:
     dw = (s.w1 - s.w0) / s.dt if s.dt > 0 else 0.0 * s.w
     return np.vstack([p.k_t * s.i - p.J * dw - p.B * s.w - p.c_tau * s.w * np.abs(s.w),
                       s.v - _armature(s, p.R, p.L) - p.k_e * emf_speed(s, p),
-                      s.f - p.c_f * s.w0 * np.abs(s.w0)])
+                      s.f - p.c_f * speed_square(s)])
 
 
 def constant_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
@@ -228,7 +266,7 @@ def constant_columns(p: MotorParams, s: Signals) -> dict[str, np.ndarray]:
 
     return {"J": np.vstack([p.J * dw, z, z]), "B": np.vstack([p.B * s.w, z, z]),
             "c_tau": np.vstack([p.c_tau * s.w * np.abs(s.w), z, z]),
-            "c_f": np.vstack([z, z, p.c_f * s.w0 * np.abs(s.w0)]),
+            "c_f": np.vstack([z, z, p.c_f * speed_square(s)]),
             "k": np.vstack([-p.k_t * s.i, p.k_e * emf_speed(s, p), z]), "R": np.vstack([z, arm(h, 0.0), z]),
             "L": np.vstack([z, arm(0.0, h), z])}
 
@@ -294,7 +332,7 @@ def _effect(name: str, values: dict[str, float], p: MotorParams, s: Signals) -> 
     z = np.zeros_like(s.w)
     mech = _row_mean(lambda w: np.asarray(eff.load_torque(w, NUMPY, None), float) + z, s)
     elec = s.v - np.asarray(eff.drive_voltage(s.v, s.i, NUMPY), float)
-    ideal = p.c_f * s.w0 * np.abs(s.w0)
+    ideal = p.c_f * speed_square(s)
     thr = np.asarray(eff.thrust(ideal, s.w0, NUMPY, None), float) - ideal
     offset = float(eff.measured_current(0.0))
     return np.vstack([mech + p.k_t * offset, elec - p.R * offset, thr])
@@ -381,7 +419,7 @@ def effect_columns(name: str, p: MotorParams, s: Signals, log: Log, periods: int
     if name == "thrust_lag":
         if log.kind is LogKind.STEADY_STATE:
             return []
-        ideal = p.c_f * s.w0 * np.abs(s.w0)
+        ideal = p.c_f * speed_square(s)
         out = []
         for tau in _grid(max(2 * log.dt, 1e-3), 1.0):
             lagged = ThrustLag(tau=tau).observe(s.t, s.w0, s.v, ideal, None)[0]
