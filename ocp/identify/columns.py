@@ -123,22 +123,46 @@ def signals(log: Log, p: MotorParams) -> Signals:
     raw = np.gradient(log.theta, dt) if log.theta is not None else log.omega
     w = smooth(raw, dt, fc)
     # eq. thrust_model on the low-passed thrust: the low-pass of c_f w|w|, not c_f times the square of the low-passed
-    # speed (their difference, the speed's variance within the low-pass, does not fall with the sample time)
-    square = smooth(raw * np.abs(raw), dt, fc) - square_bias(w, _speed_noise(raw, w, dt, fc))
+    # speed (their difference does not fall with the sample time)
+    square = _square(raw, w, dt, fc)
     theta = rotor_angle(log)
     return Signals(w[:-1], w[1:], i[:-1], i[1:], 0.5 * (w[:-1] + w[1:]), 0.5 * (i[:-1] + i[1:]), v[:-1], f[:-1],
                    theta[:-1], log.t[:-1], dt, from_angle=log.theta is not None, square=square[:-1])
 
 
+#: the speed is low-passed at this many times the channels' cutoff before its ``w|w|`` is formed for the thrust map
+#: (:func:`_square`): the square of the full low-pass left 2.4e-3 N on the exact +-6 V square of
+#: ``tests/identify/test_thrust_square.py`` at 1 and 10 kHz alike, at 2, 3 and 4 times the cutoff 1e-3, 2e-4 and 3e-5 to
+#: 1e-4 N; the raw speed's square none, but a coarse encoder's quantized speed (whose noise the Gaussian correction
+#: misreads) then moved the thrust map by 0.7 noise levels (proving ground 1289: ``param:c_f`` named for its asymmetry)
+SQUARE_CUTOFF = 4.0
+
+
+def _impulse(dt: float, fc: float, n: int) -> tuple[np.ndarray, int]:
+    """The impulse response (at most ``n`` samples, odd) of :func:`.align.smooth` at ``fc`` [Hz] and its centre."""
+    pulse = np.zeros(min(n, 2 * int(20.0 / (fc * dt)) + 1) // 2 * 2 + 1)
+    pulse[pulse.size // 2] = 1.0
+    return smooth(pulse, dt, fc), pulse.size // 2
+
+
+def _square(raw: np.ndarray, low: np.ndarray, dt: float, fc: float) -> np.ndarray:
+    """(N,) [rad^2/s^2] the low-pass at ``fc`` [Hz] of ``w|w|`` for the speed ``raw`` (N,) [rad/s] whose low-pass is
+    ``low`` (N,): formed on the speed low-passed at :data:`SQUARE_CUTOFF` times ``fc``, less that speed's noise bias
+    (:func:`square_bias`; its white noise from :func:`_speed_noise`, times the share the gentler low-pass passes)."""
+    pre_fc = SQUARE_CUTOFF * fc
+    pre = smooth(raw, dt, pre_fc)
+    h, _ = _impulse(dt, pre_fc, raw.size)
+    sigma = _speed_noise(raw, low, dt, fc) * math.sqrt(min(float(np.sum(h * h)), 1.0))
+    return smooth(pre * np.abs(pre), dt, fc) - square_bias(low, sigma)
+
+
 def _speed_noise(raw: np.ndarray, low: np.ndarray, dt: float, fc: float) -> float:
     """The white noise [rad/s] of the speed ``raw`` (N,) whose low-pass at ``fc`` [Hz] is ``low`` (N,): the smaller of
-    its second differences' (:func:`.noise_level.white_noise`, high where the signal bends at the sample scale) and
-    what the low-pass removes, scaled by the share of white noise's variance it removes, ``1 - 2 h_0 + sum h^2`` for
-    its impulse response ``h`` (high where the signal has content above ``fc``)."""
-    pulse = np.zeros(min(raw.size, 2 * int(20.0 / (fc * dt)) + 1))
-    pulse[pulse.size // 2] = 1.0
-    h = smooth(pulse, dt, fc)
-    removed = 1.0 - 2.0 * h[pulse.size // 2] + float(np.sum(h * h))
+    its second differences' (:func:`.noise_level.white_noise`, high where the signal bends at the sample scale, low on
+    a quantized one) and what the low-pass removes, scaled by the share of white noise's variance it removes,
+    ``1 - 2 h_0 + sum h^2`` for its impulse response ``h`` (high where the signal has content above ``fc``)."""
+    h, c = _impulse(dt, fc, raw.size)
+    removed = 1.0 - 2.0 * h[c] + float(np.sum(h * h))
     return min(white_noise(raw), float(np.std(raw - low)) / math.sqrt(max(removed, 1e-12)))
 
 
@@ -154,9 +178,8 @@ def square_bias(mu: np.ndarray, sigma: float) -> np.ndarray:
 
 
 def speed_square(s: Signals) -> np.ndarray:
-    """(M,) [rad^2/s^2] ``w|w|`` at each interval's start, for eq. thrust_model: on low-passed rows the low-pass of the
-    raw speed's ``w|w|`` less its noise's bias (:func:`square_bias`), which the low-passed thrust is to be compared
-    with; else ``w0 |w0|``."""
+    """(M,) [rad^2/s^2] ``w|w|`` at each interval's start, for eq. thrust_model: on low-passed rows the low-pass of
+    ``w|w|`` (:func:`_square`), which the low-passed thrust is to be compared with; else ``w0 |w0|``."""
     return s.w0 * np.abs(s.w0) if s.square is None else s.square
 
 
