@@ -244,9 +244,9 @@ def _forward(design: Design, pool: list[str], items: list[str], current: Fitted,
         # winner then yields to the next physical one that passes
         passes = functools.partial(_passes, design, current, min_improvement=min_improvement, noise_floor=noise_floor)
         sound = functools.partial(_sound, physical, _plausible(design, current), design)
-        above = worst(design, current) > noise_floor  # (else only an effect that halves an equation: _halves)
+        above = worst(design, current) > noise_floor  # (else only an item that halves an equation: _halves)
         win = next((k for k, (c, f) in enumerate(tried)
-                    if passes(c, f) and (above or (c not in CONSTANTS and _halves(design, current, (c,), f)))), None)
+                    if passes(c, f) and (above or _halves(design, current, (c,), f))), None)
         win = _slower_first(design, current, tried, win, min_improvement, sound)
         if win is not None and not sound(tried[win][1]):
             win = next((k for k, (c, f) in enumerate(tried) if k > win and passes(c, f) and sound(f)), None)
