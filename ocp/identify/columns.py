@@ -132,9 +132,10 @@ def signals(log: Log, p: MotorParams) -> Signals:
 
 #: the speed is low-passed at this many times the channels' cutoff before its ``w|w|`` is formed for the thrust map
 #: (:func:`_square`): the square of the full low-pass left 2.4e-3 N on the exact +-6 V square of
-#: ``tests/identify/test_thrust_square.py`` at 1 and 10 kHz alike, at 2, 3 and 4 times the cutoff 1e-3, 2e-4 and 3e-5 to
-#: 1e-4 N; the raw speed's square none, but a coarse encoder's quantized speed (whose noise the Gaussian correction
-#: misreads) then moved the thrust map by 0.7 noise levels (proving ground 1289: ``param:c_f`` named for its asymmetry)
+#: ``tests/identify/test_thrust_square.py`` at 1 and 10 kHz alike; at 2, 3 and 4 times the cutoff 1.0-1.3e-3,
+#: 1.7-3.4e-4 and 0.3-1.2e-4 N (1 and 10 kHz); the raw speed's square none, but a coarse encoder's quantized speed
+#: (whose noise the Gaussian correction misreads: its second differences are mostly zero) then moved the thrust map by
+#: 0.7 noise levels (proving ground 1289, a 1024-count encoder at 10 kHz: ``param:c_f`` named for its asymmetry)
 SQUARE_CUTOFF = 4.0
 
 
