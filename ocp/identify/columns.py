@@ -164,21 +164,20 @@ def _square(log: Log, raw: np.ndarray, low: np.ndarray, fc: float, c_f: float) -
     pre = smooth(raw, dt, pre_fc)
     h_pre, _ = _impulse(dt, pre_fc, raw.size)
     share = min(float(np.sum(h_pre * h_pre)), 1.0)
-    small, large = _speed_noise(raw, low, dt, fc)
-    h_low, _ = _impulse(dt, fc, raw.size)
+    h_low, centre = _impulse(dt, fc, raw.size)
+    small, large = _speed_noise(raw, low, h_low, centre)
     thrust = max(white_noise(log.thrust), 1e-3 * float(np.sqrt(np.mean(log.thrust**2))))
     if c_f * large**2 * share >= SQUARE_NOISE * thrust * math.sqrt(min(float(np.sum(h_low * h_low)), 1.0)):
         return None
     return smooth(pre * np.abs(pre), dt, fc) - square_bias(low, small * math.sqrt(share))
 
 
-def _speed_noise(raw: np.ndarray, low: np.ndarray, dt: float, fc: float) -> tuple[float, float]:
-    """Two estimates [rad/s], the smaller first, of the white noise of the speed ``raw`` (N,) whose low-pass at ``fc``
-    [Hz] is ``low`` (N,): its second differences' (:func:`.noise_level.white_noise`, high where the signal bends at the
-    sample scale, low on a quantized one) and what the low-pass removes, scaled by the share of white noise's variance
-    it removes, ``1 - 2 h_0 + sum h^2`` for its impulse response ``h`` (high where the signal has content above
-    ``fc``)."""
-    h, c = _impulse(dt, fc, raw.size)
+def _speed_noise(raw: np.ndarray, low: np.ndarray, h: np.ndarray, c: int) -> tuple[float, float]:
+    """Two estimates [rad/s], the smaller first, of the white noise of the speed ``raw`` (N,) whose low-pass is ``low``
+    (N,): its second differences' (:func:`.noise_level.white_noise`, high where the signal bends at the sample scale,
+    low on a quantized one) and what the low-pass removes, scaled by the share of white noise's variance it removes,
+    ``1 - 2 h_c + sum h^2`` for its impulse response ``h`` centred at ``c`` (high where the signal has content above
+    the cutoff)."""
     removed = 1.0 - 2.0 * h[c] + float(np.sum(h * h))
     a, b = white_noise(raw), float(np.std(raw - low)) / math.sqrt(max(removed, 1e-12))
     return min(a, b), max(a, b)
