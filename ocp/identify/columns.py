@@ -11,11 +11,11 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import special
 
 from ocp.identify.align import cutoff_hz, smooth
 from ocp.identify.angle import drift_windows, interval_ripple, rotor_angle, track_phase
 from ocp.identify.noise_level import white_noise
+from ocp.identify.thrust_square import low_passed_square
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE, ThrustLag, make_effect
 from ocp.model.params import MotorParams
@@ -91,7 +91,7 @@ class Signals:
     #: the speed is the identifier's own central derivative of a logged angle: no logger's lag (``speed_lag``)
     from_angle: bool = False
     #: (M,) [rad^2/s^2] ``w|w|`` at the interval's start as the thrust's low-pass sees it (:func:`speed_square`); None:
-    #: ``w0 |w0|`` (raw rows, or a speed too noisy for it: :func:`_square`)
+    #: ``w0 |w0|`` (raw rows, or a speed too noisy for it: :func:`.thrust_square.low_passed_square`)
     square: np.ndarray | None = None
 
 
@@ -124,80 +124,17 @@ def signals(log: Log, p: MotorParams) -> Signals:
     w = smooth(raw, dt, fc)
     # eq. thrust_model on the low-passed thrust: the low-pass of c_f w|w|, not c_f times the square of the low-passed
     # speed (their difference does not fall with the sample time)
-    square = _square(log, raw, w, fc, p.c_f)
+    square = low_passed_square(log, raw, w, fc, p.c_f)
     theta = rotor_angle(log)
     return Signals(w[:-1], w[1:], i[:-1], i[1:], 0.5 * (w[:-1] + w[1:]), 0.5 * (i[:-1] + i[1:]), v[:-1], f[:-1],
                    theta[:-1], log.t[:-1], dt, from_angle=log.theta is not None,
                    square=None if square is None else square[:-1])
 
 
-#: the speed is low-passed at this many times the channels' cutoff before its ``w|w|`` is formed for the thrust map
-#: (:func:`_square`): the square of the full low-pass left 2.4e-3 N on the exact +-6 V square of
-#: ``tests/identify/test_thrust_square.py`` at 1 and 10 kHz alike; at 2, 3 and 4 times the cutoff 1.0-1.3e-3,
-#: 1.7-3.4e-4 and 0.3-1.2e-4 N (1 and 10 kHz); the raw speed's square none, but a coarse encoder's quantized speed
-#: (whose noise the Gaussian correction misreads: its second differences are mostly zero) then moved the thrust map by
-#: 0.7 noise levels (proving ground 1289, a 1024-count encoder at 10 kHz: ``param:c_f`` named for its asymmetry)
-SQUARE_CUTOFF = 4.0
-#: the largest bias the speed's noise may put in that square, ``c_f sigma^2`` with the larger of the two noise
-#: estimates (:func:`_speed_noise`), as a share of the low-passed thrust's noise: beyond it the square of the low-passed
-#: speed is kept, whose noise is the low-pass's (a 74 Hz tachometer log with 134 rad/s of filtered noise, blind rig
-#: 627, read ``c_f`` 59 % high through the gentler low-pass, 0.4 % through the full one; evidence.RESOLVED's share)
-SQUARE_NOISE = 0.2
-
-
-def _impulse(dt: float, fc: float, n: int) -> tuple[np.ndarray, int]:
-    """The impulse response (at most ``n`` samples, odd) of :func:`.align.smooth` at ``fc`` [Hz] and its centre."""
-    pulse = np.zeros(min(n, 2 * int(20.0 / (fc * dt)) + 1) // 2 * 2 + 1)
-    pulse[pulse.size // 2] = 1.0
-    return smooth(pulse, dt, fc), pulse.size // 2
-
-
-def _square(log: Log, raw: np.ndarray, low: np.ndarray, fc: float, c_f: float) -> np.ndarray | None:
-    """(N,) [rad^2/s^2] the low-pass at ``fc`` [Hz] of ``w|w|`` for the speed ``raw`` (N,) [rad/s] of ``log`` whose
-    low-pass is ``low`` (N,): formed on the speed low-passed at :data:`SQUARE_CUTOFF` times ``fc``, less that speed's
-    noise bias (:func:`square_bias`; its white noise the smaller estimate of :func:`_speed_noise`, times the share the
-    gentler low-pass passes). None where the larger estimate puts that bias, ``c_f sigma^2`` [N], at
-    :data:`SQUARE_NOISE` of the low-passed thrust's noise or more (its white noise, at least 1e-3 of its RMS as
-    :func:`.equations.noise` floors it, through the low-pass): the speed's noise, not the method, would then decide."""
-    dt = log.dt
-    pre_fc = SQUARE_CUTOFF * fc
-    pre = smooth(raw, dt, pre_fc)
-    h_pre, _ = _impulse(dt, pre_fc, raw.size)
-    share = min(float(np.sum(h_pre * h_pre)), 1.0)
-    h_low, centre = _impulse(dt, fc, raw.size)
-    small, large = _speed_noise(raw, low, h_low, centre)
-    thrust = max(white_noise(log.thrust), 1e-3 * float(np.sqrt(np.mean(log.thrust**2))))
-    if c_f * large**2 * share >= SQUARE_NOISE * thrust * math.sqrt(min(float(np.sum(h_low * h_low)), 1.0)):
-        return None
-    return smooth(pre * np.abs(pre), dt, fc) - square_bias(low, small * math.sqrt(share))
-
-
-def _speed_noise(raw: np.ndarray, low: np.ndarray, h: np.ndarray, c: int) -> tuple[float, float]:
-    """Two estimates [rad/s], the smaller first, of the white noise of the speed ``raw`` (N,) whose low-pass is ``low``
-    (N,): its second differences' (:func:`.noise_level.white_noise`, high where the signal bends at the sample scale,
-    low on a quantized one) and what the low-pass removes, scaled by the share of white noise's variance it removes,
-    ``1 - 2 h_c + sum h^2`` for its impulse response ``h`` centred at ``c`` (high where the signal has content above
-    the cutoff)."""
-    removed = 1.0 - 2.0 * h[c] + float(np.sum(h * h))
-    a, b = white_noise(raw), float(np.std(raw - low)) / math.sqrt(max(removed, 1e-12))
-    return min(a, b), max(a, b)
-
-
-def square_bias(mu: np.ndarray, sigma: float) -> np.ndarray:
-    """``E[x|x|] - mu|mu|`` (M,) [rad^2/s^2] for ``x`` Gaussian about ``mu`` (M,) [rad/s] with standard deviation
-    ``sigma`` [rad/s]: what a speed's white noise adds to ``w|w|`` (``sign(mu) sigma^2`` away from zero, smooth through
-    it). ``E[x|x|] = (mu^2 + sigma^2)(2 Phi(mu/sigma) - 1) + 2 mu sigma phi(mu/sigma)``."""
-    if sigma <= 0.0:
-        return np.zeros_like(mu)
-    z = mu / sigma
-    return ((mu * mu + sigma * sigma) * special.erf(z / math.sqrt(2.0))
-            + 2.0 * mu * sigma * np.exp(-0.5 * z * z) / math.sqrt(2.0 * math.pi) - mu * np.abs(mu))
-
-
 def speed_square(s: Signals) -> np.ndarray:
     """(M,) [rad^2/s^2] ``w|w|`` at each interval's start, for eq. thrust_model: on low-passed rows the low-pass of
-    ``w|w|`` (:func:`_square`), which the low-passed thrust is to be compared with; else (and where the speed is too
-    noisy for it) ``w0 |w0|``."""
+    ``w|w|`` (:func:`.thrust_square.low_passed_square`), which the low-passed thrust is to be compared with; else (and
+    where the speed is too noisy for it) ``w0 |w0|``."""
     return s.w0 * np.abs(s.w0) if s.square is None else s.square
 
 

@@ -5,10 +5,9 @@ The three model equations, written as residuals of the NOMINAL plant on the (ali
 
     r_mech = k_t i - J w' - B w - c_tau w|w|      [N m]   eq. dc_mechanical
     r_elec = V - L i' - R i - k_e w               [V]     eq. dc_electrical
-    r_thr  = F - c_f w|w|                         [N]     eq. thrust_model
+    r_thr  = F - c_f w|w|                         [N]     eq. thrust_model (w|w| low-passed as F: speed_square)
 
-(the thrust map's ``w|w|`` low-passed as the thrust is, not formed on the low-passed speed:
-:func:`.columns.speed_square`) are explained by a linear combination of columns, one set per candidate:
+are explained by a linear combination of columns, one set per candidate:
 
 * a constant off by a relative ``x`` (true = nominal (1 + x)): ``J w'``, ``B w``, ``c_tau w|w|``,
   ``c_f w|w|`` (thrust), ``R i``, ``L i'``, and the motor constant ``k`` (k_t = k_e, both scaled):

@@ -16,11 +16,8 @@ passes its test; a constant must enter such an equation, or halve the held-out e
 an effect may win in any (its material fall shows an equation below the floor was not at its noise: the noise level is
 an estimate; a torque equation at 0.86 noise units that an angle ripple brought to 0.25 on a 10 kHz log was never
 explained while effects too were held to equations above the floor). Once every equation is at or under the floor, an
-item still wins where it halves the held-out error of one it enters (:func:`_halves`, a constant's room): the blind
-rig's seed 227, a brush drop left the torque equation at 0.65 noise units, and an 18-period ripple took it to 0.23;
-proving ground 150 without noise, a ripple left it at 0.05, and a ``B`` 31 % off took it to 0 (until session 65 only
-an effect could, and ``B`` was named there only while the thrust map's method error held that equation above its
-floor).
+item still wins where it halves the held-out error of one it enters (:func:`_halves`): blind 227, a ripple took the
+torque equation from 0.65 to 0.23 noise units; proving ground 150 noise-free, a ``B`` 31 % off from 0.05 to 0.
 The tests differ by item, so the best-scoring one may fail where the next passes (they are in :mod:`.evidence`): the
 score falls beyond sampling noise (the pooled score's scatter, or one equation's own) -- for an effect also by at least
 ``min_improvement`` (its materiality, on the score with every equation the effect does not enter counted at most at its

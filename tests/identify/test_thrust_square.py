@@ -15,7 +15,8 @@ import math
 import numpy as np
 import pytest
 
-from ocp.identify.columns import signals, square_bias, targets
+from ocp.identify.columns import signals, targets
+from ocp.identify.thrust_square import square_bias
 from ocp.logs import Log, log_from_arrays
 from tests.identify.test_replica import LINEAR, exact, logged
 
