@@ -53,6 +53,7 @@ def low_passed_square(log: Log, raw: np.ndarray, low: np.ndarray, fc: float, c_f
     thrust = max(white_noise(log.thrust), 1e-3 * float(np.sqrt(np.mean(log.thrust**2))))
     if c_f * large**2 * share >= SQUARE_NOISE * thrust * math.sqrt(min(float(np.sum(h_low * h_low)), 1.0)):
         return None
+    # eq. thrust_model's w|w| through the low-pass the thrust took, less the speed noise's bias
     return smooth(pre * np.abs(pre), dt, fc) - square_bias(low, small * math.sqrt(share))
 
 
