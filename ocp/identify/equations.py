@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 
-from ocp.identify.noise_level import white_noise
+from ocp.identify.noise_level import floored_noise
 from ocp.logs import Log, LogKind
 from ocp.model.effect_base import EffectBase
 from ocp.model.effects import measured_current, stateful
@@ -211,7 +211,7 @@ def noise(log: Log, names: tuple[str, ...], plant: DCMotorPlant) -> dict[str, fl
         if log.kind is LogKind.STEADY_STATE or y.size < 10:
             out[eq] = max(0.01 * rms, 1e-12)
             continue
-        out[eq] = max(white_noise(y), 1e-3 * rms, 1e-12)
+        out[eq] = floored_noise(y)
     return out
 
 

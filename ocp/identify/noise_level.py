@@ -19,3 +19,9 @@ def white_noise(y: np.ndarray) -> float:
     sqrt(6); 0 for fewer than three samples."""
     d2 = np.diff(y, 2)
     return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0)) if d2.size else 0.0
+
+
+def floored_noise(y: np.ndarray) -> float:
+    """:func:`white_noise` of a time series ``y`` (N,) floored at 1e-3 of its RMS (a quantized or noise-free channel
+    reads 0) and at 1e-12: an equation's noise level (:func:`ocp.identify.equations.noise`)."""
+    return max(white_noise(y), 1e-3 * float(np.sqrt(np.mean(y * y))), 1e-12)

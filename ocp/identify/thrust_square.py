@@ -6,13 +6,14 @@ difference does not fall with the sample time (session 65; ``tests/identify/test
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 from scipy import special
 
 from ocp.identify.align import smooth
-from ocp.identify.noise_level import white_noise
+from ocp.identify.noise_level import floored_noise, white_noise
 from ocp.logs import Log
 
 #: the speed is low-passed at this many times the channels' cutoff before its ``w|w|`` is formed for the thrust map
@@ -29,11 +30,16 @@ SQUARE_CUTOFF = 4.0
 SQUARE_NOISE = 0.2
 
 
-def _impulse(dt: float, fc: float, n: int) -> tuple[np.ndarray, int]:
-    """The impulse response (at most ``n`` samples, odd) of :func:`.align.smooth` at ``fc`` [Hz] and its centre."""
+@functools.lru_cache(maxsize=32)
+def _white_shares(dt: float, fc: float, n: int) -> tuple[float, float]:
+    """The shares of white noise's variance :func:`.align.smooth` at ``fc`` [Hz] passes and removes on a log of ``n``
+    rows: ``sum h^2`` (at most 1) and ``1 - 2 h_0 + sum h^2`` for its impulse response ``h`` (at most ``n`` samples,
+    centred at ``h_0``); once per sample time, cutoff and length (the regression builds its rows several times)."""
     pulse = np.zeros(min(n, 2 * int(20.0 / (fc * dt)) + 1) // 2 * 2 + 1)
     pulse[pulse.size // 2] = 1.0
-    return smooth(pulse, dt, fc), pulse.size // 2
+    h = smooth(pulse, dt, fc)
+    power = float(np.sum(h * h))
+    return min(power, 1.0), 1.0 - 2.0 * float(h[pulse.size // 2]) + power
 
 
 def low_passed_square(log: Log, raw: np.ndarray, low: np.ndarray, fc: float, c_f: float) -> np.ndarray | None:
@@ -41,29 +47,25 @@ def low_passed_square(log: Log, raw: np.ndarray, low: np.ndarray, fc: float, c_f
     low-pass is ``low`` (N,): formed on the speed low-passed at :data:`SQUARE_CUTOFF` times ``fc``, less that speed's
     noise bias (:func:`square_bias`; its white noise the smaller estimate of :func:`_speed_noise`, times the share the
     gentler low-pass passes). None where the larger estimate puts that bias, ``c_f sigma^2`` [N], at
-    :data:`SQUARE_NOISE` of the low-passed thrust's noise or more (its white noise, at least 1e-3 of its RMS as
-    :func:`.equations.noise` floors it, through the low-pass): the speed's noise, not the method, would then decide."""
+    :data:`SQUARE_NOISE` of the low-passed thrust's noise or more (:func:`.noise_level.floored_noise`, through the
+    low-pass): the speed's noise, not the method, would then decide."""
     dt = log.dt
     pre_fc = SQUARE_CUTOFF * fc
     pre = smooth(raw, dt, pre_fc)
-    h_pre, _ = _impulse(dt, pre_fc, raw.size)
-    share = min(float(np.sum(h_pre * h_pre)), 1.0)
-    h_low, centre = _impulse(dt, fc, raw.size)
-    small, large = _speed_noise(raw, low, h_low, centre)
-    thrust = max(white_noise(log.thrust), 1e-3 * float(np.sqrt(np.mean(log.thrust**2))))
-    if c_f * large**2 * share >= SQUARE_NOISE * thrust * math.sqrt(min(float(np.sum(h_low * h_low)), 1.0)):
+    share = _white_shares(dt, pre_fc, raw.size)[0]
+    passed, removed = _white_shares(dt, fc, raw.size)
+    small, large = _speed_noise(raw, low, removed)
+    if c_f * large**2 * share >= SQUARE_NOISE * floored_noise(log.thrust) * math.sqrt(passed):
         return None
     # eq. thrust_model's w|w| through the low-pass the thrust took, less the speed noise's bias
     return smooth(pre * np.abs(pre), dt, fc) - square_bias(low, small * math.sqrt(share))
 
 
-def _speed_noise(raw: np.ndarray, low: np.ndarray, h: np.ndarray, c: int) -> tuple[float, float]:
+def _speed_noise(raw: np.ndarray, low: np.ndarray, removed: float) -> tuple[float, float]:
     """Two estimates [rad/s], the smaller first, of the white noise of the speed ``raw`` (N,) whose low-pass is ``low``
     (N,): its second differences' (:func:`.noise_level.white_noise`, high where the signal bends at the sample scale,
-    low on a quantized one) and what the low-pass removes, scaled by the share of white noise's variance it removes,
-    ``1 - 2 h_c + sum h^2`` for its impulse response ``h`` centred at ``c`` (high where the signal has content above
-    the cutoff)."""
-    removed = 1.0 - 2.0 * h[c] + float(np.sum(h * h))
+    low on a quantized one) and what the low-pass removes, scaled by the share ``removed`` of white noise's variance it
+    removes (:func:`_white_shares`; high where the signal has content above the cutoff)."""
     a, b = white_noise(raw), float(np.std(raw - low)) / math.sqrt(max(removed, 1e-12))
     return min(a, b), max(a, b)
 
