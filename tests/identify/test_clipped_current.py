@@ -3,9 +3,9 @@
 The blind rig (``bench/blind_check.py``) clips its current ADC on about one log in fifteen, and four of its seven
 false angle ripples were among them. Here: clean logs of the independent proving ground (``tests/proving_ground``,
 its own physics and logger) with the current clipped at 45 % of its peak. The seeds were picked where the clipped
-rows, unhandled, named something (``bench/clipped_current.py`` runs all of them; its figures are in the README);
-since session 60's alignment (the lag read from the nearest whole sample) 162's, unhandled, name nothing, and the
-counterfactual runs on the other three.
+rows, unhandled, named something (``bench/clipped_current.py`` runs all of them; its figures are in
+docs/model-check-rules.md); since session 60's alignment (the lag read from the nearest whole sample) 162's,
+unhandled, name nothing, and the counterfactual runs on the other three.
 """
 
 from __future__ import annotations

@@ -49,7 +49,7 @@ def test_an_inductance_error_is_the_command_moved_by_x_l_over_r() -> None:
     (23172, "L would have to be off by more than a factor two: a timing error"),
     pytest.param(23180, TIMING_MIMICS, marks=pytest.mark.xfail(strict=True, reason=(
         "session 60's alignment (the lag read from the nearest whole sample): 0.52 samples for 0.15 is applied as 0.57 "
-        "where it was 0.47, and L -18 % is named; one of the ten sets' six broken logs (README, Model check)")))])
+        "where it was 0.47, and L -18 % is named; one of the ten sets' six broken logs (docs/model-check-rules.md)")))])
 def test_a_lag_error_is_not_named_an_inductance_error(seed: int, reason: str) -> None:
     """2 kHz and 5 kHz encoder logs whose inductance is right: the lag found 2.22 samples for a drawn 1.13 (L/R
     2.36) and 0.52 for 0.15 (L/R 2.51) had named L -49 % and -14 %. The timing the L error mimics predicts as well

@@ -1,4 +1,4 @@
-"""``bench/pg_floor.py`` (the torque equation's floor against a load item's footprint, README: Model check). On
+"""``bench/pg_floor.py`` (the torque equation's floor against a load item's footprint, docs/model-check-rules.md). On
 proving-ground rigs drawn with Coulomb friction the footprint is the rotor's low-pass of ``tau_c tanh(w / eps)``, a
 filter with a non-negative impulse response of unit area, so it never exceeds ``tau_c``; it is the rig's, not the
 sensors' (the same on the log recorded again without noise), and sensor noise only raises the floor. A ripple's row

@@ -91,8 +91,8 @@ def test_the_alignment_reads_the_lag_whose_interpolation_is_exact(rig: MotorPara
     ``m + f``. ``switched`` takes it as a switching instant, which is exact only in the two limits, where
     ``g(g(f)) = g(f)``: within 0.02 samples for a fast armature and a slow one. Between (L/R 0.3-2 samples) it moves
     the lag towards the nearest whole sample (0.08 for 0.34 at L/R 0.3, 2.82 for 2.62 at 0.5): the estimate pulled
-    to the whole sample only as far as the armature makes every fraction one was tried in session 60 (README, Model
-    check) and measured worse on the proving ground's and the blind rig's logs."""
+    to the whole sample only as far as the armature makes every fraction one was tried in session 60
+    (docs/model-check-rules.md, "Session 60") and measured worse on the proving ground's and the blind rig's logs."""
     p = rig.model_copy(update={"L": tau * DT * rig.R})
     m = math.floor(lag)
     exact = m + _old_share(p, lag - m)
