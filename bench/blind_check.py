@@ -28,6 +28,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from blindrig.case import generate
 from blindrig.draw import EFFECTS, PARAMS
+from modelcheck import evidence_table
 
 #: the checkout whose ``ocp`` and ``clients`` the CLI runs (PYTHONPATH, ahead of the editable install's)
 TREE = Path(__file__).resolve().parents[1]
@@ -35,7 +36,7 @@ CLI = Path(sys.executable).with_name("thrustshape")
 if not CLI.exists():
     CLI = Path(shutil.which("thrustshape") or "thrustshape")
 KEEP_KEYS = ("verdict", "ambiguous", "message", "blind_spots", "notes", "route", "tolerance", "alignment",
-             "calibration", "noise", "units", "rounds", "angle_periodic")
+             "calibration", "noise", "units", "rounds", "angle_periodic", "evidence")
 ALL_LABELS = [*EFFECTS, *(f"param:{q}" for q in PARAMS)]
 
 
@@ -119,6 +120,9 @@ def report(recs: list[dict]) -> None:
         print(f"\nexact by {title}:")
         for g, oks in sorted(groups.items()):
             print(f"  {g:14s} {sum(oks):3d}/{len(oks):3d} = {sum(oks) / len(oks):.0%}")
+    evidence = [r["diagnose"].get("evidence") for r in done]
+    print("\n".join(evidence_table([(e["test"], k in r["truth"]) for r, ev in zip(done, evidence, strict=True)
+                                     if isinstance(ev, dict) for k, e in ev.items()])))
     ts = sorted(r["time_s"] for r in recs if "time_s" in r)
     if ts:
         print(f"\ntime per log (checker): median {ts[len(ts) // 2]:.1f} s, max {ts[-1]:.1f} s")

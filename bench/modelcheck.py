@@ -140,12 +140,15 @@ def one(seed: int, cache: str | None = None, quiet: bool = False, angle: bool = 
         measured = bool(res.alignment and res.alignment.identified)
         amb = bool(res.ambiguous)
         gain = next((float(a["relative"]) for a in res.ambiguous if a["alternative"] == COMMON_GAIN), None)
+        evidence = {k: e["test"] for k, e in res.evidence.items()}
     except Exception as exc:  # a crash is a wrong verdict, recorded with its message
         verdict, err, align, amb, measured, gain = [], f"{type(exc).__name__}: {exc}", 0.0, False, False, None
+        evidence = {}
     t2 = time.perf_counter()
     lag = case.logger.skew + case.truth.e("input_delay", "delay") / case.logger.dt
     return {"seed": seed, "kind": case.kind, "expected": sorted(case.expected), "verdict": verdict, "error": err,
-            "ambiguous": amb, "gain": gain, "rate": case.logger.rate, "n": log.n, "speed": case.logger.speed,
+            "ambiguous": amb, "gain": gain, "evidence": evidence, "rate": case.logger.rate, "n": log.n,
+            "speed": case.logger.speed,
             "excitations": list(case.excitations), "true_lag": lag, "alignment": align, "align_measured": measured,
             "armature": case.nominal["L"] / case.nominal["R"] / case.logger.dt,
             "current_filter": (1.0 - case.logger.alpha) / case.logger.alpha,
@@ -223,7 +226,26 @@ def table(rows: list[dict[str, Any]], optional: bool = False) -> str:
     lines += [f"a gain on the command listed beside the verdict (ocp.identify.gain): {len(gains)} logs"
               + "".join(f"; {r['seed']} ({'+'.join(r['expected']) or 'clean'}: {100 * r['gain']:+.0f} %)"
                         for r in gains)]
-    return "\n".join(lines + alignment_table(rows))
+    named = [(test, label in r["expected"]) for r in rows for label, test in r.get("evidence", {}).items()]
+    return "\n".join(lines + evidence_table(named) + alignment_table(rows))
+
+
+def evidence_table(named: list[tuple[str, bool]]) -> list[str]:
+    """Per test a name won by (:mod:`ocp.identify.strength`), how many names it won and how many of them were
+    drawn, from ``named`` (test, drawn) pairs, one per name in a verdict (none, as in records written before session
+    68: no lines)."""
+    from ocp.identify.strength import STRONG
+
+    won, drawn = Counter(t for t, _ in named), Counter(t for t, ok in named if ok)
+    lines = ["", "names by the test they won beside the others (ocp/identify/strength.py):",
+             f"{'test':20s} {'strength':8s} {'named':>6s} {'drawn':>6s} {'precision':>9s}"]
+    for group in (True, False):
+        word = "strong" if group else "weak"
+        tests = [t for t in STRONG if STRONG[t] is group and won[t]]
+        lines += [f"{t:20s} {word:8s} {won[t]:6d} {drawn[t]:6d} {100 * drawn[t] / won[t]:8.1f}%" for t in tests]
+        n, ok = sum(won[t] for t in tests), sum(drawn[t] for t in tests)
+        lines += [f"{'all ' + word:29s} {n:6d} {ok:6d} {100 * ok / n:8.1f}%"] if n else []
+    return lines if named else []
 
 
 #: the nominal armature time constants L/R [samples] the alignment's errors are grouped by (:func:`alignment_table`)

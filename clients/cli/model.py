@@ -354,6 +354,7 @@ def _print_alignment(d: dict[str, Any], rule: bool = False) -> None:
 def _print_diagnosis(d: dict[str, Any]) -> None:
     print("nothing missing" if not d["verdict"] else "missing: " + ", ".join(d["verdict"]))
     print("".join(f"  {text}\n" for text in d["explanations"]), end="")
+    _print_evidence(d.get("evidence") or {})
     for a in d.get("ambiguous") or []:
         print(f"ambiguous: {a['adopted']} or {a['alternative']}: {a['reason']}")
     for b in d.get("blind_spots") or []:
@@ -390,6 +391,15 @@ def _print_diagnosis(d: dict[str, Any]) -> None:
         imp = 100 * e["improvement"] if isinstance(e["improvement"], int | float) else None
         print(f"  {e['effect']:18s} {_g(imp, '6.1f'):>6s} %  {'significant' if e['significant'] else ''}")
     _print_equations(d)
+
+
+def _print_evidence(evidence: dict[str, Any]) -> None:
+    """How each name won (:mod:`ocp.identify.strength`): one line, then what each weak name won by."""
+    if evidence:
+        print("evidence: " + "; ".join(f"{k} {'strong' if e['strong'] else 'WEAK'} ({e['test']}"
+                                       + (f", z {_g(e['z'], '.3g')}" if e.get("z") is not None else "") + ")"
+                                       for k, e in evidence.items()))
+    print("".join(f"  weak: {k} wins {e['says']}\n" for k, e in evidence.items() if not e["strong"]), end="")
 
 
 def _rivals(counts: list[int]) -> str:

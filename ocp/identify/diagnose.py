@@ -57,6 +57,7 @@ from ocp.identify.explain import (
     explain,
     item_name,
     item_values,
+    message,
     physical,
     plant_of,
     spectrum_peak,
@@ -82,6 +83,7 @@ from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
 from ocp.identify.replica import unmasked
 from ocp.identify.select import Selection, select
 from ocp.identify.signs import check_signs
+from ocp.identify.strength import item_evidence
 from ocp.logs import Log, LogKind
 from ocp.model.effects import make_effect
 from ocp.model.plant import DCMotorPlant
@@ -182,6 +184,7 @@ class DiagnoseResult:
     angle_periodic: dict[str, Any] | None = None
     tolerance: float = 0.10
     blind_spots: list[dict[str, Any]] = field(default_factory=list)  # what the log cannot show (.coverage)
+    evidence: dict[str, dict[str, Any]] = field(default_factory=dict)  # how each name won (.strength)
 
     @property
     def ranking(self) -> list[RankEntry]:
@@ -193,11 +196,11 @@ class DiagnoseResult:
             "verdict": self.verdict,
             "ranking": [e.to_dict() for e in self.ranking],
             "explanations": self.explanations,
-            "message": _message(self.verdict, self.explanations, self.ambiguous),
+            "message": message(self.verdict, self.explanations, self.ambiguous, self.evidence),
             "alignment": self.alignment.to_dict() if self.alignment else None,
             "calibration": {k: {kk: finite(vv) if isinstance(vv, float) else vv for kk, vv in v.items()}
                             for k, v in self.calibration.items()},
-            "tolerance": self.tolerance, "blind_spots": self.blind_spots,
+            "tolerance": self.tolerance, "blind_spots": self.blind_spots, "evidence": self.evidence,
             "ambiguous": [{k: finite(v) if isinstance(v, float) else v for k, v in a.items()} for a in self.ambiguous],
             "angle_periodic": self.angle_periodic, "noise": {k: finite(v) for k, v in self.noise.items()},
             "units": CHANNEL_UNITS,
@@ -206,13 +209,6 @@ class DiagnoseResult:
                         "current_sensor_lag": r.baseline.current_lag,
                         "ranking": [e.to_dict() for e in r.entries]} for r in self.rounds],
         }
-
-
-def _message(verdict: list[str], explanations: list[str], ambiguous: list[dict[str, Any]]) -> str:
-    if not verdict:  # (what was set aside is said too: the page shows the message alone)
-        return "; ".join(["nothing missing", *explanations])
-    text = "; ".join(explanations)
-    return "ambiguous: " + "; ".join(str(a["reason"]) for a in ambiguous) + ". " + text if ambiguous else text
 
 
 def _pool(plant: DCMotorPlant, opt: DiagnoseOptions) -> tuple[tuple[str, ...], list[str]]:
@@ -345,10 +341,11 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     cov = coverage(log)  # (read by the gain's reason and the blind spots)
     gain = gain_rival(design, sel.final, opt.tolerance, opt.ambiguity_margin, not cov["voltage_range"])
     ambiguous += [r for r in (rival, gain) if r] + unseen_rivals(design.unseen, verdict, sel.final.score)
-    spots = blind_spots(log, verdict, gain=gain is not None, cov=cov)
     return DiagnoseResult(verdict, rounds, final, noise, explanations + aside, align,
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
-                          spectrum_peak(design, stall, sel.ripple), opt.tolerance, spots)
+                          spectrum_peak(design, stall, sel.ripple), opt.tolerance,
+                          blind_spots(log, verdict, gain=gain is not None, cov=cov),
+                          item_evidence(design, sel.final, verdict, opt.tolerance))
 
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],

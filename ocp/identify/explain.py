@@ -35,6 +35,17 @@ SIGNATURE = {**PARAM_SIGNATURE, "k": "torque residual proportional to the curren
                                      "proportional to the speed, in the ratio of k_t to k_e"}
 
 
+def message(verdict: list[str], explanations: list[str], ambiguous: list[dict[str, Any]],
+            evidence: dict[str, dict[str, Any]]) -> str:
+    """A diagnosis in one text (the page shows it alone): the verdict's explanations, what is ambiguous first, and
+    for each name won by a weak test (:mod:`.strength`) what it won by."""
+    if not verdict:  # (what was set aside is said too)
+        return "; ".join(["nothing missing", *explanations])
+    text = "; ".join([*explanations, *(f"weak evidence for {k}: it wins {e['says']}" for k, e in evidence.items()
+                                       if not e["strong"])])
+    return "ambiguous: " + "; ".join(str(a["reason"]) for a in ambiguous) + ". " + text if ambiguous else text
+
+
 def item_name(item: str) -> str:
     """Verdict name: effects by catalogue name, constants as ``param:<key>``."""
     return f"param:{item}" if item in CONSTANTS else item

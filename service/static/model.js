@@ -224,6 +224,11 @@ function showDiagnosisDetails(res, after) {
     box.appendChild(p);
   };
   for (const a of res.ambiguous || []) line(`Ambiguous: ${a.adopted} or ${a.alternative} — ${a.reason}`, "m-ambiguous");
+  const ev = Object.entries(res.evidence || {});  // how each name won (ocp/identify/strength.py)
+  if (ev.length) {
+    line("Evidence: " + ev.map(([k, e]) => `${k} ${e.strong ? "strong" : "weak"} (${e.test.replaceAll("_", " ")}` +
+         (e.z == null ? ")" : `, z = ${fmt(e.z, 3)})`)).join("; ") + ".", "m-evidence");
+  }
   for (const b of res.blind_spots || []) {  // what this log cannot show, whatever the verdict
     line((b.hidden.length ? `This log cannot show ${b.hidden.join(", ")}: ` : "Note: ") + `${b.text}.` +
          (b.design ? " Design the experiment to show them." : ""), "m-blind");

@@ -44,6 +44,7 @@ def test_a_logging_skew_is_aligned_away_not_blamed(rig: MotorParams, tmp_path: P
     out = capsys.readouterr().out
     assert out.startswith("missing: coulomb_friction") and "alignment: command acts 1.0" in out
     assert "removed: logging convention" in out and "calibration (refinements within 10 %" in out
+    assert "\nevidence: coulomb_friction strong (likelihood_ratio, z " in out and "weak:" not in out
     ripple = next(line for line in out.splitlines() if line.startswith("angle-periodic torque: best fit at"))
     assert ripple.endswith("not named: it does not win on held-out data")  # the search's best count, not a verdict
 

@@ -119,6 +119,7 @@ def test_model_check_finds_the_hidden_effect_and_the_refit_lowers_the_error(page
     hidden = next(iter(HIDDEN))
     assert page.get_attribute("#m-verdict", "data-verdict") == hidden
     assert hidden in page.inner_text("#m-verdict strong")
+    assert page.inner_text("#m-evidence").startswith(f"Evidence: {hidden} strong (likelihood ratio, z = ")
     first = page.locator("#m-ranking tbody tr").first
     assert first.get_attribute("data-effect") == hidden
     assert first.locator("input[type=checkbox]").is_checked()
