@@ -148,9 +148,8 @@ def one(seed: int, cache: str | None = None, quiet: bool = False, angle: bool = 
     lag = case.logger.skew + case.truth.e("input_delay", "delay") / case.logger.dt
     return {"seed": seed, "kind": case.kind, "expected": sorted(case.expected), "verdict": verdict, "error": err,
             "ambiguous": amb, "gain": gain, "evidence": evidence, "rate": case.logger.rate, "n": log.n,
-            "speed": case.logger.speed,
-            "excitations": list(case.excitations), "true_lag": lag, "alignment": align, "align_measured": measured,
-            "armature": case.nominal["L"] / case.nominal["R"] / case.logger.dt,
+            "speed": case.logger.speed, "excitations": list(case.excitations), "true_lag": lag, "alignment": align,
+            "align_measured": measured, "armature": case.nominal["L"] / case.nominal["R"] / case.logger.dt,
             "current_filter": (1.0 - case.logger.alpha) / case.logger.alpha,
             "constant_error": case.constant_error, "t_generate": t1 - t0, "t_diagnose": t2 - t1, "noise_free": quiet,
             "angle": log.theta is not None, "shapes": shapes, "forced_kind": kind}
