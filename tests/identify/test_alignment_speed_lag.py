@@ -90,7 +90,7 @@ def test_the_diagnosis_reports_the_lag_it_applied() -> None:
     """Behind the 2.9-sample filter at 63 Hz the estimate is 1.85 for a lag of 2 (above): the diagnosis reports both,
     ``samples`` the estimate and ``applied_samples`` the whole sample the equations moved the command by, and the CLI
     says so."""
-    from clients.cli.model import _print_alignment
+    from clients.cli.answers import print_alignment
     from ocp.identify import diagnose
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
@@ -103,5 +103,5 @@ def test_the_diagnosis_reports_the_lag_it_applied() -> None:
     assert 1.5 < al["samples"] < 1.99 and al["applied_samples"] == pytest.approx(2.0, abs=1e-3)
     out = io.StringIO()
     with contextlib.redirect_stdout(out):
-        _print_alignment(d)
+        print_alignment(d)
     assert "; the equations moved it 2.00" in out.getvalue()

@@ -9,7 +9,7 @@ from __future__ import annotations
 import pytest
 
 from bench.modelcheck import case_log
-from clients.cli.model import _print_diagnosis, _rivals
+from clients.cli.answers import print_diagnosis, rivals_text
 from ocp.identify import diagnose
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -27,12 +27,12 @@ def test_a_flat_spectrum_leaves_the_count_open(seed: int, decided: bool, capsys:
         assert ap["periods"] == true and ap["rivals"] == []
     else:
         assert ap["periods"] != true and true in ap["rivals"] and len(ap["rivals"]) >= 10
-    _print_diagnosis(res.to_dict())
+    print_diagnosis(res.to_dict())
     out = capsys.readouterr().out
     assert ("the count is not decided by this log" in out) is not decided
 
 
 def test_rival_counts_are_printed_as_runs() -> None:
-    assert _rivals([3, 4, 5, 9]) == "3-5 and 9 periods/rev"
-    assert _rivals([7]) == "7 periods/rev"
-    assert _rivals([1, 2, 6, 7, 8, 20]) == "1, 2, 6-8 and 20 periods/rev"
+    assert rivals_text([3, 4, 5, 9]) == "3-5 and 9 periods/rev"
+    assert rivals_text([7]) == "7 periods/rev"
+    assert rivals_text([1, 2, 6, 7, 8, 20]) == "1, 2, 6-8 and 20 periods/rev"

@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from bench.modelcheck import case_log
-from clients.cli.model import _print_diagnosis
+from clients.cli.answers import print_diagnosis
 from ocp.identify import diagnose
 from ocp.identify.angle import DRIFT_SPAN, DRIFT_VAR, MAX_PERIODS, MAX_PIECES, tracked_periods
 from ocp.model.params import MotorParams
@@ -64,7 +64,7 @@ def test_a_count_beyond_the_tracking_is_decided_only_where_it_stands_out(
     else:
         assert ap["periods"] != true and true in ap["rivals"]
         assert set(range(int(ap["max_tracked_periods"]) + 1, MAX_PERIODS + 1)) - {ap["periods"]} <= set(ap["rivals"])
-    _print_diagnosis(res.to_dict())
+    print_diagnosis(res.to_dict())
     out = capsys.readouterr().out
     assert ("the integrated angle drifts faster than a ripple's phase can be followed" in out) is not decided
     assert f"its phase is followed up to {ap['max_tracked_periods']} periods/rev only" in out

@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from clients.cli.model import runs
+from clients.cli.answers import runs
 from ocp.identify import diagnose
 from ocp.logs import write_log_csv
 from ocp.model.params import load_params
