@@ -200,10 +200,10 @@ class DiagnosePublic(_Open):
         "them); a log checked point by point that turns one way only (no drag or thrust asymmetry)")
     evidence: dict[str, dict[str, Any]] = Field(
         default_factory=dict, description="per verdict name, how it won beside the other names: {test, strong, says, "
-        "z, heldout}; test likelihood_ratio, beyond_sampling or alignment (strong), held_out_blocks, estimate, "
-        "ripple_rows or with_others (weak); z: the torque equation's likelihood-ratio z (null where the name does not "
-        "enter it); heldout: per equation it enters, the held-out RMS in noise units without it and with it "
-        "(ocp/identify/strength.py; empty on a log checked point by point)")
+        "z, heldout}; test likelihood_ratio, beyond_sampling or alignment (strong), inductance_timing, "
+        "held_out_blocks, estimate, ripple_rows or with_others (weak); z: the torque equation's likelihood-ratio z "
+        "(null where the name does not enter it); heldout: per equation it enters, the held-out RMS in noise units "
+        "without it and with it (ocp/identify/strength.py; empty on a log checked point by point)")
 
 
 class FitPublic(_Open):

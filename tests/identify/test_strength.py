@@ -9,7 +9,8 @@ won by beside the other names, and the figure it reports agrees with that test's
   likelihood-ratio z of 2.31 (a constant's test asks 2.33), named on the paired held-out blocks; ``make_case(3543,
   kind="one")``, a 41-period ripple on a 100 Hz log, named over the rows independent for a fast ripple while its
   likelihood-ratio z is under the effect's quantile. Each is the drawn label (weak is not wrong), and the answer's
-  message says what it won by.
+  message says what it won by. ``L`` beyond sampling noise is weak however far its armature error falls
+  (``make_case(1191)``).
 """
 
 from __future__ import annotations
@@ -79,3 +80,16 @@ def test_a_ripple_named_over_its_own_rows_is_weak() -> None:
     assert e["z"] < ndtri(1.0 - EFFECT_ALPHA)
     assert "weak evidence for cogging: it wins only over the rows independent for a fast ripple" in \
         res.to_dict()["message"]
+
+
+def test_an_inductance_error_is_weak_however_far_its_armature_error_falls() -> None:
+    """``make_case(1191)`` (the tuning set): ``L`` off beyond the tolerance, the armature equation's held-out error
+    from 11.7 to 1.0 noise units -- far beyond sampling, but a command timing a fraction of a sample off would move
+    that equation alike, so the name is ``inductance_timing``, weak, and enters no other equation."""
+    res, expected = _case(1191)
+    assert set(res.verdict) == expected == {"param:L"}
+    e = res.evidence["param:L"]
+    assert e["test"] == "inductance_timing" and e["strong"] is False and e["z"] is None
+    before, after = e["heldout"]["armature"]
+    assert set(e["heldout"]) == {"armature"} and after < 0.5 * before
+    assert "weak evidence for param:L" in res.to_dict()["message"]
