@@ -120,9 +120,8 @@ def report(recs: list[dict]) -> None:
         print(f"\nexact by {title}:")
         for g, oks in sorted(groups.items()):
             print(f"  {g:14s} {sum(oks):3d}/{len(oks):3d} = {sum(oks) / len(oks):.0%}")
-    evidence = [r["diagnose"].get("evidence") for r in done]
-    print("\n".join(evidence_table([(e["test"], k in r["truth"]) for r, ev in zip(done, evidence, strict=True)
-                                     if isinstance(ev, dict) for k, e in ev.items()])))
+    print("\n".join(evidence_table([(e["test"], k in r["truth"]) for r in done
+                                     if isinstance(ev := r["diagnose"].get("evidence"), dict) for k, e in ev.items()])))
     ts = sorted(r["time_s"] for r in recs if "time_s" in r)
     if ts:
         print(f"\ntime per log (checker): median {ts[len(ts) // 2]:.1f} s, max {ts[-1]:.1f} s")
