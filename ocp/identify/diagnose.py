@@ -287,12 +287,13 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
     def judged(design: Design, f: Fitted) -> str | None:  # why a named L is not (what mimics it, on free runs)
         final, shift = plant_of(plant, design, f, delay), None if delay is not None else align.samples - own
         error = functools.partial(_free_error, sp=sp, noise=noise, seg=seg)
+        if "L" in design.one_sided and filter_mimics(plant, final, log, shift, tau, opt.max_logging_skew,
+                                                     functools.partial(error, channels=("omega",))):
+            return FILTER_MIMICS  # (first: the filter is the specific cause; the timing below mimics it too)
         if not inductance_wins(plant, final, f.items, log, shift, tau, error, opt.min_improvement,
-                               opt.max_logging_skew):
+                               opt.max_logging_skew, searched=unconfirmed is None):
             return TIMING_MIMICS
-        mimic = "L" in design.one_sided and filter_mimics(plant, final, log, shift, tau, opt.max_logging_skew,
-                                                           functools.partial(error, channels=("omega",)))
-        return FILTER_MIMICS if mimic else None
+        return None
 
     stall = stall_torque(plant.params, log.voltage)
     design, sel, aside = _explain(plant, aligned, sp, effects, pool, noise, opt, delay is not None, progress, align,
