@@ -36,11 +36,12 @@ def unresolved(p: MotorParams, log: Log) -> dict[str, str]:
     tau = rotor_tau(p, log.omega) if log.kind is LogKind.TIME_SERIES else np.inf
     if tau < ROTOR_SAMPLES * log.dt:
         out["J"] = (f"the rotor's time constant ({1e3 * tau:.3g} ms at these speeds) is under two samples "
-                    f"({1e3 * log.dt:.3g} ms): the log cannot tell an inertia error from the timing of its current and "
-                    f"speed sensors; logged at {ADVISED_SAMPLES / tau / 1e3:.3g} kHz or faster it can")
+                    f"({1e3 * ROTOR_SAMPLES * log.dt:.3g} ms): the log cannot tell an inertia error from the timing of "
+                    f"its current and speed sensors; logged at {ADVISED_SAMPLES / tau / 1e3:.3g} kHz or faster it can")
     if log.kind is LogKind.STEADY_STATE or slow_armature(p, log.dt):
-        out["L"] = (f"L/R = {1e3 * p.L / p.R:.3g} ms is under two samples ({1e3 * log.dt:.3g} ms): the log cannot tell "
-                    "an inductance error from current filtering or sub-sample command timing; logged at "
+        out["L"] = (f"L/R = {1e3 * p.L / p.R:.3g} ms is under two samples ({1e3 * ARMATURE_SAMPLES * log.dt:.3g} ms): "
+                    "the log cannot tell an inductance error from current filtering or sub-sample command timing; "
+                    "logged at "
                     f"{advised_rate(p) / 1e3:.3g} kHz or faster (voltage steps, any excitation) it can")
     return out
 

@@ -9,6 +9,7 @@ an input delay and a wake lag. The inductance had the same rule already (L/R und
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -50,3 +51,9 @@ def test_the_rule_follows_the_rotor_time_constant() -> None:
         t = dt * np.arange(w.size)
         log = log_from_arrays(t, np.ones_like(t), np.ones_like(t), np.ones_like(t), omega=w)
         assert ("J" in unresolved(p, log)) is expect, samples
+    # the reason states the time constant and what two samples span, in ms (it gave one sample's span before
+    # session 69: blind 125, "3.83 ms ... under two samples (2 ms)")
+    t = tau / 1.9 * np.arange(w.size)
+    reason = unresolved(p, log_from_arrays(t, np.ones_like(t), np.ones_like(t), np.ones_like(t), omega=w))["J"]
+    said = [float(x) for x in re.findall(r"\(([0-9.]+) ms", reason)]
+    assert said == pytest.approx([1e3 * tau, 1e3 * ROTOR_SAMPLES * tau / 1.9], rel=1e-2) and said[0] < said[1]
