@@ -85,10 +85,10 @@ def test_an_inductance_error_a_conventional_timing_explains_is_not_named(seed: i
     """Logs whose inductance is right (session 68's ten sets), each held back by one of the rival's two forms alone.
     Beside the timing with the other constants as calibrated (a lag on the grid predicts within the materiality where
     the mimicking one did not): 3034 (5 kHz chirp, L/R 0.66 samples, the lag found 0 for 0.28, ``L`` +79 %), 3519
-    (1 kHz, found 2.07 for 2.29, ``L`` +55 %), 3450 (10 kHz PRBS, found 0.74 for 0.06, ``L``
-    -34 %, which its free run does not see; the mimicking lag lies just below 0, outside the conventions, and was
-    not tried). Beside it with them nominal: 3099 (1 kHz, found 2.75 for 2.13, ``L`` -45 %), where the constants
-    calibrated beside that ``L`` predict far worse (15.8 against 9.98 noise units at the mimicking lag)."""
+    (1 kHz, found 2.07 for 2.29, ``L`` +55 %), 3450 (10 kHz PRBS, found 0.74 for 0.06, ``L`` -34 %, which its free
+    run does not see; the mimicking lag lies just below 0, outside the conventions, and was not tried). Beside it
+    with them nominal: 3099 (1 kHz, found 2.75 for 2.13, ``L`` -45 %), where the constants calibrated beside that
+    ``L`` predict far worse (15.8 against 9.98 noise units at the mimicking lag)."""
     case = make_case(seed, kind)
     assert "param:L" not in case.expected and "L" not in case.constant_error
     res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), case_log(case))
