@@ -9,7 +9,7 @@ moved to the nearest value calibration reaches, 10 % from nominal), with the sam
 channels' RMS difference is taken in each channel's noise level (current and thrust: the sensor's noise or its
 quantisation step; speed: the tachometer's noise, or an encoder's quantisation over its differencing window).
 
-    python bench/blind_audit.py --records RUN.json --dir /work/blindcache [--procs 2]
+    python bench/blind_audit.py --records RUN.json [--procs 2]
 
 ``RUN.json``: ``bench/blind_check.py --json``'s records (the verdicts). Prints, per label, how many were drawn, how
 many show (footprint >= VISIBLE) and the recall on those; and the exact-verdict rate with the labels that do not show
