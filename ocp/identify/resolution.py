@@ -41,8 +41,7 @@ def unresolved(p: MotorParams, log: Log) -> dict[str, str]:
     if log.kind is LogKind.STEADY_STATE or slow_armature(p, log.dt):
         out["L"] = (f"L/R = {1e3 * p.L / p.R:.3g} ms is under two samples ({1e3 * ARMATURE_SAMPLES * log.dt:.3g} ms): "
                     "the log cannot tell an inductance error from current filtering or sub-sample command timing; "
-                    "logged at "
-                    f"{advised_rate(p) / 1e3:.3g} kHz or faster (voltage steps, any excitation) it can")
+                    f"logged at {advised_rate(p) / 1e3:.3g} kHz or faster (voltage steps, any excitation) it can")
     return out
 
 

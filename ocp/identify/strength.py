@@ -16,13 +16,13 @@ it won:
 * ``inductance_timing``: ``L`` beyond sampling noise, weak too. Its only equation is the armature's, where a command
   timing a fraction of a sample off leaves the residual an inductance error leaves, on held-out rows as on training
   rows (the reason :func:`.evidence.estimate_agrees` never names ``L``): sampling noise is not what it must beat.
-  Named so, ``L`` was the drawn label 35 times of 45 over the ten proving-ground sets and 3 of 13 on the blind rig;
-  7 of the proving ground's 10 false ones had the alignment 0.23-0.96 samples off.
+  Named so, ``L`` was the drawn label 34 times of 39 over the ten proving-ground sets and 3 of 6 on the blind rig
+  (session 68's code, before :func:`.inductance.inductance_wins` tried every conventional timing: 35 of 45, 3 of 13).
 
 ``input_delay`` is named by the alignment's own tests (:func:`.diagnose._delay_wins`): ``alignment``, strong.
-Measured at session 68's code, per name (``python bench/modelcheck.py`` and ``python bench/blind_check.py`` print the
+Measured at session 69's code, per name (``python bench/modelcheck.py`` and ``python bench/blind_check.py`` print the
 table): over the proving ground's ten sets (2,000 logs) strong names were drawn labels 1,974 times of 2,010, weak ones
-57 of 75; over the blind rig's 1,000 logs 919 of 973 and 14 of 41 (a ripple on its own rows 4 of 14).
+56 of 69; over the blind rig's 1,000 logs 919 of 973 and 14 of 34 (a ripple on its own rows 4 of 14).
 """
 
 from __future__ import annotations
