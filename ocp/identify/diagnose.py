@@ -346,7 +346,7 @@ def diagnose(plant: DCMotorPlant, log: Log, options: DiagnoseOptions | None = No
                           calibration(plant.params, design, sel.final, opt.tolerance), ambiguous,
                           spectrum_peak(design, stall, sel.ripple), opt.tolerance,
                           blind_spots(log, verdict, gain=gain is not None, cov=cov),
-                          item_evidence(design, sel.final, verdict, opt.tolerance))
+                          item_evidence(design, sel.final, verdict, opt.tolerance, opt.min_improvement))
 
 
 def _explain(plant: DCMotorPlant, log: Log, sp: Split, effects: tuple[str, ...], pool: list[str],

@@ -97,6 +97,34 @@ def ripple_beyond(design: Design, before: Fitted, after: Fitted) -> bool:
     return before.per_eq[0] > 0 and 1.0 - after.per_eq[0] / before.per_eq[0] >= math.sqrt(2.0 / ripple_rows(design))
 
 
+def win_test(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float) -> str | None:
+    """The first test by which adding ``item`` (fitted ``f``) to ``current`` wins on held-out data, or None: the
+    likelihood ratio (``likelihood_ratio``, :func:`ratio_agrees`) or a fall beyond sampling noise
+    (``beyond_sampling``, :func:`beyond_scatter`); for a constant also the paired held-out blocks
+    (``held_out_blocks``, :func:`blocks_agree`) or its estimate (``estimate``, :func:`estimate_agrees`), for an angle
+    ripple its own independent rows (``ripple_rows``, :func:`ripple_beyond`). An effect must be material as well
+    (:func:`is_material`; an angle ripple on the torque equation alone where it wins, :func:`own_material`, and
+    beside a Stribeck band off the band too, :func:`ripple_off_band`); a constant's materiality is the tolerance (the
+    selection's module doc). The selection adopts by it (:func:`.select.select`), and the answer names the test each
+    name won by (:mod:`.strength`): one function, so the name and the reason given cannot part."""
+    material = item in CONSTANTS or is_material(design, current, f, (item,), min_improvement)
+    if not (material or (item == "cogging" and own_material(design, current, f, (item,), min_improvement))):
+        return None
+    if item == "cogging" and not ripple_off_band(design, current, f, min_improvement):
+        return None
+    if ratio_agrees(design, current, item, f):
+        return "likelihood_ratio"
+    if beyond_scatter(design, current, f, (item,)):
+        return "beyond_sampling"
+    if not material:
+        return None
+    if item in CONSTANTS and blocks_agree(design, current, item, f):
+        return "held_out_blocks"
+    if item in CONSTANTS and estimate_agrees(design, current, item, f):
+        return "estimate"
+    return "ripple_rows" if item == "cogging" and ripple_beyond(design, current, f) else None
+
+
 def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[str], min_improvement: float) -> bool:
     """Whether ``after`` (``before`` plus the effects ``items``) cuts the held-out score by ``min_improvement`` (an
     effect's materiality), the score taken with every equation that no column of ``items`` enters counted at most at
@@ -119,7 +147,7 @@ def is_material(design: Design, before: Fitted, after: Fitted, items: Sequence[s
 def own_material(design: Design, before: Fitted, after: Fitted, items: Sequence[str], min_improvement: float) -> bool:
     """Whether ``after`` (``before`` plus the effects ``items``) cuts the held-out RMS pooled over the equations
     ``items`` enter, alone, by ``min_improvement``: an angle ripple's materiality where it also wins beyond
-    sampling noise or by the likelihood ratio (:func:`.select._wins`). Counted at the noise level, the equations it
+    sampling noise or by the likelihood ratio (:func:`win_test`). Counted at the noise level, the equations it
     cannot enter dilute its fall wherever its own equation reads near or under one noise unit, which is an estimate:
     the blind rig's seed 368 (5 kHz), an 18-period ripple took the torque equation from 0.68 to 0.18 noise units, a
     capped score's fall of 8 %. Each equation is counted at least at :data:`RESOLVED`."""

@@ -65,18 +65,15 @@ from ocp.identify.evidence import (
     acts_alike,
     band_alike,
     beyond_scatter,
-    blocks_agree,
     equations_of,
-    estimate_agrees,
     implausible_factor,
     is_material,
     off_band_fall,
-    own_material,
     ratio_agrees,
     resolved,
-    ripple_beyond,
     ripple_off_band,
     scatter,
+    win_test,
     worst,
 )
 from ocp.identify.lsq import SATURATING, as_given, calibrated_columns, score, solve
@@ -207,7 +204,7 @@ def select(design: Design, pool: Sequence[str], tol: float, min_improvement: flo
     # backward: each constant, then each effect but the last adopted one, tested again beside all the others
     for c in [i for i in items if i in CONSTANTS] + [i for i in items if i not in CONSTANTS][:-1]:
         rest = fit_model(design, [i for i in items if i != c], tol)
-        if physical(rest) and not _wins(design, rest, c, current, min_improvement):  # (refit unphysical: kept)
+        if physical(rest) and win_test(design, rest, c, current, min_improvement) is None:  # (unphysical: kept)
             items.remove(c)
             dropped.append(c)
             current = rest
@@ -315,7 +312,7 @@ def _pair(design: Design, items: list[str], tried: list[tuple[str, Fitted]], cur
 
 def _ripple_alone(design: Design, pair: tuple[str, str], single: dict[str, Fitted], f: Fitted, least: float) -> bool:
     """Whether a pair adopted together (``f``) holding a ripple passes :func:`.evidence.ripple_off_band` (materiality
-    ``least``) beside the other item's own fit (``single``), as a ripple adopted alone does in :func:`_wins`."""
+    ``least``) beside the other item's own fit (``single``), as one adopted alone does (:func:`.evidence.win_test`)."""
     other = [i for i in pair if i != "cogging"]
     return len(other) == 2 or ripple_off_band(design, single[other[0]], f, least)
 
@@ -345,26 +342,11 @@ def _halves(design: Design, current: Fitted, items: Sequence[str], after: Fitted
     return bool(np.any(live & (at(after.per_eq) <= (1.0 - ROOM_FALL) * at(current.per_eq))))
 
 
-def _wins(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float) -> bool:
-    """Whether adding ``item`` (fitted ``f``) to ``current`` wins on held-out data: beyond sampling noise
-    (:func:`.evidence.beyond_scatter`), and for an effect by ``min_improvement`` too (a constant's materiality is the
-    tolerance, module doc: read on the held-out fall, or on its estimate, :func:`.evidence.estimate_agrees`)."""
-    material = item in CONSTANTS or is_material(design, current, f, (item,), min_improvement)
-    # an angle ripple's fall is material on the torque equation alone where it wins by the tests below (module doc)
-    if not (material or (item == "cogging" and own_material(design, current, f, (item,), min_improvement))):
-        return False
-    if item == "cogging" and not ripple_off_band(design, current, f, min_improvement):
-        return False
-    if beyond_scatter(design, current, f, (item,)) or ratio_agrees(design, current, item, f):
-        return True
-    return material and ((item in CONSTANTS and (blocks_agree(design, current, item, f)
-                                                 or estimate_agrees(design, current, item, f)))
-                         or (item == "cogging" and ripple_beyond(design, current, f)))
-
-
 def _passes(design: Design, current: Fitted, item: str, f: Fitted, min_improvement: float, noise_floor: float) -> bool:
-    """Whether ``item`` (fitted ``f``) wins beside ``current`` (:func:`_wins`) with room for it (:func:`_room`)."""
-    return _wins(design, current, item, f, min_improvement) and _room(design, current, (item,), noise_floor, f)
+    """Whether ``item`` (fitted ``f``) wins beside ``current`` (:func:`.evidence.win_test`) with room for it
+    (:func:`_room`)."""
+    return win_test(design, current, item, f, min_improvement) is not None \
+        and _room(design, current, (item,), noise_floor, f)
 
 
 def _plausible(design: Design, current: Fitted) -> list[str]:
@@ -421,10 +403,10 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
                margin: float, min_improvement: float, kin: Sequence[str] = ()) -> list[dict[str, object]]:
     """Adopted items that another item explains as well on held-out data: within ``margin``, or within the held-out
     score's own sampling scatter (:func:`.evidence.scatter`), whichever is wider, on the equations (and a band's
-    rows) the adopted item acts on too, and winning in its place by the test the adopted item passed (:func:`_wins`,
-    from the other adopted items). Where the alternative is a constant off by more than :data:`IMPLAUSIBLE_FACTOR`,
-    the reason says why the effect was preferred. ``kin``: rival-only items (:attr:`.columns.Column.rival`), which
-    challenge an adopted voltage drop only."""
+    rows) the adopted item acts on too, and winning in its place by the test the adopted item passed
+    (:func:`.evidence.win_test`, from the other adopted items). Where the alternative is a constant off by more than
+    :data:`IMPLAUSIBLE_FACTOR`, the reason says why the effect was preferred. ``kin``: rival-only items
+    (:attr:`.columns.Column.rival`), which challenge an adopted voltage drop only."""
     margin, out = max(margin, scatter(design)), []
     without = functools.cache(lambda a: fit_model(design, [i for i in items if i != a], tol))  # (once per item)
     for a, b in [*itertools.product(items, pool), *((d, c) for d in items if d in DROPS for c in kin)]:
@@ -433,7 +415,8 @@ def _challenge(design: Design, items: list[str], pool: Sequence[str], best: Fitt
         alt = fit_model(design, [b if i == a else i for i in items], tol)
         na, nb = (f"param:{x}" if x in CONSTANTS else x for x in (a, b))
         if alt.score <= best.score * (1.0 + margin) and band_alike(design, a, best, alt, margin) \
-                and acts_alike(design, a, best, alt, margin) and _wins(design, without(a), b, alt, min_improvement):
+                and acts_alike(design, a, best, alt, margin) \
+                and win_test(design, without(a), b, alt, min_improvement) is not None:
             out.append({"adopted": a, "alternative": b, "score": best.score, "alternative_score": alt.score,
                         "reason": f"replacing {na} by {nb} fits the held-out data as well "
                                   f"({alt.score:.3g} vs {best.score:.3g} noise units, within {100 * margin:.1f} %): "

@@ -1,9 +1,8 @@
 """How sure each name is: the held-out test each item of the verdict passes beside the others (issue #11).
 
-The selection (:mod:`.select`) names an item where its win passes one of several tests (:mod:`.evidence`), and they
-are not equally sure. Each item of the final model is tested here as the selection's last check tests it, beside
-all the other adopted items (the model without it against the final model), and the first test it passes says how
-it won:
+The selection (:mod:`.select`) names an item where its win passes one of several tests (:func:`.evidence.win_test`),
+and they are not equally sure. Each item of the final model is tested here by that same function, beside all the other
+adopted items (the model without it against the final model), and the test it passes says how it won:
 
 * ``likelihood_ratio``: the torque equation's held-out squared error falls beyond the one-sided normal quantile
   (:func:`.evidence.ratio_agrees`); ``beyond_sampling``: a held-out RMS falls beyond two standard errors over its
@@ -11,8 +10,8 @@ it won:
 * ``held_out_blocks`` (a paired comparison over held-out blocks, :func:`.evidence.blocks_agree`), ``estimate`` (a
   constant's estimate beyond its box, :func:`.evidence.estimate_agrees`), ``ripple_rows`` (an angle ripple's fall
   beyond sampling over the rows independent for a fast ripple, not over the torque rows,
-  :func:`.evidence.ripple_beyond`) and ``with_others`` (none of them alone: kept as one of a pair, or as the last
-  effect adopted). All ``weak``.
+  :func:`.evidence.ripple_beyond`) and ``with_others`` (none of them alone, or an effect no longer material beside
+  the others: kept as one of a pair, or as the last effect adopted). All ``weak``.
 * ``inductance_timing``: ``L`` beyond sampling noise, weak too. Its only equation is the armature's, where a command
   timing a fraction of a sample off leaves the residual an inductance error leaves, on held-out rows as on training
   rows (the reason :func:`.evidence.estimate_agrees` never names ``L``): sampling noise is not what it must beat.
@@ -31,17 +30,9 @@ from typing import Any
 
 import numpy as np
 
-from ocp.identify.evidence import (
-    beyond_scatter,
-    blocks_agree,
-    equations_of,
-    estimate_agrees,
-    ratio_agrees,
-    ratio_z,
-    ripple_beyond,
-)
+from ocp.identify.evidence import equations_of, ratio_z, win_test
 from ocp.identify.explain import item_name
-from ocp.identify.regression import CONSTANTS, Design
+from ocp.identify.regression import Design
 from ocp.identify.select import Fitted, fit_model
 
 #: the tests, surest first, and whether a name won by each is strong (module doc)
@@ -65,22 +56,18 @@ SAYS = {"likelihood_ratio": "the torque equation's held-out error falls beyond c
         "with_others": "by no test alone beside the other items, only together with them"}
 
 
-def test_passed(design: Design, without: Fitted, item: str, final: Fitted) -> str:
-    """The first test (:data:`STRONG`'s order) by which ``final`` beats ``without`` (``final`` less ``item``)."""
-    if ratio_agrees(design, without, item, final):
-        return "likelihood_ratio"
-    if beyond_scatter(design, without, final, (item,)):
-        return "inductance_timing" if item == "L" else "beyond_sampling"
-    if item in CONSTANTS and blocks_agree(design, without, item, final):
-        return "held_out_blocks"
-    if item in CONSTANTS and estimate_agrees(design, without, item, final):
-        return "estimate"
-    if item == "cogging" and ripple_beyond(design, without, final):
-        return "ripple_rows"
-    return "with_others"
+def test_passed(design: Design, without: Fitted, item: str, final: Fitted, min_improvement: float) -> str:
+    """The test by which ``final`` beats ``without`` (``final`` less ``item``): the selection's own
+    (:func:`.evidence.win_test`, materiality included), ``L``'s fall beyond sampling named ``inductance_timing``, and
+    ``with_others`` where none passes alone."""
+    test = win_test(design, without, item, final, min_improvement)
+    if test is None:
+        return "with_others"
+    return "inductance_timing" if item == "L" and test == "beyond_sampling" else test
 
 
-def item_evidence(design: Design, final: Fitted, verdict: list[str], tol: float) -> dict[str, dict[str, Any]]:
+def item_evidence(design: Design, final: Fitted, verdict: list[str], tol: float,
+                  min_improvement: float) -> dict[str, dict[str, Any]]:
     """Per verdict name: ``test`` (module doc), ``strong``, ``says`` (the test in words), ``z`` (the torque
     equation's likelihood-ratio z, None where the item does not enter it) and ``heldout`` (per equation it enters,
     the held-out RMS in noise units without it and with it). ``input_delay`` is ``alignment``."""
@@ -91,7 +78,7 @@ def item_evidence(design: Design, final: Fitted, verdict: list[str], tol: float)
         if item_name(item) not in verdict:
             continue
         without = fit_model(design, [i for i in final.items if i != item], tol)
-        test = test_passed(design, without, item, final)
+        test = test_passed(design, without, item, final, min_improvement)
         enters = equations_of(design, (item,)) & (design.n_test > 0)
         out[item_name(item)] = {
             "test": test, "strong": STRONG[test], "says": SAYS[test],

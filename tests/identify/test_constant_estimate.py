@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from bench.modelcheck import case_log
-from ocp.identify import diagnose, evidence, select
+from ocp.identify import diagnose, evidence
 from ocp.logs import Log
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -48,7 +48,7 @@ def test_viscous_error_named_on_its_estimate() -> None:
 
 
 def test_without_the_estimate_test_it_is_missed(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(select, "estimate_agrees", lambda *a: False)
+    monkeypatch.setattr(evidence, "estimate_agrees", lambda *a: False)
     assert _diagnose(3224, "constant+one").verdict == ["thrust_asymmetry"]
 
 

@@ -1,5 +1,5 @@
 """An angle ripple beside a Stribeck band is named only where it is material off the band too (issue #11, session
-56: :func:`ocp.identify.evidence.ripple_off_band` in :func:`ocp.identify.select._wins`).
+56: :func:`ocp.identify.evidence.ripple_off_band` in :func:`ocp.identify.evidence.win_test`).
 
 A ripple is periodic in the rotor angle and shows on every row the log resolves it; a Stribeck band acts near zero
 speed only. Where the identifier's band misfits a drawn one (its level, width or the rows at rest), a ripple of some
@@ -19,7 +19,7 @@ from typing import Any
 import pytest
 
 from bench.modelcheck import case_log
-from ocp.identify import diagnose, select
+from ocp.identify import diagnose, evidence, select
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
 from tests.proving_ground import make_case
@@ -47,7 +47,8 @@ def test_a_ripple_only_on_the_bands_rows_is_not_named() -> None:
 
 
 def test_without_the_test_off_the_band_it_was_named(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(select, "ripple_off_band", lambda *a: True)
+    for module in (evidence, select):  # (the test of a single item and of a pair)
+        monkeypatch.setattr(module, "ripple_off_band", lambda *a: True)
     assert sorted(_diagnose(40175, None).verdict) == ["cogging", "stribeck"]
 
 
@@ -64,5 +65,6 @@ def test_a_ripple_adopted_in_a_pair_is_held_to_it_too(monkeypatch: pytest.Monkey
     (:func:`ocp.identify.select._pair`), and are named so. With a test off the band that refuses every ripple, the
     pair is refused too: the pair's path asks it as a single ripple's does."""
     assert _result(50168, "two").verdict == ["stribeck", "cogging"]
-    monkeypatch.setattr(select, "ripple_off_band", lambda *a: False)
+    for module in (evidence, select):
+        monkeypatch.setattr(module, "ripple_off_band", lambda *a: False)
     assert "cogging" not in _diagnose(50168, "two").verdict
