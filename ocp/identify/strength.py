@@ -21,7 +21,8 @@ adopted items (the model without it against the final model), and the test it pa
 ``input_delay`` is named by the alignment's own tests (:func:`.diagnose._delay_wins`): ``alignment``, strong.
 Measured at session 69's code, per name (``python bench/modelcheck.py`` and ``python bench/blind_check.py`` print the
 table): over the proving ground's ten sets (2,000 logs) strong names were drawn labels 1,974 times of 2,010, weak ones
-56 of 69; over the blind rig's 1,000 logs 919 of 973 and 14 of 34 (a ripple on its own rows 4 of 14).
+56 of 69; over the blind rig's 1,000 logs 919 of 973 and 14 of 34 (a ripple on its own rows 4 of 14). Session 70's
+one test for adoption and credit moved no verdict and no credit on those 3,000 logs.
 """
 
 from __future__ import annotations

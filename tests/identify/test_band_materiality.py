@@ -115,9 +115,9 @@ def test_an_alternative_must_fit_the_bands_rows_too_to_be_its_equal() -> None:
 
 
 def test_the_fall_off_the_band_is_the_held_out_error_on_the_other_rows() -> None:
-    """``off_band_fall`` (a ripple beside a Stribeck band must be material there too: evidence.win_test): the fall of the
-    torque equation's K-fold held-out error on the rows where the band does NOT act, from the oracle's numbers. The
-    band itself, which explains a third of its own rows' error, moves the other rows by under 2 %."""
+    """``off_band_fall`` (a ripple beside a Stribeck band must be material there too: evidence.win_test): the fall of
+    the torque equation's K-fold held-out error on the rows where the band does NOT act, from the oracle's numbers.
+    The band itself, which explains a third of its own rows' error, moves the other rows by under 2 %."""
     a, t, folds = _rows(12, 1.5)
     d = _design(a, t, folds)
     before, after = fit_model(d, (), tol=0.5), fit_model(d, ("stribeck",), tol=0.5)
