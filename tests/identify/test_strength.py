@@ -11,20 +11,27 @@ won by beside the other names, and the figure it reports agrees with that test's
   likelihood-ratio z is under the effect's quantile. Each is the drawn label (weak is not wrong), and the answer's
   message says what it won by. ``L`` beyond sampling noise is weak however far its armature error falls
   (``make_case(1191)``).
+* The credit is the selection's own test (:func:`ocp.identify.evidence.win_test`), materiality included: on
+  synthetic torque rows (``test_band_materiality``'s), a band whose fall passes the likelihood ratio but not the
+  materiality is credited ``with_others``, as the selection would not adopt it alone (until session 70 the credit
+  skipped materiality and said ``likelihood_ratio``).
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 from scipy.special import ndtri
 
-from ocp.identify import diagnose
-from ocp.identify.evidence import BLOCK_ALPHA, BLOCK_FALL, EFFECT_ALPHA
+from ocp.identify import diagnose, strength  # (strength.test_passed: a module's name, not a test)
+from ocp.identify.evidence import BLOCK_ALPHA, BLOCK_FALL, EFFECT_ALPHA, is_material, ratio_agrees, win_test
+from ocp.identify.select import fit_model
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams, preset
 from ocp.model.plant import DCMotorPlant
+from tests.identify.test_band_materiality import _design, _rows
 from tests.proving_ground import make_case
 from tests.synthetic_rig import RigSpec, generate
 
@@ -93,3 +100,16 @@ def test_an_inductance_error_is_weak_however_far_its_armature_error_falls() -> N
     before, after = e["heldout"]["armature"]
     assert set(e["heldout"]) == {"armature"} and after < 0.5 * before
     assert "weak evidence for param:L" in res.to_dict()["message"]
+
+
+def test_a_fall_short_of_materiality_is_credited_with_others() -> None:
+    """A Stribeck band at 4 noise units on 1,200 synthetic torque rows, judged on the whole score (no footprint):
+    the torque equation falls 10 %, beyond the likelihood ratio's quantile, under the 12 % an effect needs."""
+    a, t, folds = _rows(12, 4.0)
+    d = replace(_design(a, t, folds), footprint=None)
+    before, after = fit_model(d, (), tol=0.5), fit_model(d, ("stribeck",), tol=0.5)
+    assert ratio_agrees(d, before, "stribeck", after) and not is_material(d, before, after, ("stribeck",), 0.12)
+    assert win_test(d, before, "stribeck", after, 0.12) is None
+    assert strength.test_passed(d, before, "stribeck", after, 0.12) == "with_others"
+    # where the fall is material (a 1 % materiality), the same fall is credited the likelihood ratio
+    assert strength.test_passed(d, before, "stribeck", after, 0.01) == "likelihood_ratio"
