@@ -121,9 +121,13 @@ def inductance_wins(plant: DCMotorPlant, final: DCMotorPlant, named: Sequence[st
             if not lags:
                 return True
             own = heldout(final, realign(log, shift, tau, max_skew))
-            forms = (final.params.model_copy(update={"L": plant.params.L}), params) if searched else (params,)
-            rival = min(heldout(DCMotorPlant(p, final.effects), realign(log, lag, tau, max_skew))
-                        for p in forms for lag in lags)
+            forms = [DCMotorPlant(p, final.effects) for p in
+                     ((final.params.model_copy(update={"L": plant.params.L}), params) if searched else (params,))]
+            for lag in lags:  # (the first rival that predicts as well decides: the rest need not run)
+                late = realign(log, lag, tau, max_skew)
+                if any(own > (1.0 - min_improvement) * heldout(rival, late) for rival in forms):
+                    return False
+            return True
     except SolverError:
         return True
     return own <= (1.0 - min_improvement) * rival
