@@ -44,17 +44,16 @@ def filtered(w: np.ndarray, lag: float) -> np.ndarray:
 
 def one(args: tuple[int, float, str | None, str | None]) -> tuple[int, float, list[str], list[str]]:
     """(seed, lag, truth, verdict) of one case with its speed filtered by ``lag`` samples."""
-    from bench.modelcheck import load_case
+    from bench.modelcheck import case_log, load_case
     from ocp.identify import diagnose
     from ocp.logs import log_from_arrays
-    from ocp.logs.timebase import uniform
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
 
     seed, lag, kind, cache = args
     case = load_case(seed, cache, False, kind)
-    t, c, _ = uniform(case.columns["t"], {k: v for k, v in case.columns.items() if k != "t"}, resample=True)
-    log = log_from_arrays(t, c["voltage"], c["current"], c["thrust"], omega=filtered(np.asarray(c["omega"]), lag),
+    x = case_log(case, angle=False)
+    log = log_from_arrays(x.t, x.voltage, x.current, x.thrust, omega=filtered(x.omega, lag),
                           source=f"proving-ground-{seed}-speed-lag-{lag:g}")
     res = diagnose(DCMotorPlant(MotorParams(**case.nominal)), log)
     return seed, lag, sorted(case.expected), sorted(res.verdict)
