@@ -23,9 +23,10 @@ def print_points(d: dict[str, Any]) -> None:
 
 
 def _kept(c: dict[str, Any]) -> str:
-    """A calibration row's note where the plant does not take the fitted value (``applied`` is not ``relative``)."""
+    """A calibration row's note where the plant does not take the fitted value (``applied`` is not ``relative``, or
+    the log gave no estimate: ``relative`` null)."""
     a, r = c.get("applied"), c.get("relative")
-    if not isinstance(a, int | float) or not isinstance(r, int | float) or abs(a - r) <= 1e-12:
+    if not isinstance(a, int | float) or (isinstance(r, int | float) and abs(a - r) <= 1e-12):
         return ""
     return "  (not resolved by this log: the plant keeps " + ("nominal)" if a == 0 else f"{100 * a:+.1f} %)")
 
@@ -74,10 +75,12 @@ def print_diagnosis(d: dict[str, Any]) -> None:
         print(f"calibration (refinements within {100 * d.get('tolerance', 0.1):.0f} % stay here; beyond it a constant "
               "is named in the verdict):" + ("\n  none applied: the nominal constants as given predict the held-out "
               "rows better than any refinement" if any(c.get("as_given") for c in cal.values()) else ""))
-        for k, c in cal.items():
-            rel = 100 * c["relative"] if isinstance(c["relative"], int | float) else None
-            print(f"  {k:6s} {_g(c['nominal'], '.4g'):>10s} -> {_g(c['fitted'], '.4g'):>10s} {c['unit']:16s} "
-                  f"{_g(rel, '+6.1f')} %{'  NAMED' if c['named'] else ''}{_kept(c)}")
+        for k, c in cal.items():  # (a constant the log cannot resolve has no estimate: "-")
+            est = isinstance(c["relative"], int | float)
+            fitted, rel = ((_g(c["fitted"], ".4g"), _g(100 * c["relative"], "+6.1f") + " %") if est
+                           else ("-", "     -  "))
+            print(f"  {k:6s} {_g(c['nominal'], '.4g'):>10s} -> {fitted:>10s} {c['unit']:16s} "
+                  f"{rel}{'  NAMED' if c['named'] else ''}{_kept(c)}")
         print("".join(f"  {k}: {c['unresolved']}\n" for k, c in cal.items() if c.get("unresolved")), end="")
     ap = d.get("angle_periodic")
     if ap:

@@ -199,16 +199,22 @@ def plant_of(plant: DCMotorPlant, design: Design, f: Fitted, delay: float | None
 
 
 def calibration(p: MotorParams, design: Design, f: Fitted, tol: float) -> dict[str, dict[str, Any]]:
-    """Per constant: nominal, fitted (the column's apparent value), relative change, the relative change the
-    calibrated plant takes (:func:`applied`), whether it is named (beyond ``tol``), and whether it is held at nominal
-    because the nominal model as given predicts the held-out rows better than the calibrated one (``as_given``)."""
+    """Per constant: nominal, fitted (the column's value), relative change, the relative change the calibrated plant
+    takes (:func:`applied`), whether it is named (beyond ``tol``), and whether it is held at nominal because the
+    nominal model as given predicts the held-out rows better than the calibrated one (``as_given``). A constant the
+    log cannot resolve (:attr:`.regression.Design.unresolved`) has no estimate: ``fitted``, ``relative`` and
+    ``within_tolerance`` are None, and ``apparent`` is its free column's relative value, what a logger's artefact took
+    up (a current filter read as ``L`` at 3e7x nominal, blind rig 704), never a value of the constant."""
     out = {}
     for c in CONSTANTS:
         x = relative(design, f, c)
         nominal = float(getattr(p, KEYS[c][0]))
-        out[c] = {"nominal": nominal, "fitted": nominal * (1.0 + x), "relative": x, "unit": UNITS[c],
+        free = c in design.unresolved
+        out[c] = {"nominal": nominal, "fitted": None if free else nominal * (1.0 + x), "relative": None if free else x,
+                  "apparent": x if free else None, "unit": UNITS[c],
                   "applied": applied(design, f, c),  # the relative error the calibrated plant takes
-                  "named": c in f.items, "within_tolerance": bool(abs(x) <= tol + 1e-9), "as_given": f.as_given,
+                  "named": c in f.items, "within_tolerance": None if free else bool(abs(x) <= tol + 1e-9),
+                  "as_given": f.as_given,
                   "unresolved": design.unresolved.get(c) or (None if c in f.items else design.one_sided.get(c))
                   or design.unseen.get(c),  # (why the log cannot decide it; a named one-sided constant it decided)
                   "slack": design.slack.get(c)}  # the box widened by what a nuisance mimics (Design.slack)

@@ -243,9 +243,12 @@ function showDiagnosisDetails(res, after) {
   const keys = Object.keys(cal);
   if (keys.length) {
     const tol = 100 * (res.tolerance ?? 0.1);
-    const kept = (c) => (typeof c.applied === "number" && Math.abs(c.applied - c.relative) > 1e-12
+    // a constant the log cannot resolve has no estimate (relative null): "—", never its free column's value
+    const est = (c) => typeof c.relative === "number";
+    const kept = (c) => (typeof c.applied === "number" && (!est(c) || Math.abs(c.applied - c.relative) > 1e-12)
       ? ` (not resolved by this log: plant keeps ${c.applied === 0 ? "nominal" : fmt(100 * c.applied, 2) + " %"})` : "");
-    const parts = keys.map((k) => `${k} ${fmt(100 * cal[k].relative, 2)} %${cal[k].named ? " (named)" : ""}${kept(cal[k])}`);
+    const parts = keys.map((k) => `${k} ${est(cal[k]) ? fmt(100 * cal[k].relative, 2) + " %" : "—"}` +
+      `${cal[k].named ? " (named)" : ""}${kept(cal[k])}`);
     const given = keys.some((k) => cal[k].as_given)
       ? ". None applied: the nominal constants as given predict the held-out rows better than any refinement" : "";
     line(`Calibration (within ±${fmt(tol, 2)} % a constant is refined, not named): ${parts.join(", ")}${given}`,

@@ -152,7 +152,8 @@ def test_an_unresolved_inductance_absorbs_a_current_filter_unnamed(rig: MotorPar
     res = diagnose(DCMotorPlant(rig), filtered)
     assert res.verdict == []
     cal = res.calibration["L"]
-    assert not cal["named"] and cal["relative"] > 1.0 and "under two samples" in cal["unresolved"]
+    assert not cal["named"] and cal["apparent"] > 1.0 and "under two samples" in cal["unresolved"]
+    assert cal["relative"] is None and cal["fitted"] is None  # (no estimate: the free column took the filter)
     assert cal["applied"] == 0.0 and res.plant.params.L == rig.L
     assert res.calibration["R"]["unresolved"] is None
     assert res.plant.params.R == pytest.approx(rig.R * (1 + res.calibration["R"]["applied"]), rel=1e-12)
@@ -160,3 +161,4 @@ def test_an_unresolved_inductance_absorbs_a_current_filter_unnamed(rig: MotorPar
     assert main(["diagnose", str(tmp_path / "filtered.csv"), "--params", "paper-rig"]) == 0
     row = next(r for r in capsys.readouterr().out.splitlines() if r.lstrip().startswith("L "))
     assert "not resolved by this log: the plant keeps nominal" in row
+    assert row.split()[2:4] == ["->", "-"] and f"{100 * cal['apparent']:.1f}" not in row  # no figure for it

@@ -27,7 +27,7 @@ def test_an_inductance_beyond_a_factor_two_is_not_named_on_a_clean_log(tmp_path:
     d, _ = blind(357, tmp_path)
     assert d.verdict == [], d.verdict
     cal = d.calibration["L"]
-    assert cal["relative"] < -0.5 and not cal["named"]  # (the fit that was named: beyond the factor)
+    assert cal["apparent"] < -0.5 and not cal["named"]  # (the fit that was named: beyond the factor)
     assert "more than a factor two" in cal["unresolved"] and "not identifiable" not in cal["unresolved"]
     assert d.alignment is not None and d.alignment.identified  # (the timing measured: the rule's new ground)
 

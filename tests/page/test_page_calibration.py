@@ -36,6 +36,7 @@ def test_an_unresolved_constant_is_shown_as_kept_at_nominal(page: Any, server: S
     page.wait_for_selector("#m-diag-results:not([hidden])", timeout=LONG)
     entries = dict(e.split(" ", 1) for e in page.inner_text("#m-calibration").split(": ", 1)[1].split(", "))
     assert "not resolved by this log: plant keeps nominal" in entries["L"]
+    assert entries["L"].startswith("— ") and "%" not in entries["L"]  # no estimate, not its free column's value
     assert "not resolved" not in entries["R"]
 
 
