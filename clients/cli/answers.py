@@ -28,7 +28,11 @@ def _kept(c: dict[str, Any]) -> str:
     a, r = c.get("applied"), c.get("relative")
     if not isinstance(a, int | float) or (isinstance(r, int | float) and abs(a - r) <= 1e-12):
         return ""
-    return "  (not resolved by this log: the plant keeps " + ("nominal)" if a == 0 else f"{100 * a:+.1f} %)")
+    free = c.get("apparent")  # (its free column, quoted within a factor two of nominal: beyond, an artefact's value)
+    reads = f"; its free column reads {100 * free:+.1f} %" if isinstance(free, int | float) and 0.5 <= 1 + free <= 2 \
+        else ""
+    keeps = "nominal" if a == 0 else f"{100 * a:+.1f} %"
+    return f"  (not resolved by this log: the plant keeps {keeps}{reads})"
 
 
 def print_equations(d: dict[str, Any]) -> None:

@@ -245,8 +245,12 @@ function showDiagnosisDetails(res, after) {
     const tol = 100 * (res.tolerance ?? 0.1);
     // a constant the log cannot resolve has no estimate (relative null): "—", never its free column's value
     const est = (c) => typeof c.relative === "number";
+    // (its free column quoted within a factor two of nominal: beyond, it is an artefact's value)
+    const reads = (c) => (typeof c.apparent === "number" && c.apparent >= -0.5 && c.apparent <= 1
+      ? `; its free column reads ${fmt(100 * c.apparent, 2)} %` : "");
     const kept = (c) => (typeof c.applied === "number" && (!est(c) || Math.abs(c.applied - c.relative) > 1e-12)
-      ? ` (not resolved by this log: plant keeps ${c.applied === 0 ? "nominal" : fmt(100 * c.applied, 2) + " %"})` : "");
+      ? ` (not resolved by this log: plant keeps ${c.applied === 0 ? "nominal" : fmt(100 * c.applied, 2) + " %"}` +
+        `${reads(c)})` : "");
     const parts = keys.map((k) => `${k} ${est(cal[k]) ? fmt(100 * cal[k].relative, 2) + " %" : "—"}` +
       `${cal[k].named ? " (named)" : ""}${kept(cal[k])}`);
     const given = keys.some((k) => cal[k].as_given)

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from clients.cli import main
+from clients.cli.answers import print_diagnosis
 from ocp.identify import DiagnoseOptions, diagnose, fit
 from ocp.logs import Log, LogKind, log_from_arrays, write_log_csv
 from ocp.logs.timebase import uniform
@@ -162,3 +163,16 @@ def test_an_unresolved_inductance_absorbs_a_current_filter_unnamed(rig: MotorPar
     row = next(r for r in capsys.readouterr().out.splitlines() if r.lstrip().startswith("L "))
     assert "not resolved by this log: the plant keeps nominal" in row
     assert row.split()[2:4] == ["->", "-"] and f"{100 * cal['apparent']:.1f}" not in row  # no figure for it
+    assert "free column reads" not in row  # (beyond a factor two: the filter's value, not quoted)
+
+
+def test_a_free_column_within_a_factor_two_is_quoted_not_estimated(capsys: pytest.CaptureFixture[str]) -> None:
+    """The CLI row of a constant the log cannot resolve: no estimate, the plant's nominal, and its free column's
+    reading where within a factor two of nominal (blind rig 125: J +48.3 % beside a drawn +47.7 %)."""
+    row = {"nominal": 1.0, "fitted": None, "relative": None, "apparent": 0.483, "unit": "kg m^2", "applied": 0.0,
+           "named": False, "unresolved": "under two samples"}
+    print_diagnosis({"verdict": [], "explanations": [], "calibration": {"J": row}, "ranking": []})
+    out = capsys.readouterr().out
+    assert "J               1 ->          - kg m^2" in out and "keeps nominal; its free column reads +48.3 %)" in out
+    print_diagnosis({"verdict": [], "explanations": [], "calibration": {"J": {**row, "apparent": 1.2}}, "ranking": []})
+    assert "keeps nominal)" in capsys.readouterr().out
