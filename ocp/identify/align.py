@@ -29,7 +29,8 @@ tell the lag: a smooth command delayed by ``d`` samples looks like one through a
 samples, and the free ``a1`` takes either. The datasheet can, where the armature is fast: given the nominal ``L/R`` (at
 most :data:`NOMINAL_TAU` samples, so that a 50 % inductance error moves the lag by at most a sample) and ``k_e``, the
 search is repeated with both held at nominal, as an output error (the current simulated from the command through that
-first-order lag, eq. dc_electrical, with free gains: noise in the logged current then biases nothing):
+first-order lag, eq. dc_electrical, with free gains and the speed read up to three samples ahead: noise in the
+logged current then biases nothing, nor a lagging speed sensor):
 :func:`_nominal_curve`. A lag found so is reported as resting on the nominal armature (:attr:`Alignment.nominal`), and
 the caller must not judge ``L`` from the same log as if the timing were measured. Where that search is flat too (no fast
 enough command change at all), the lag is unidentifiable: none is assumed then, and none is called a delay. Held at a
@@ -77,6 +78,8 @@ SKEW_FRACTION = 0.75
 #: longest nominal armature time constant L/R [samples] for which a lag is measured with it held
 #: (:func:`_nominal_curve`): a 50 % inductance error then moves the lag by at most a sample
 NOMINAL_TAU = 2.0
+#: [samples] how far ahead the logged speed may be read by :func:`_nominal_curve` (free gains): a sensor's lag
+SPEED_LEADS = (1, 2, 3)
 #: the inductance error [fraction of nominal] a lag measured with a slower armature held may stand for: it moves the
 #: lag by that share of the L/R (:attr:`Alignment.bias`), the same 50 % that bounds :data:`NOMINAL_TAU`'s one sample
 HELD_L_ERROR = 0.5
@@ -214,8 +217,11 @@ def estimate(log: Log, max_logging_skew: float = 2.0, armature: tuple[float, flo
     nominal, bias = False, 0.0
     if not sharp and armature is not None:
         tau = armature[0] / log.dt
-        lags, res = _search(_nominal_curve(log, tau, armature[1], k), top, floor)
-        held, sharp = _pick(lags, res)
+        for leads in (SPEED_LEADS, ()):  # (the speed as logged where its free lead leaves the lag open)
+            lags, res = _search(_nominal_curve(log, tau, armature[1], k, leads), top, floor)
+            held, sharp = _pick(lags, res)
+            if sharp:
+                break
         # a slower armature's lag is taken only as a delay candidate (a HELD_L_ERROR inductance error moves it by
         # bias): the caller claims it where it predicts held-out data better than a longer L/R (.diagnose._delay_wins)
         bias = HELD_L_ERROR * tau if tau > NOMINAL_TAU else 0.0
@@ -244,19 +250,25 @@ def _search(curve: Callable[[np.ndarray], np.ndarray], top: int, floor: float) -
     return np.concatenate([coarse, fine])[order], np.maximum(np.concatenate([res, curve(fine)])[order], floor)
 
 
-def _nominal_curve(log: Log, tau: float, k_e: float, k: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+def _nominal_curve(log: Log, tau: float, k_e: float, k: np.ndarray,
+                   leads: tuple[int, ...] = SPEED_LEADS) -> Callable[[np.ndarray], np.ndarray]:
     """The output-error residual per lag (module doc): the logged current on rows ``k`` (M,) fitted by the
-    back-EMF-corrected command ``V[n - lag] - k_e w[n]`` [V], its dead-band term, the current's sign (a brush
-    drop) and a constant, each passed through the armature's first-order lag ``i[n+1] = p i[n] + (1 - p) x[n]``,
-    ``p = exp(-1/tau)``, ``tau`` [samples] the nominal ``L/R``, exact under a zero-order hold (eq. dc_electrical).
-    ``tau`` is held, not fitted: with it free, lag and ``tau`` trade along a valley, and a longer ``tau`` wins by
-    smoothing the speed's noise (a lag biased short by most of ``L/R``)."""
+    back-EMF-corrected command ``V[n - lag] - k_e w[n]`` [V], the speed's lead ``w[n + d] - w[n]`` (d = 1, 2, 3
+    samples) [rad/s], its dead-band term, the current's sign (a brush drop) and a constant, each passed through the
+    armature's first-order lag ``i[n+1] = p i[n] + (1 - p) x[n]``, ``p = exp(-1/tau)``, ``tau`` [samples] the nominal
+    ``L/R``, exact under a zero-order hold (eq. dc_electrical). ``tau`` is held, not fitted: with it free, lag and
+    ``tau`` trade along a valley, and a longer ``tau`` wins by smoothing the speed's noise (a lag biased short by most
+    of ``L/R``). The leads are free: a filtered tachometer or a differenced encoder logs the speed rows late, and with
+    the back-EMF held to the logged speed the command was moved to match it (the blind rig's 476, a 2.9-row
+    tachometer filter beside a 2-sample skew: a 4.6-sample delay; 249, a differenced encoder beside a 1-sample skew:
+    5.0 samples; ``tests/identify/test_alignment_nominal_armature.py``)."""
     v, i, w = log.voltage, log.current, log.omega
     band, sign = _soft_sign(v), _soft_sign(i)
     rows = k[k >= min(k[-1], k[0] + int(10 * tau) + 1)]  # (the filters' start-up transient left out)
+    lead = [np.concatenate([w[d:], np.repeat(w[-1], d)]) - w for d in leads]  # (N,) each [rad/s]
 
     def one(lag: float) -> float:
-        x = np.column_stack([shifted(v, lag) - k_e * w, shifted(band, lag), sign, np.ones(v.size)])
+        x = np.column_stack([shifted(v, lag) - k_e * w, *lead, shifted(band, lag), sign, np.ones(v.size)])
         a = _through_armature(x, tau)[rows]
         coef = np.linalg.lstsq(a, i[rows], rcond=None)[0]
         return float(np.sqrt(np.mean((i[rows] - a @ coef) ** 2)))
