@@ -251,17 +251,19 @@ def _search(curve: Callable[[np.ndarray], np.ndarray], top: int, floor: float) -
 
 
 def _nominal_curve(log: Log, tau: float, k_e: float, k: np.ndarray,
-                   leads: tuple[int, ...] = SPEED_LEADS) -> Callable[[np.ndarray], np.ndarray]:
+                   leads: tuple[int, ...]) -> Callable[[np.ndarray], np.ndarray]:
     """The output-error residual per lag (module doc): the logged current on rows ``k`` (M,) fitted by the
-    back-EMF-corrected command ``V[n - lag] - k_e w[n]`` [V], the speed's lead ``w[n + d] - w[n]`` (d = 1, 2, 3
-    samples) [rad/s], its dead-band term, the current's sign (a brush drop) and a constant, each passed through the
-    armature's first-order lag ``i[n+1] = p i[n] + (1 - p) x[n]``, ``p = exp(-1/tau)``, ``tau`` [samples] the nominal
-    ``L/R``, exact under a zero-order hold (eq. dc_electrical). ``tau`` is held, not fitted: with it free, lag and
-    ``tau`` trade along a valley, and a longer ``tau`` wins by smoothing the speed's noise (a lag biased short by most
-    of ``L/R``). The leads are free: a filtered tachometer or a differenced encoder logs the speed rows late, and with
-    the back-EMF held to the logged speed the command was moved to match it (the blind rig's 476, a 2.9-row
-    tachometer filter beside a 2-sample skew: a 4.6-sample delay; 249, a differenced encoder beside a 1-sample skew:
-    5.0 samples; ``tests/identify/test_alignment_nominal_armature.py``)."""
+    back-EMF-corrected command ``V[n - lag] - k_e w[n]`` [V], the speed's lead ``w[n + d] - w[n]`` for each ``d`` in
+    ``leads`` [samples] (:data:`SPEED_LEADS`, or none) [rad/s], its dead-band term, the current's sign (a brush drop)
+    and a constant, each passed through the armature's first-order lag ``i[n+1] = p i[n] + (1 - p) x[n]``, ``p =
+    exp(-1/tau)``, ``tau`` [samples] the nominal ``L/R``, exact under a zero-order hold (eq. dc_electrical). ``tau`` is
+    held, not fitted: with it free, lag and ``tau`` trade along a valley, and a longer ``tau`` wins by smoothing the
+    speed's noise (a lag biased short by most of ``L/R``). The leads are free: a filtered tachometer or a differenced
+    encoder logs the speed rows late, and with the back-EMF held to the logged speed the command was moved to match it
+    (the blind rig's 476, a 2.9-row tachometer filter beside a 2-sample skew: a 4.6-sample delay; 663, a differenced
+    encoder beside a 2-sample skew: 3.6 samples; ``tests/identify/test_alignment_nominal_armature.py``). Where they
+    leave the lag open, the caller searches again without them (:func:`estimate`): read ahead, 607's lag, 2.7 samples
+    for a drawn 2, went to none."""
     v, i, w = log.voltage, log.current, log.omega
     band, sign = _soft_sign(v), _soft_sign(i)
     rows = k[k >= min(k[-1], k[0] + int(10 * tau) + 1)]  # (the filters' start-up transient left out)
