@@ -33,8 +33,9 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bench.modelcheck import audited, case_log, load_case, noise_free
-from ocp.identify.align import estimate, realign
+from ocp.identify.align import estimate
 from ocp.identify.columns import nuisance_columns, raw_signals, signals
+from ocp.identify.realign import realign
 from ocp.identify.regression import speed_view
 from ocp.identify.resolution import rotor_tau
 from ocp.model.params import MotorParams

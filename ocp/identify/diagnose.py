@@ -40,11 +40,9 @@ from ocp.identify.align import (
     DELAY_GAIN,
     SKEW_FRACTION,
     Alignment,
-    applying,
     armature_error,
     estimate,
     gain,
-    realign,
     spread,
     within,
 )
@@ -79,6 +77,7 @@ from ocp.identify.inductance import (
     timed_inductance,
 )
 from ocp.identify.predict import CHANNEL_UNITS, CHANNELS, free_run, noise_levels, read_current
+from ocp.identify.realign import applying, realign
 from ocp.identify.regression import CONSTANTS, REGRESSED, Design, build
 from ocp.identify.replica import unmasked
 from ocp.identify.select import Selection, select
@@ -402,7 +401,7 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
     """Whether a lag beyond the logging conventions predicts the held-out speed and current (what the
     armature voltage drives first; free run, in noise units) better by the selection's ``min_improvement``
     than the best lag within them (its fraction of a sample taken as the equations take it, the drive switching
-    within the row, :func:`.align.switched`; the longer lag's delay of the held command switches so too), or cuts
+    within the row, :func:`.realign.switched`; the longer lag's delay of the held command switches so too), or cuts
     the alignment search's residual by :data:`.align.DELAY_GAIN` (the armature equation with free coefficients,
     which other model errors do not swamp, :func:`.align.gain`), or predicts the held-out current of the armature
     alone better by ``min_improvement`` (:func:`.align.armature_error`, or ``current``: that error per lag [samples]

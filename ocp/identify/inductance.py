@@ -15,9 +15,10 @@ from collections.abc import Callable, Sequence
 import numpy as np
 
 from ocp.errors import SolverError
-from ocp.identify.align import SKEW_FRACTION, realign
+from ocp.identify.align import SKEW_FRACTION
 from ocp.identify.evidence import IMPLAUSIBLE_FACTOR
 from ocp.identify.explain import KEYS
+from ocp.identify.realign import realign
 from ocp.identify.regression import Design
 from ocp.logs import Log
 from ocp.model.effects import make_effect
@@ -150,7 +151,7 @@ def filter_mimics(plant: DCMotorPlant, final: DCMotorPlant, log: Log, shift: flo
     0.52 samples, held-out speed 17.7 noise units with the nominal ``L``, 7.5 with the named one; 3046 of the
     ``constant`` draws, a ``k`` error logged through a 0.56-sample filter: ``L`` fitted 87 % high, speed 0.79 with
     the nominal ``L``, 0.98 with it). A plant too stiff to free-run, or an ``L`` below nominal, is not mimicked.
-    ``max_skew``: the conventions' whole samples ``shift`` is read from (:func:`.align.switched`)."""
+    ``max_skew``: the conventions' whole samples ``shift`` is read from (:func:`.realign.switched`)."""
     if final.params.L <= plant.params.L:
         return False
     moved = log if shift is None else realign(log, shift, tau, max_skew)

@@ -3,7 +3,7 @@ own physics, a hard dead zone ``sign(V) max(|V| - v_db, 0)``, its own logger and
 
 A 200 Hz PI loop drives an armature that settles within a fraction of a sample (L/R of 0.1 samples), the drive
 applying row k's command 1.26 samples later: the current sampled at a row shows the level applied over the row
-before it, so the lag a log can show is the whole sample, 1 (:func:`ocp.identify.align.switched` maps the fraction).
+before it, so the lag a log can show is the whole sample, 1 (:func:`ocp.identify.realign.switched` maps the fraction).
 With a dead band of 15-25 % of the supply the PI command crosses it at every reversal; a dead-band term of one width
 (5 % of the command's spread) leaves the current amperes off inside the band, and the lag search trades that misfit
 for timing (proving-ground seed 117: 0.30 found for 1.26, the missed sample then named ``R`` +19.5 %). The term's

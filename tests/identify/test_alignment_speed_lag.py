@@ -1,4 +1,4 @@
-"""The alignment (``align.estimate``, ``align.switched``) of a fast rotor logged slowly, alone or behind a lagging
+"""The alignment (``align.estimate``, ``realign.switched``) of a fast rotor logged slowly, alone or behind a lagging
 speed sensor (issue #11, sessions 59-60).
 
 The alignment fits the armature equation over one held sample with free coefficients. Until session 60 the back-EMF
@@ -26,7 +26,7 @@ import io
 import numpy as np
 import pytest
 
-from ocp.identify import align
+from ocp.identify import align, realign
 from ocp.logs import Log, log_from_arrays
 
 # seed 741's rig [Ohm, H, N m/A, kg m^2, N m s/rad, N m s^2/rad^2]: L/R 0.15 ms
@@ -76,14 +76,14 @@ TAU = L / R  # [s] the rig's armature time constant (0.01 samples at 63 Hz: it s
 def test_a_lagging_tachometer_leaves_the_commands_timing(rate: float, filt: float, skew: int) -> None:
     a = align.estimate(_log(rate, skew, filt, 1))
     assert a.identified and abs(a.samples - skew) < 0.5, a.samples
-    assert align.switched(a.samples, TAU * rate) == pytest.approx(skew, abs=1e-6)
+    assert realign.switched(a.samples, TAU * rate) == pytest.approx(skew, abs=1e-6)
 
 
 @pytest.mark.parametrize("skew", [0, 2])
 def test_an_unfiltered_speed_is_aligned_within_a_quarter_sample(skew: int) -> None:
     a = align.estimate(_log(63.0, skew, 0.0, 2))
     assert a.identified and abs(a.samples - skew) < 0.25, a.samples
-    assert align.switched(a.samples, TAU * 63.0) == pytest.approx(skew, abs=1e-6)
+    assert realign.switched(a.samples, TAU * 63.0) == pytest.approx(skew, abs=1e-6)
 
 
 def test_the_diagnosis_reports_the_lag_it_applied() -> None:

@@ -21,13 +21,13 @@ from ocp.identify.align import (
     armature_error,
     estimate,
     gain,
-    realign,
     search_range,
     shifted,
     within,
 )
 from ocp.identify.diagnose import _delay_wins, split
 from ocp.identify.predict import noise_levels
+from ocp.identify.realign import realign
 from ocp.logs import Log, log_from_arrays
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
@@ -107,7 +107,7 @@ def test_the_conventional_lag_is_free_run_as_the_equations_see_it(rig: MotorPara
                                                                    monkeypatch: pytest.MonkeyPatch) -> None:
     """The comparison's conventional side runs the plant on the log realigned as :func:`diagnose` realigns it for
     the equations: a fraction of a sample as the drive switching within the row at the nominal L/R
-    (:func:`.align.switched`), not the interpolated blend (which the longer lag's delay of the held command is not
+    (:func:`.realign.switched`), not the interpolated blend (which the longer lag's delay of the held command is not
     either). Here the paper rig's armature (L/R about 0.3 samples at 1 kHz) settles within the row: the two differ."""
     base = generate(rig, RigSpec(seconds=1.5, seed=11))
     log = Log(base.t, shifted(base.voltage, -1.4), base.current, base.omega, base.theta, base.thrust, base.kind,

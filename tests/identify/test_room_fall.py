@@ -8,7 +8,7 @@ draw's truth, and the rule switched off (``ROOM_FALL`` = 1: no fall is enough) g
 200 Hz PI log with a 2.3 V dead band) was the other side: an ``R`` 14 % high cut its armature equation, under the
 floor, by a quarter -- not named. From session 24 to 28 it was a strict xfail: the alignment left its command a sample
 off (0.30 found for 1.26; the dead-band term of one width left the current amperes off inside the band), the
-fraction entered as a switch within the row (:func:`ocp.identify.align.switched`: none for its armature of 0.11
+fraction entered as a switch within the row (:func:`ocp.identify.realign.switched`: none for its armature of 0.11
 samples), and the missed sample named ``R`` +19.5 %. Session 29 searches the dead band's width at each lag
 (``tests/identify/test_alignment_dead_band.py``): the lag is found at 1.0 and nothing but the dead band is named.
 The rule's other side stays tested by hand-made regressions (``test_noise_floor_room.py``).

@@ -15,9 +15,10 @@ import pytest
 
 import ocp.identify.predict as predict
 from bench.modelcheck import case_log
-from ocp.identify.align import estimate, realign
+from ocp.identify.align import estimate
 from ocp.identify.fit import channel_rms
 from ocp.identify.predict import MAX_SPEED_SPAN, noise_levels, sensed_speed, speed_span
+from ocp.identify.realign import realign
 from ocp.logs import Log, log_from_arrays
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant

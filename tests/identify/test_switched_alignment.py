@@ -1,10 +1,10 @@
 """A fraction of a sample of command lag: a drive switching within the row (issue #11, sessions 24 and 60).
 
 The alignment measures the lag to a fraction of a sample, and the equations see the command moved by it
-(:func:`ocp.identify.align.realign`). Interpolating the fraction blends the old and the new level over the row: right
+(:func:`ocp.identify.realign.realign`). Interpolating the fraction blends the old and the new level over the row: right
 for an armature much slower than a row (its current integrates both), wrong for one that settles within it (its
 current shows only the new level at the next sample). On clean proving-ground logs at L/R of half a sample the blend
-was taken for an inductance 42-45 % low. :func:`ocp.identify.align.switched` gives the lag whose interpolation drives
+was taken for an inductance 42-45 % low. :func:`ocp.identify.realign.switched` gives the lag whose interpolation drives
 the nominal armature over each row as a drive switching at the estimate's fraction does. Since session 60 the fraction
 is read from the whole sample nearest the estimate, either side: on a fast armature an estimate a little short of a
 whole sample is that sample (read from the sample below it, it was a whole sample late: the blind rig's 619 at 0.99
@@ -24,7 +24,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from ocp.identify import align
-from ocp.identify.align import shifted, switched
+from ocp.identify.align import shifted
+from ocp.identify.realign import switched
 from ocp.logs import Log, log_from_arrays
 from ocp.model.params import MotorParams
 
