@@ -267,7 +267,7 @@ def _nominal_curve(log: Log, tau: float, k_e: float, k: np.ndarray,
     v, i, w = log.voltage, log.current, log.omega
     band, sign = _soft_sign(v), _soft_sign(i)
     rows = k[k >= min(k[-1], k[0] + int(10 * tau) + 1)]  # (the filters' start-up transient left out)
-    lead = [np.concatenate([w[d:], np.repeat(w[-1], d)]) - w for d in leads]  # (N,) each [rad/s]
+    lead = [shifted(w, -d) - w for d in leads]  # (N,) each [rad/s]: read d samples ahead, the last held
 
     def one(lag: float) -> float:
         x = np.column_stack([shifted(v, lag) - k_e * w, *lead, shifted(band, lag), sign, np.ones(v.size)])
