@@ -31,6 +31,10 @@ BRUSH_SLOPE = 20.0
 #: 1e-4 of the peak speed, :data:`.columns.COULOMB_EDGES`), a rotor mode a free run or the optimiser would have to
 #: resolve at thousands of steps a sample; smoothed so, the stiffest mode is within 21 x the mechanical one
 FRICTION_SLOPE = 20.0
+#: a ``calibration`` row's keys, the dynamic check's (:func:`calibration`) and the point-by-point check's
+#: (:func:`.steady_diagnose.diagnose_points`) alike, so a reader of either JSON finds the same row
+ROW_KEYS = ("nominal", "fitted", "relative", "apparent", "unit", "applied", "named", "within_tolerance", "as_given",
+            "unresolved", "slack")
 SIGNATURE = {**PARAM_SIGNATURE, "k": "torque residual proportional to the current and voltage residual "
                                      "proportional to the speed, in the ratio of k_t to k_e"}
 

@@ -166,12 +166,17 @@ def _sign_alike(best: _Try, tries: list[_Try], log: Log, base: float) -> list[di
 
 
 def _calibrated(plant: DCMotorPlant, fitted: DCMotorPlant, cand: Candidate, tol: float) -> dict[str, Any]:
-    """A constant's entry in ``calibration`` (the dynamic check's keys): nominal (in ``plant``), fitted (in
-    ``fitted``), relative change, unit, and whether it is beyond the tolerance ``tol`` (named)."""
+    """A constant's entry in ``calibration`` (the dynamic check's keys, :data:`.explain.ROW_KEYS`): nominal (in
+    ``plant``), fitted (in ``fitted``), relative change, unit, and whether it is beyond the tolerance ``tol`` (named).
+    The plant takes the fitted value (``applied``); a constant the sweep's equations cannot judge is no candidate
+    (:func:`pool`) and has no row, so none is ``unresolved`` (nor has an ``apparent`` value) or held ``as_given``, and
+    no box is widened (``slack``)."""
     nominal, fit_ = (float(cand.values(p)[cand.param_key]) for p in (plant, fitted))
     x = fit_ / nominal - 1.0 if nominal else math.inf
-    return {"nominal": nominal, "fitted": fit_, "relative": x, "unit": cand.units()[cand.param_key],
-            "named": abs(x) > tol, "within_tolerance": abs(x) <= tol}
+    row = {"nominal": nominal, "fitted": fit_, "relative": x, "apparent": None, "unit": cand.units()[cand.param_key],
+           "applied": x, "named": abs(x) > tol, "within_tolerance": abs(x) <= tol, "as_given": False,
+           "unresolved": None, "slack": None}
+    return row
 
 
 def _backward(plant: DCMotorPlant, log: Log, chosen: list[Candidate], verdict: list[str],

@@ -26,6 +26,7 @@ import pytest
 from clients.cli import main
 from ocp.identify import diagnose
 from ocp.identify.evidence import Fitted
+from ocp.identify.explain import ROW_KEYS
 from ocp.identify.lsq import as_given
 from ocp.identify.regression import Design
 from ocp.identify.select import fit_model
@@ -76,8 +77,8 @@ def test_the_diagnosis_says_the_constants_are_held_as_given(tmp_path: Path, caps
     """The JSON marks every constant held at nominal for that reason, and the CLI text says so once."""
     log = step_log(np.full(2000, 6.0), 1.0)
     res = diagnose(DCMotorPlant(P), log)
-    assert all(c["as_given"] and (c["relative"] if c["apparent"] is None else c["apparent"]) == 0.0
-               for c in res.to_dict()["calibration"].values())  # (apparent: a constant this log cannot resolve)
+    assert all(tuple(c) == ROW_KEYS and c["as_given"] and (c["relative"] if c["apparent"] is None else c["apparent"])
+               == 0.0 for c in res.to_dict()["calibration"].values())  # (apparent: a constant this log cannot resolve)
     csv, params = tmp_path / "step.csv", tmp_path / "nominal.json"
     write_log_csv(log, csv)
     params.write_text(json.dumps(P.model_dump()))

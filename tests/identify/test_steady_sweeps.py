@@ -11,6 +11,7 @@ import pytest
 
 from ocp.identify import DiagnoseOptions, diagnose
 from ocp.identify.equations import checked, residuals
+from ocp.identify.explain import ROW_KEYS
 from ocp.identify.steady_diagnose import pool
 from ocp.logs import Log, read_log
 from ocp.model.effects import make_effect
@@ -39,6 +40,7 @@ def test_a_constant_within_the_tolerance_is_calibrated_not_named(tmp_path: Path)
     assert res.verdict == []
     cal = res.calibration["c_f"]
     assert cal["within_tolerance"] and not cal["named"] and cal["relative"] == pytest.approx(-0.091, abs=0.01)
+    assert tuple(cal) == ROW_KEYS and cal["applied"] == cal["relative"]  # (the dynamic check's row, as the plant takes)
     assert res.plant.params.c_f == pytest.approx(sw.truth.c_f, rel=0.01)
     assert any("Within the 10 % tolerance: calibrated, not named." in e for e in res.explanations)
 
