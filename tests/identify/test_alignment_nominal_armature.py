@@ -184,3 +184,16 @@ def test_a_late_speed_is_not_read_as_a_delay(seed: int, tmp_path: Path) -> None:
     a = estimate(read_log(tmp_path / f"case-{seed}.csv"), 2.0, (p.L / p.R, p.k_e))
     assert a.nominal and not a.delay and abs(a.samples - truth["logger"]["skew"]) <= 0.75, a
     assert "input_delay" not in res.verdict and "input_delay" not in truth["labels"]
+
+
+@pytest.mark.parametrize("seed", [800, 249])
+def test_a_late_speed_sensor_does_not_vouch_for_a_delay(seed: int, tmp_path: Path) -> None:
+    """The blind rig's 800 (a 2.8 kHz PI log, its tachometer filtered over 3.0 rows, the command logged 2 samples
+    early) and 249 (a 950 Hz ramp, an encoder's differenced speed, 1 sample early): no delay drawn. Their searches
+    read 3.0 and 5.0 samples, beyond the conventions, and the free run with that delay predicted the held-out speed
+    better (the simulated speed late as the sensor's), though not the current: both were named an ``input_delay``.
+    Judged on the current, the delay is not called (:func:`ocp.identify.diagnose._delay_wins`)."""
+    res, truth = blind(seed, tmp_path)
+    assert "input_delay" not in truth["labels"] and truth["rig"]["delay"] == 0.0
+    assert res.alignment is not None and not res.alignment.delay and "input_delay" not in res.verdict
+    assert res.alignment.samples <= 2.75  # (the conventions' edge: 2 samples of skew and 0.75 of the update)
