@@ -414,13 +414,9 @@ def _delay_wins(plant: DCMotorPlant, log: Log, align: Alignment, own: float, opt
     nothing (a current offset of 26 noise units hid a 6.4-sample delay, proving-ground seed 9392). A lag measured
     with a slow armature's nominal L/R held (:attr:`.align.Alignment.bias`) must also beat that L/R made as much
     longer as puts the lag at the conventions' edge (within the factor-two prior, :data:`IMPLAUSIBLE_FACTOR`): on a
-    smooth command the two look alike, and only held-out data tell an inductance error from a delay. (The free run's
-    speed was judged too until session 72: a speed sensor's own lag, a tachometer's filter or a differenced encoder,
-    which the conventions' shift of the command against every sensor cannot remove, is matched by a delayed command's
-    late simulated speed. Blind rig 800, a 3-row tachometer filter beside a 2-sample skew: its 3.0-sample lag won by
-    the speed, 22.7 -> 18.7 noise units, while its current went 4.2 -> 7.4; 249, an encoder's differenced speed: 2.6
-    -> 1.9 against 1.5 -> 1.6. Both were named an ``input_delay``; no true delay of the blind rig's 1,000 logs or the
-    proving ground's ten sets was lost.)"""
+    smooth command the two look alike, and only held-out data tell an inductance error from a delay. (Not the speed,
+    since session 72: a speed sensor's lag, which no shift of the command removes, is matched by a delayed command's
+    late simulated speed; blind rig 800, 249: false delays, the current against them. Model-check history.)"""
     if gain(align, opt.max_logging_skew + own) >= DELAY_GAIN:
         return True
     short = within(align, opt.max_logging_skew + own, log.dt).samples - own

@@ -173,10 +173,9 @@ def _calibrated(plant: DCMotorPlant, fitted: DCMotorPlant, cand: Candidate, tol:
     no box is widened (``slack``)."""
     nominal, fit_ = (float(cand.values(p)[cand.param_key]) for p in (plant, fitted))
     x = fit_ / nominal - 1.0 if nominal else math.inf
-    row = {"nominal": nominal, "fitted": fit_, "relative": x, "apparent": None, "unit": cand.units()[cand.param_key],
-           "applied": x, "named": abs(x) > tol, "within_tolerance": abs(x) <= tol, "as_given": False,
-           "unresolved": None, "slack": None}
-    return row
+    return {"nominal": nominal, "fitted": fit_, "relative": x, "apparent": None, "unit": cand.units()[cand.param_key],
+            "applied": x, "named": abs(x) > tol, "within_tolerance": abs(x) <= tol, "as_given": False,
+            "unresolved": None, "slack": None}
 
 
 def _backward(plant: DCMotorPlant, log: Log, chosen: list[Candidate], verdict: list[str],
