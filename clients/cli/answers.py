@@ -109,12 +109,19 @@ def print_diagnosis(d: dict[str, Any]) -> None:
 
 
 def _print_evidence(evidence: dict[str, Any]) -> None:
-    """How each name won (:mod:`ocp.identify.strength`): one line, then what each weak name won by."""
+    """How each name won (:mod:`ocp.identify.strength`): one line, each name's test and the held-out error of the
+    equations it enters without and with it, then what each weak name won by."""
     if evidence:
         print("evidence: " + "; ".join(f"{k} {'strong' if e['strong'] else 'WEAK'} ({e['test']}"
-                                       + (f", z {_g(e['z'], '.3g')}" if e.get("z") is not None else "") + ")"
-                                       for k, e in evidence.items()))
+                                       + (f", z {_g(e['z'], '.3g')}" if e.get("z") is not None else "")
+                                       + _heldout(e.get("heldout") or {}) + ")" for k, e in evidence.items()))
     print("".join(f"  weak: {k} wins {e['says']}\n" for k, e in evidence.items() if not e["strong"]), end="")
+
+
+def _heldout(heldout: dict[str, list[float]]) -> str:
+    """``; held out: thrust 1.40 -> 1.00 noise units``: per equation, the held-out RMS without and with the name."""
+    pairs = ", ".join(f"{eq} {_g(a, '#.3g')} -> {_g(b, '#.3g')}" for eq, (a, b) in heldout.items())
+    return f"; held out: {pairs} noise units" if pairs else ""
 
 
 def rivals_text(counts: list[int]) -> str:

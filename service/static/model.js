@@ -226,8 +226,12 @@ function showDiagnosisDetails(res, after) {
   for (const a of res.ambiguous || []) line(`Ambiguous: ${a.adopted} or ${a.alternative} — ${a.reason}`, "m-ambiguous");
   const ev = Object.entries(res.evidence || {});  // how each name won (ocp/identify/strength.py)
   if (ev.length) {
+    const held = (h) => {  // per equation the name enters: held-out RMS without and with it [noise units]
+      const pairs = Object.entries(h || {}).map(([eq, [a, b]]) => `${eq} ${fmt(a, 3)} → ${fmt(b, 3)}`);
+      return pairs.length ? `; held out: ${pairs.join(", ")} noise units` : "";
+    };
     line("Evidence: " + ev.map(([k, e]) => `${k} ${e.strong ? "strong" : "weak"} (${e.test.replaceAll("_", " ")}` +
-         (e.z == null ? ")" : `, z = ${fmt(e.z, 3)})`)).join("; ") + ".", "m-evidence");
+         (e.z == null ? "" : `, z = ${fmt(e.z, 3)}`) + held(e.heldout) + ")").join("; ") + ".", "m-evidence");
   }
   for (const b of res.blind_spots || []) {  // what this log cannot show, whatever the verdict
     line((b.hidden.length ? `This log cannot show ${b.hidden.join(", ")}: ` : "Note: ") + `${b.text}.` +

@@ -46,6 +46,9 @@ def test_a_logging_skew_is_aligned_away_not_blamed(rig: MotorParams, tmp_path: P
     assert out.startswith("missing: coulomb_friction") and "alignment: command acts 1.0" in out
     assert "removed: logging convention" in out and "calibration (refinements within 10 %" in out
     assert "\nevidence: coulomb_friction strong (likelihood_ratio, z " in out and "weak:" not in out
+    (eq, (without, with_)), = res.evidence["coulomb_friction"]["heldout"].items()  # (the torque equation alone)
+    assert with_ < without  # (an adopted name lowers the held-out error of the equation it enters)
+    assert f"; held out: {eq} {without:#.3g} -> {with_:#.3g} noise units)" in out
     ripple = next(line for line in out.splitlines() if line.startswith("angle-periodic torque: best fit at"))
     assert ripple.endswith("not named: it does not win on held-out data")  # the search's best count, not a verdict
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import io
 import json
+import re
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -119,7 +120,10 @@ def test_model_check_finds_the_hidden_effect_and_the_refit_lowers_the_error(page
     hidden = next(iter(HIDDEN))
     assert page.get_attribute("#m-verdict", "data-verdict") == hidden
     assert hidden in page.inner_text("#m-verdict strong")
-    assert page.inner_text("#m-evidence").startswith(f"Evidence: {hidden} strong (likelihood ratio, z = ")
+    evidence = page.inner_text("#m-evidence")
+    assert evidence.startswith(f"Evidence: {hidden} strong (likelihood ratio, z = ")
+    without, with_ = map(float, re.search(r"; held out: \w+ ([\d.]+) → ([\d.]+) noise units\)", evidence).groups())
+    assert with_ < without  # (the held-out error of the equation the name enters, without and with it)
     first = page.locator("#m-ranking tbody tr").first
     assert first.get_attribute("data-effect") == hidden
     assert first.locator("input[type=checkbox]").is_checked()
