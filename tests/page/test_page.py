@@ -122,7 +122,9 @@ def test_model_check_finds_the_hidden_effect_and_the_refit_lowers_the_error(page
     assert hidden in page.inner_text("#m-verdict strong")
     evidence = page.inner_text("#m-evidence")
     assert evidence.startswith(f"Evidence: {hidden} strong (likelihood ratio, z = ")
-    without, with_ = map(float, re.search(r"; held out: \w+ ([\d.]+) → ([\d.]+) noise units\)", evidence).groups())
+    held = re.search(r"; held out: \w+ ([\d.]+) → ([\d.]+) noise units\)", evidence)
+    assert held is not None, evidence
+    without, with_ = map(float, held.groups())
     assert with_ < without  # (the held-out error of the equation the name enters, without and with it)
     first = page.locator("#m-ranking tbody tr").first
     assert first.get_attribute("data-effect") == hidden
