@@ -11,7 +11,10 @@ voltage stay positive: the supply delivers power in both directions.
 
 Sweeps with a time column (a Tyto "PropTest": one row per ESC step, seconds apart) are sweeps too when
 the command is strictly monotone and the rows are at least ``SWEEP_ROW_S`` apart: no time series is
-logged that slowly.
+logged that slowly. Rows that far apart under a command that is not monotone (a sweep up and back down, a step held
+over several rows, or a time in ms under a header without its unit) are refused, naming the time column, until the
+user says which kind the file is: read as a time series, an up-and-down sweep was refused as too short to check, or
+checked at a row every few seconds (session 72).
 """
 
 from __future__ import annotations
@@ -107,6 +110,12 @@ def _kind(table: Mapping[str, np.ndarray], chosen: Mapping[str, Header], opt: Re
             return LogKind.STEADY_STATE, (f"steady-state sweep: {chosen['command'].column!r} is strictly monotone and "
                                           f"the rows are {step:.3g} s apart (one row per operating point; the time "
                                           "column is not used)")
+        if step >= SWEEP_ROW_S:  # (neither: a sweep up and back down, a step held over rows, or a time in ms)
+            raise LogError(chosen["t"].column, f"rows {step:.3g} s apart: too slow for a time series of a motor's "
+                                               "dynamics, and no strictly monotone command marks a steady-state sweep; "
+                                               "say which (steady_state / --steady-state: yes, one row per operating "
+                                               "point; no, a time series), or give a time in ms a header that says so, "
+                                               "e.g. 'time (ms)'")
         return LogKind.TIME_SERIES, f"time series (time column {chosen['t'].column!r})"
     if monotone:
         return LogKind.STEADY_STATE, (f"steady-state sweep: no time column and {chosen['command'].column!r} "

@@ -225,3 +225,47 @@ def test_tyto_proptest_export_one_way_esc(tmp_path: Path) -> None:
     assert log.torque is not None
     np.testing.assert_allclose(log.torque, 6e-7 * w**2, rtol=1e-9, atol=1e-15)
     assert any("one-way ESC" in n for n in log.notes) and any("sign flipped" in n for n in log.notes)
+
+
+@pytest.mark.parametrize("hold", [1, 3])
+def test_a_slow_sweep_up_and_back_down_is_asked_for_its_kind(hold: int, tmp_path: Path) -> None:
+    """A thrust stand's sweep with a time column, rows 5.5 s apart, the ESC stepped up and back down (``hold`` rows a
+    step): no longer strictly monotone, so not detected as a sweep; until session 72 it was read as a time series with
+    a row every 5.5 s (refused later as too short, or checked as one). Now refused, naming the time column and both
+    kinds; told either, it is read as that kind (the sweep with a row per step as logged)."""
+    esc = np.repeat(np.concatenate([np.arange(1000.0, 2001.0, 50.0), np.arange(1950.0, 999.0, -50.0)]), hold)
+    rpm = 11.5 * (esc - 1000)
+    rows = [f"{5.5 * k:.2f},{e:.0f},{r:.1f},{5.2e-6 * (r * RPM) ** 2 / G0:.6g},16.0,{1e-5 * (r * RPM) ** 1.5:.6g}"
+            for k, (e, r) in enumerate(zip(esc, rpm, strict=True))]
+    path = tmp_path / "updown.csv"
+    path.write_text("Time (s),ESC signal (µs),Motor Optical Speed (RPM),Thrust (kgf),Voltage (V),Current (A)\n"
+                    + "\n".join(rows) + "\n", encoding="utf-8")
+    with pytest.raises(LogError) as err:
+        read_log(path)
+    assert err.value.field == "Time (s)" and "5.5 s apart" in err.value.reason and "--steady-state" in err.value.reason
+    sweep = read_log(path, kind="steady-state")
+    assert sweep.kind is LogKind.STEADY_STATE and sweep.n == esc.size
+    np.testing.assert_allclose(sweep.omega, rpm * RPM, rtol=1e-3)
+    if esc.size >= 50:
+        assert read_log(path, kind="time-series").kind is LogKind.TIME_SERIES
+    else:  # (told it is a time series, a sweep of 41 rows is one too short to check)
+        with pytest.raises(LogError, match="too short"):
+            read_log(path, kind="time-series")
+
+
+def test_a_time_in_ms_under_a_header_without_its_unit_is_not_read_as_seconds(tmp_path: Path) -> None:
+    """A logger's millisecond counter under a bare ``t`` header (seconds by default): read as seconds it made a 1 kHz
+    log a row a second. Refused, with the header that would say so; named ``time (ms)`` it is a 1 kHz time series."""
+    n = 400
+    t = np.arange(n, dtype=float)
+    v = 6.0 * np.sin(2 * np.pi * 5.0 * t / 1000.0)
+    cols = {"voltage": v, "current": 0.5 * v, "omega": 40.0 * v, "thrust": 1e-4 * (40.0 * v) ** 2}
+    body = "\n".join(f"{t[k]:.0f}," + ",".join(f"{c[k]:.6g}" for c in cols.values()) for k in range(n)) + "\n"
+    bare, named = tmp_path / "bare.csv", tmp_path / "named.csv"
+    bare.write_text("t," + ",".join(cols) + "\n" + body, encoding="utf-8")
+    named.write_text("time (ms)," + ",".join(cols) + "\n" + body, encoding="utf-8")
+    with pytest.raises(LogError, match=r"time \(ms\)") as err:
+        read_log(bare)
+    assert err.value.field == "t" and "1 s apart" in err.value.reason
+    log = read_log(named)
+    assert log.kind is LogKind.TIME_SERIES and log.dt == pytest.approx(1e-3)
