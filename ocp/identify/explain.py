@@ -3,6 +3,7 @@ plant, the calibration table, and words."""
 
 from __future__ import annotations
 
+import inspect
 import math
 from typing import Any
 
@@ -31,10 +32,6 @@ BRUSH_SLOPE = 20.0
 #: 1e-4 of the peak speed, :data:`.columns.COULOMB_EDGES`), a rotor mode a free run or the optimiser would have to
 #: resolve at thousands of steps a sample; smoothed so, the stiffest mode is within 21 x the mechanical one
 FRICTION_SLOPE = 20.0
-#: a ``calibration`` row's keys, the dynamic check's (:func:`calibration`) and the point-by-point check's
-#: (:func:`.steady_diagnose.diagnose_points`) alike, so a reader of either JSON finds the same row
-ROW_KEYS = ("nominal", "fitted", "relative", "apparent", "unit", "applied", "named", "within_tolerance", "as_given",
-            "unresolved", "slack")
 SIGNATURE = {**PARAM_SIGNATURE, "k": "torque residual proportional to the current and voltage residual "
                                      "proportional to the speed, in the ratio of k_t to k_e"}
 
@@ -202,6 +199,21 @@ def plant_of(plant: DCMotorPlant, design: Design, f: Fitted, delay: float | None
     return DCMotorPlant(params, tuple(effects))
 
 
+def calibration_row(nominal: float, fitted: float | None, relative: float | None, apparent: float | None, unit: str,
+                    applied: float, named: bool, within_tolerance: bool | None, as_given: bool = False,
+                    unresolved: str | None = None, slack: float | None = None) -> dict[str, Any]:
+    """One constant's ``calibration`` row (:func:`calibration`), the dynamic check's and the point-by-point check's
+    (:func:`.steady_diagnose.diagnose_points`) alike, so a reader of either JSON finds the same keys
+    (:data:`ROW_KEYS`, in this order)."""
+    return {"nominal": nominal, "fitted": fitted, "relative": relative, "apparent": apparent, "unit": unit,
+            "applied": applied, "named": named, "within_tolerance": within_tolerance, "as_given": as_given,
+            "unresolved": unresolved, "slack": slack}
+
+
+#: a ``calibration`` row's keys (:func:`calibration_row`)
+ROW_KEYS = tuple(inspect.signature(calibration_row).parameters)
+
+
 def calibration(p: MotorParams, design: Design, f: Fitted, tol: float) -> dict[str, dict[str, Any]]:
     """Per constant: nominal, fitted (the column's value), relative change, the relative change the calibrated plant
     takes (:func:`applied`), whether it is named (beyond ``tol``), and whether it is held at nominal because the
@@ -214,14 +226,13 @@ def calibration(p: MotorParams, design: Design, f: Fitted, tol: float) -> dict[s
         x = relative(design, f, c)
         nominal = float(getattr(p, KEYS[c][0]))
         free = c in design.unresolved
-        out[c] = {"nominal": nominal, "fitted": None if free else nominal * (1.0 + x), "relative": None if free else x,
-                  "apparent": x if free else None, "unit": UNITS[c],
-                  "applied": applied(design, f, c),  # the relative error the calibrated plant takes
-                  "named": c in f.items, "within_tolerance": None if free else bool(abs(x) <= tol + 1e-9),
-                  "as_given": f.as_given,
-                  "unresolved": design.unresolved.get(c) or (None if c in f.items else design.one_sided.get(c))
-                  or design.unseen.get(c),  # (why the log cannot decide it; a named one-sided constant it decided)
-                  "slack": design.slack.get(c)}  # the box widened by what a nuisance mimics (Design.slack)
+        out[c] = calibration_row(
+            nominal, None if free else nominal * (1.0 + x), None if free else x, x if free else None, UNITS[c],
+            applied(design, f, c),  # the relative error the calibrated plant takes
+            c in f.items, None if free else bool(abs(x) <= tol + 1e-9), f.as_given,
+            design.unresolved.get(c) or (None if c in f.items else design.one_sided.get(c))
+            or design.unseen.get(c),  # (why the log cannot decide it; a named one-sided constant it decided)
+            design.slack.get(c))  # the box widened by what a nuisance mimics (Design.slack)
     return out
 
 

@@ -27,7 +27,7 @@ from ocp.identify.candidates import Candidate, all_candidates, candidate
 from ocp.identify.coverage import blind_spots
 from ocp.identify.diagnose import DiagnoseOptions, DiagnoseResult, RankEntry, Round, Score, finite
 from ocp.identify.equations import EquationStatus, allowed, checked, noise, residuals, statuses
-from ocp.identify.explain import won_at
+from ocp.identify.explain import calibration_row, won_at
 from ocp.identify.signs import check_point_signs
 from ocp.identify.steady import ROUTE, UNITS, direction_maps, fit_candidates, score
 from ocp.logs import Log
@@ -166,16 +166,14 @@ def _sign_alike(best: _Try, tries: list[_Try], log: Log, base: float) -> list[di
 
 
 def _calibrated(plant: DCMotorPlant, fitted: DCMotorPlant, cand: Candidate, tol: float) -> dict[str, Any]:
-    """A constant's entry in ``calibration`` (the dynamic check's keys, :data:`.explain.ROW_KEYS`): nominal (in
+    """A constant's entry in ``calibration`` (the dynamic check's row, :func:`.explain.calibration_row`): nominal (in
     ``plant``), fitted (in ``fitted``), relative change, unit, and whether it is beyond the tolerance ``tol`` (named).
     The plant takes the fitted value (``applied``); a constant the sweep's equations cannot judge is no candidate
     (:func:`pool`) and has no row, so none is ``unresolved`` (nor has an ``apparent`` value) or held ``as_given``, and
     no box is widened (``slack``)."""
     nominal, fit_ = (float(cand.values(p)[cand.param_key]) for p in (plant, fitted))
     x = fit_ / nominal - 1.0 if nominal else math.inf
-    return {"nominal": nominal, "fitted": fit_, "relative": x, "apparent": None, "unit": cand.units()[cand.param_key],
-            "applied": x, "named": abs(x) > tol, "within_tolerance": abs(x) <= tol, "as_given": False,
-            "unresolved": None, "slack": None}
+    return calibration_row(nominal, fit_, x, None, cand.units()[cand.param_key], x, abs(x) > tol, abs(x) <= tol)
 
 
 def _backward(plant: DCMotorPlant, log: Log, chosen: list[Candidate], verdict: list[str],
