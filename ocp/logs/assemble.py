@@ -28,7 +28,7 @@ from pydantic import ValidationError
 from ocp.errors import LogError
 from ocp.logs.headers import Header, recognise
 from ocp.logs.model import QUANTITIES, UNITS, ColumnSpec, Log, LogKind, ReadOptions, log_from_arrays
-from ocp.logs.timebase import uniform
+from ocp.logs.timebase import HELD, uniform
 
 _SIGNED_BY_COMMAND = ("omega", "torque")
 SWEEP_ROW_S = 1.0  # [s] median time between the rows of a steady sweep that has a time column
@@ -171,7 +171,8 @@ def log_from_table(table: Mapping[str, np.ndarray], options: ReadOptions | None 
         finite = np.flatnonzero(np.all(np.isfinite(np.vstack([t, *ch.values()])), axis=0))
         end = int(finite[-1]) + 1 if finite.size else t.size
         t, ch = t[:end], {k: v[:end] for k, v in ch.items()}  # trailing empty rows of a spreadsheet
-        t, ch, note = uniform(t, ch, opt.resample == "auto")
+        # (a supply's voltage is a sample; the armature's is the drive's, held from row to row)
+        t, ch, note = uniform(t, ch, opt.resample == "auto", held=HELD if electrical == "armature" else ("command",))
         if note:
             notes.append(note)
     return log_from_arrays(t, ch.get("voltage"), ch.get("current"), ch.get("thrust"), ch.get("omega"),

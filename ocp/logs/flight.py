@@ -103,7 +103,8 @@ def read_flight_log(p: Path, fmt: str, opt: ReadOptions) -> Log:
         raise LogError(str(p), "no such file")
     topics, unit = _ulog_topics(p, opt.motor) if fmt == "ulog" else _dataflash_topics(p, opt.motor)
     reference = next(iter(topics))
-    t, ch, notes = merge(_dedupe(topics), reference, opt.resample == "auto")
+    # (the ESC's voltage is the supply's, a sample; its command is held)
+    t, ch, notes = merge(_dedupe(topics), reference, opt.resample == "auto", held=("command",))
     kind = LogKind.STEADY_STATE if opt.kind == "steady-state" else LogKind.TIME_SERIES
     notes = [f"{'PX4 ULog' if fmt == 'ulog' else 'ArduPilot DataFlash log'}, motor {opt.motor}: ESC speed, "
              "current and voltage (the supply's); no thrust is logged in flight", *notes]

@@ -2,8 +2,11 @@
 with a reason -- never integrated on a median step as if they were regular.
 
 A log is *regular* when every step is within ``JITTER`` of the median step. Otherwise, without
-gaps longer than ``MAX_GAP`` median steps, every channel is linearly interpolated onto the uniform
-grid ``t0 + k h`` (``h`` the median step); with such a gap the log is refused (split it there).
+gaps longer than ``MAX_GAP`` median steps, every sampled channel is linearly interpolated onto the
+uniform grid ``t0 + k h`` (``h`` the median step); with such a gap the log is refused (split it there).
+A held channel (``HELD``: a command, which the drive keeps from its row's time to the next row's) is
+put on the grid as its mean over each grid step (:func:`held_mean`), the held value each new row
+needs for the same volt-seconds; interpolated, a step between two rows would become a ramp.
 Several topics sampled at different rates (flight logs) are merged the same way onto the grid of
 the reference topic, over the span they all cover.
 """
@@ -18,6 +21,9 @@ from ocp.errors import LogError
 
 JITTER = 0.01  # relative
 MAX_GAP = 5.0  # median steps
+#: the channels held from one row to the next (the armature voltage the drive applies, an ESC's command); the
+#: others are samples
+HELD = ("voltage", "command")
 
 
 def steps(t: np.ndarray, name: str = "t") -> tuple[float, float]:
@@ -38,9 +44,23 @@ def _gap(t: np.ndarray, h: float, name: str) -> None:
                              "split the log at the gap")
 
 
+def held_mean(grid: np.ndarray, t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(N,) a held signal's mean over each step ``[g_k, g_k + h)`` of the uniform ``grid`` (N,) [s] (``h`` its
+    step): ``v`` (M,) held from each time ``t`` (M,) [s] to the next (the last row's value beyond it), so the
+    integral of the result, held on the grid, equals the signal's at every grid point (eq. ZOH: a drive's
+    volt-seconds). Linear interpolation would ramp a step across the jittered rows around it; an armature
+    settling within a row (L/R under a sample) shows the step where it was (blind rig 509, 744)."""
+    area = np.concatenate([[0.0], np.cumsum(v[:-1] * np.diff(t))])  # (M,) the integral up to each row [unit s]
+    h = grid[1] - grid[0] if grid.size > 1 else 1.0
+    edges = np.append(grid, grid[-1] + h)
+    at = np.where(edges <= t[-1], np.interp(edges, t, area), area[-1] + v[-1] * (edges - t[-1]))
+    return np.diff(at) / h
+
+
 def uniform(t: np.ndarray, channels: Mapping[str, np.ndarray], resample: bool,
-            name: str = "t") -> tuple[np.ndarray, dict[str, np.ndarray], str | None]:
-    """``(t, channels, note)`` on a uniform grid; ``note`` says what was done (None: already regular)."""
+            name: str = "t", held: tuple[str, ...] = HELD) -> tuple[np.ndarray, dict[str, np.ndarray], str | None]:
+    """``(t, channels, note)`` on a uniform grid; ``note`` says what was done (None: already regular); the channels
+    named in ``held`` as held signals (:func:`held_mean`), the others interpolated."""
     h, jitter = steps(t, name)
     if jitter <= JITTER:
         return t, dict(channels), None
@@ -49,15 +69,18 @@ def uniform(t: np.ndarray, channels: Mapping[str, np.ndarray], resample: bool,
                              f"median {h:.3g} s); allow resampling or resample to a uniform grid first")
     _gap(t, h, name)
     grid = t[0] + h * np.arange(int(np.floor((t[-1] - t[0]) / h + 1e-9)) + 1)
-    out = {k: np.interp(grid, t, v) for k, v in channels.items()}
+    out = {k: held_mean(grid, t, v) if k in held else np.interp(grid, t, v) for k, v in channels.items()}
+    kept = [k for k in out if k in held]
     note = (f"{name}: irregular sample times (steps up to {100 * jitter:.0f} % off the median {h:.3g} s): "
-            f"{t.size} samples resampled onto a uniform {h:.3g} s grid by linear interpolation ({grid.size} samples)")
+            f"{t.size} samples resampled onto a uniform {h:.3g} s grid by linear interpolation ({grid.size} samples)"
+            + (f", {', '.join(kept)} by its mean over each step (held between rows)" if kept else ""))
     return grid, out, note
 
 
 def merge(topics: Mapping[str, tuple[np.ndarray, Mapping[str, np.ndarray]]], reference: str,
-          resample: bool) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
-    """Channels of several topics ``{topic: (t (M_k,), {channel: (M_k,)})}`` on the uniform grid of ``reference``.
+          resample: bool, held: tuple[str, ...] = HELD) -> tuple[np.ndarray, dict[str, np.ndarray], list[str]]:
+    """Channels of several topics ``{topic: (t (M_k,), {channel: (M_k,)})}`` on the uniform grid of ``reference``
+    (those named in ``held`` as held signals, :func:`held_mean`).
 
     Returns ``(t (N,), {channel: (N,)}, notes)``; errors name the topic with a gap or no overlap.
     """
@@ -68,7 +91,7 @@ def merge(topics: Mapping[str, tuple[np.ndarray, Mapping[str, np.ndarray]]], ref
     if hi - lo < 2 * h:
         raise LogError(reference, f"the topics {sorted(topics)} do not overlap in time")
     if len(topics) == 1:
-        t, chans, note = uniform(t_ref, topics[reference][1], resample, reference)
+        t, chans, note = uniform(t_ref, topics[reference][1], resample, reference, held)
         return t, chans, [note] if note else []
     if not resample:
         raise LogError(reference, "channels sampled at different times; allow resampling to merge them")
@@ -78,7 +101,9 @@ def merge(topics: Mapping[str, tuple[np.ndarray, Mapping[str, np.ndarray]]], ref
     out: dict[str, np.ndarray] = {}
     for tk, tchans in topics.values():
         for c, v in tchans.items():
-            out[c] = np.interp(grid, tk, v)
+            out[c] = held_mean(grid, tk, v) if c in held else np.interp(grid, tk, v)
     rates = ", ".join(f"{n} {1 / float(np.median(np.diff(tk))):.3g} Hz" for n, (tk, _) in topics.items())
+    kept = [c for c in out if c in held]
     return grid, out, [f"topics ({rates}) resampled by linear interpolation onto the {h:.3g} s grid of "
-                       f"{reference}, over the {hi - lo:.3g} s they all cover ({grid.size} samples)"]
+                       f"{reference}, over the {hi - lo:.3g} s they all cover ({grid.size} samples)"
+                       + (f", {', '.join(kept)} by its mean over each step (held between rows)" if kept else "")]
