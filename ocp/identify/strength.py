@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 
 from ocp.identify.evidence import equations_of, ratio_z, win_test
-from ocp.identify.explain import item_name
+from ocp.identify.explain import EQUATIONS, item_name
 from ocp.identify.regression import Design
 from ocp.identify.select import Fitted, fit_model
 
@@ -40,7 +40,6 @@ from ocp.identify.select import Fitted, fit_model
 STRONG = {"likelihood_ratio": True, "beyond_sampling": True, "alignment": True, "inductance_timing": False,
           "held_out_blocks": False, "estimate": False, "ripple_rows": False, "with_others": False}
 #: the equations of :class:`.regression.Design`, in its order
-EQUATIONS = ("torque", "armature", "thrust")
 #: what each test says, for the answer's text
 SAYS = {"likelihood_ratio": "the torque equation's held-out error falls beyond chance (likelihood ratio)",
         "beyond_sampling": "an equation's held-out error falls beyond its sampling noise",
