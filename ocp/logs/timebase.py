@@ -50,11 +50,12 @@ def held_mean(grid: np.ndarray, t: np.ndarray, v: np.ndarray) -> np.ndarray:
     integral of the result, held on the grid, equals the signal's at every grid point (eq. ZOH: a drive's
     volt-seconds). Linear interpolation would ramp a step across the jittered rows around it; an armature
     settling within a row (L/R under a sample) shows the step where it was (blind rig 509, 744)."""
-    area = np.concatenate([[0.0], np.cumsum(v[:-1] * np.diff(t))])  # (M,) the integral up to each row [unit s]
+    dv = v - v[0]  # (about the first value: a constant command stays exactly constant)
+    area = np.concatenate([[0.0], np.cumsum(dv[:-1] * np.diff(t))])  # (M,) its integral up to each row [unit s]
     h = grid[1] - grid[0] if grid.size > 1 else 1.0
     edges = np.append(grid, grid[-1] + h)
-    at = np.where(edges <= t[-1], np.interp(edges, t, area), area[-1] + v[-1] * (edges - t[-1]))
-    return np.diff(at) / h
+    at = np.where(edges <= t[-1], np.interp(edges, t, area), area[-1] + dv[-1] * (edges - t[-1]))
+    return v[0] + np.diff(at) / h
 
 
 def uniform(t: np.ndarray, channels: Mapping[str, np.ndarray], resample: bool,
