@@ -39,7 +39,6 @@ from ocp.identify.select import Fitted, fit_model
 #: the tests, surest first, and whether a name won by each is strong (module doc)
 STRONG = {"likelihood_ratio": True, "beyond_sampling": True, "alignment": True, "inductance_timing": False,
           "held_out_blocks": False, "estimate": False, "ripple_rows": False, "with_others": False}
-#: the equations of :class:`.regression.Design`, in its order
 #: what each test says, for the answer's text
 SAYS = {"likelihood_ratio": "the torque equation's held-out error falls beyond chance (likelihood ratio)",
         "beyond_sampling": "an equation's held-out error falls beyond its sampling noise",
