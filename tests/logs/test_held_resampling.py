@@ -67,3 +67,17 @@ def test_a_supplys_voltage_is_a_sample() -> None:
     np.testing.assert_allclose(ch["voltage"], np.interp(t[0] + np.median(np.diff(t)) * np.arange(ch["voltage"].size),
                                                         t, v), rtol=1e-12)
     assert note is not None and "held" not in note
+
+
+def test_a_slower_command_topic_merges_held() -> None:
+    """Flight logs: an ESC topic at 100 Hz and its command topic at 40 Hz, each jittered; on the ESC's grid the
+    command is its mean over each step (volt-seconds kept), the ESC's channels interpolated."""
+    from ocp.logs.timebase import merge
+
+    t_esc, t_cmd = _jittered(300, 1e-2, 5), _jittered(120, 2.5e-2, 6)
+    u = np.repeat(np.random.default_rng(7).choice([0.1, 0.4, 0.8], 30), 4)
+    grid, ch, notes = merge({"ESC": (t_esc, {"omega": 300.0 * np.cos(t_esc)}), "cmd": (t_cmd, {"command": u})},
+                            "ESC", resample=True)
+    np.testing.assert_allclose(ch["command"], _brute_mean(grid, t_cmd, u), atol=0.8 * 2 / 4000)
+    np.testing.assert_allclose(ch["omega"], np.interp(grid, t_esc, 300.0 * np.cos(t_esc)), rtol=1e-12)
+    assert "command by its mean over each step" in notes[0]
