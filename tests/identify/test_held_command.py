@@ -22,4 +22,3 @@ def test_a_jittered_loggers_command_steps_name_nothing_undrawn(seed: int, tmp_pa
     assert truth["logger"]["jitter"] > 0 and truth["L_over_R_samples"] < 0.2
     assert any("held between rows" in n for n in read_log(tmp_path / f"case-{seed}.csv").notes)
     assert sorted(res.verdict) == sorted(truth["labels"])
-

@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from ocp.logs import read_log
-from ocp.logs.timebase import held_mean, uniform
+from ocp.logs.timebase import held_mean, merge, uniform
 
 
 def _jittered(n: int, dt: float, seed: int) -> np.ndarray:
@@ -72,8 +72,6 @@ def test_a_supplys_voltage_is_a_sample() -> None:
 def test_a_slower_command_topic_merges_held() -> None:
     """Flight logs: an ESC topic at 100 Hz and its command topic at 40 Hz, each jittered; on the ESC's grid the
     command is its mean over each step (volt-seconds kept), the ESC's channels interpolated."""
-    from ocp.logs.timebase import merge
-
     t_esc, t_cmd = _jittered(300, 1e-2, 5), _jittered(120, 2.5e-2, 6)
     u = np.repeat(np.random.default_rng(7).choice([0.1, 0.4, 0.8], 30), 4)
     grid, ch, notes = merge({"ESC": (t_esc, {"omega": 300.0 * np.cos(t_esc)}), "cmd": (t_cmd, {"command": u})},
