@@ -44,19 +44,22 @@ def _gap(t: np.ndarray, h: float, name: str) -> None:
                              "split the log at the gap")
 
 
-def held_mean(grid: np.ndarray, t: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """(N,) a held signal's mean over each step ``[g_k, g_k + h)`` of the uniform ``grid`` (N,) [s] (``h`` its
-    step): ``v`` (M,) held from each time ``t`` (M,) [s] to the next (the last row's value beyond it), so the
+def held_mean(grid: np.ndarray, h: float, t: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """(N,) a held signal's mean over each step ``[g_k, g_k + h)`` of the uniform ``grid`` (N,) [s] of step ``h``
+    [s]: ``v`` (M,) held from each time ``t`` (M,) [s] to the next (the last row's value beyond it), so the
     integral of the result, held on the grid, equals the signal's at every grid point (eq. ZOH: a drive's
     volt-seconds). Linear interpolation would ramp a step across the jittered rows around it; an armature
     settling within a row (L/R under a sample) shows the step where it was (blind rig 509, 744)."""
     dv = v - v[0]  # (about the first value: a constant command stays exactly constant)
     area = np.concatenate([[0.0], np.cumsum(dv[:-1] * np.diff(t))])  # (M,) its integral up to each row [unit s]
-    h = grid[1] - grid[0] if grid.size > 1 else 1.0
     edges = np.append(grid, grid[-1] + h)
     at = np.where(edges <= t[-1], np.interp(edges, t, area), area[-1] + dv[-1] * (edges - t[-1]))
     return v[0] + np.diff(at) / h
 
+
+def _held_note(kept: list[str]) -> str:
+    """The resampling note's clause for the held channels ``kept`` (empty: none)."""
+    return f", {', '.join(kept)} by its mean over each step (held between rows)" if kept else ""
 
 def uniform(t: np.ndarray, channels: Mapping[str, np.ndarray], resample: bool,
             name: str = "t", held: tuple[str, ...] = HELD) -> tuple[np.ndarray, dict[str, np.ndarray], str | None]:
@@ -70,11 +73,10 @@ def uniform(t: np.ndarray, channels: Mapping[str, np.ndarray], resample: bool,
                              f"median {h:.3g} s); allow resampling or resample to a uniform grid first")
     _gap(t, h, name)
     grid = t[0] + h * np.arange(int(np.floor((t[-1] - t[0]) / h + 1e-9)) + 1)
-    out = {k: held_mean(grid, t, v) if k in held else np.interp(grid, t, v) for k, v in channels.items()}
-    kept = [k for k in out if k in held]
+    out = {k: held_mean(grid, h, t, v) if k in held else np.interp(grid, t, v) for k, v in channels.items()}
     note = (f"{name}: irregular sample times (steps up to {100 * jitter:.0f} % off the median {h:.3g} s): "
             f"{t.size} samples resampled onto a uniform {h:.3g} s grid by linear interpolation ({grid.size} samples)"
-            + (f", {', '.join(kept)} by its mean over each step (held between rows)" if kept else ""))
+            + _held_note([k for k in out if k in held]))
     return grid, out, note
 
 
@@ -102,9 +104,8 @@ def merge(topics: Mapping[str, tuple[np.ndarray, Mapping[str, np.ndarray]]], ref
     out: dict[str, np.ndarray] = {}
     for tk, tchans in topics.values():
         for c, v in tchans.items():
-            out[c] = held_mean(grid, tk, v) if c in held else np.interp(grid, tk, v)
+            out[c] = held_mean(grid, h, tk, v) if c in held else np.interp(grid, tk, v)
     rates = ", ".join(f"{n} {1 / float(np.median(np.diff(tk))):.3g} Hz" for n, (tk, _) in topics.items())
-    kept = [c for c in out if c in held]
     return grid, out, [f"topics ({rates}) resampled by linear interpolation onto the {h:.3g} s grid of "
                        f"{reference}, over the {hi - lo:.3g} s they all cover ({grid.size} samples)"
-                       + (f", {', '.join(kept)} by its mean over each step (held between rows)" if kept else "")]
+                       + _held_note([c for c in out if c in held])]

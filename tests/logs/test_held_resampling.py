@@ -31,13 +31,14 @@ def _brute_mean(grid: np.ndarray, t: np.ndarray, v: np.ndarray, per_step: int = 
 def test_held_mean_keeps_the_held_signals_integral() -> None:
     t = _jittered(400, 1e-3, 0)
     v = np.repeat(np.random.default_rng(1).choice([-6.0, 2.0, 9.0], 80), 5)  # a PRBS of 5-row bits [V]
-    grid = t[0] + np.median(np.diff(t)) * np.arange(399)
-    got = held_mean(grid, t, v)
+    h = float(np.median(np.diff(t)))
+    grid = t[0] + h * np.arange(399)
+    got = held_mean(grid, h, t, v)
     np.testing.assert_allclose(got, _brute_mean(grid, t, v), atol=9.0 * 2 / 4000)  # (the midpoint rule's step)
     # a level held on rows stays that level; on the rows' own regular grid each row is its own value
-    assert np.all(held_mean(grid, t, np.full(t.size, 3.1)) == 3.1)  # (exactly: a one-level command has no steps)
+    assert np.all(held_mean(grid, h, t, np.full(t.size, 3.1)) == 3.1)  # (exactly: a one-level command has no steps)
     regular = np.arange(50) * 1e-3
-    np.testing.assert_allclose(held_mean(regular, regular, v[:50]), v[:50], rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(held_mean(regular, 1e-3, regular, v[:50]), v[:50], rtol=1e-12, atol=1e-12)
 
 
 def test_a_jittered_files_command_is_held_its_sensors_interpolated(tmp_path: Path) -> None:
