@@ -14,7 +14,7 @@ import numpy as np
 
 from ocp.identify.align import cutoff_hz, smooth
 from ocp.identify.angle import drift_windows, interval_ripple, rotor_angle, track_phase
-from ocp.identify.noise_level import white_noise
+from ocp.identify.noise_level import sensor_noise
 from ocp.identify.thrust_square import low_passed_square
 from ocp.logs import Log, LogKind
 from ocp.model.effects import CATALOGUE, ThrustLag, make_effect
@@ -152,9 +152,9 @@ def runs(mask: np.ndarray) -> list[tuple[int, int]]:
 
 def _rest_speed(s: Signals, log: Log, p: MotorParams) -> float:
     """:data:`REST_NOISE` noise levels [rad/s] of the low-passed speed: the speed column's per-sample noise
-    (:func:`.noise_level.white_noise`) through the low-pass."""
+    (:func:`.noise_level.sensor_noise`) through the low-pass."""
     low = min(1.0, 2.0 * cutoff_hz(log, p.J * p.R / (p.k_t * p.k_e)) * s.dt)
-    return REST_NOISE * white_noise(log.omega) * math.sqrt(low)
+    return REST_NOISE * sensor_noise(log.omega) * math.sqrt(low)
 
 
 def at_rest(s: Signals, log: Log, p: MotorParams) -> np.ndarray:
@@ -358,7 +358,7 @@ def ripple_windows(log: Log, s: Signals, periods: int) -> np.ndarray:
     (M, 1) ones."""
     if log.theta is not None or s.dt == 0:
         return np.ones((s.t.size, 1))
-    return drift_windows(s.t, periods, white_noise(log.omega), s.dt)
+    return drift_windows(s.t, periods, sensor_noise(log.omega), s.dt)
 
 
 def ripple_phase(s: Signals, log: Log, periods: int, cols: list[tuple[Column, np.ndarray]], resid: np.ndarray,

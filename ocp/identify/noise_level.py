@@ -4,7 +4,7 @@ A smooth signal's second differences are small beside white noise's, whose ``d2 
 standard deviation ``sqrt(6) sigma``; the median absolute deviation (times 1.4826, a Gaussian's MAD to its standard
 deviation) leaves the signal's curvature and outliers out. Biased high where the curvature is not small beside the
 noise (a slowly logged, finely resolved speed: ``docs/model-check-history.md``, session 58) and zero on a quantized
-channel whose second differences are mostly zero; callers floor it.
+channel whose second differences are mostly zero, where a sensor's level is their RMS (:func:`sensor_noise`).
 """
 
 from __future__ import annotations
@@ -19,6 +19,22 @@ def white_noise(y: np.ndarray) -> float:
     sqrt(6); 0 for fewer than three samples."""
     d2 = np.diff(y, 2)
     return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0)) if d2.size else 0.0
+
+
+#: a MAD of second differences under this share of their RMS is a quantized sensor's whose samples mostly repeat
+#: (:func:`sensor_noise`)
+DEGENERATE = 1e-6
+
+
+def sensor_noise(y: np.ndarray) -> float:
+    """:func:`white_noise` of a sensor's samples ``y`` (N,), or their second differences' RMS / sqrt(6) where most of
+    those are equal (the MAD under :data:`DEGENERATE` of the RMS): a quantized sensor whose reading steps now and then
+    (a fast encoder's differenced speed on a slow rotor) reads zero by the MAD, and every misfit of that channel would
+    then count as beyond its noise. The RMS counts the steps, which are its rounding."""
+    d2 = np.diff(y, 2)
+    rms = float(np.sqrt(np.mean(d2 * d2))) if d2.size else 0.0
+    mad = white_noise(y)
+    return mad if mad * math.sqrt(6.0) > DEGENERATE * rms else rms / math.sqrt(6.0)
 
 
 def floored_noise(y: np.ndarray) -> float:

@@ -29,7 +29,7 @@ import numpy as np
 
 from ocp.errors import LogError, SolverError
 from ocp.filters import iir
-from ocp.identify.noise_level import white_noise
+from ocp.identify.noise_level import sensor_noise
 from ocp.logs import Log, LogKind
 from ocp.model.effects import measured_current, stateful
 from ocp.model.plant import NUMPY, DCMotorPlant
@@ -295,5 +295,5 @@ def noise_levels(log: Log) -> dict[str, float]:
         if log.kind is LogKind.STEADY_STATE or y.size < 10:
             out[ch] = max(0.01 * float(np.sqrt(np.mean(y * y))), 1e-12)
             continue
-        out[ch] = max(white_noise(y), 1e-6 * float(np.max(np.abs(y))), 1e-12)
+        out[ch] = max(sensor_noise(y), 1e-6 * float(np.max(np.abs(y))), 1e-12)
     return out

@@ -67,7 +67,7 @@ from ocp.identify.coverage import unseen
 from ocp.identify.drops import drop_columns
 from ocp.identify.footprint import BANDED, Footprints, grams, weighted
 from ocp.identify.holdout import usable
-from ocp.identify.noise_level import white_noise
+from ocp.identify.noise_level import sensor_noise
 from ocp.identify.resolution import rotor_tau, unresolved
 from ocp.identify.ripple import pick_periods, residualizer
 from ocp.logs import Log, LogKind
@@ -316,7 +316,7 @@ def build(p: MotorParams, log: Log, train: np.ndarray, test: np.ndarray, effects
             cols += [(replace(c, at_rest=False), np.vstack([view(np.where(rest, 0.0, a[0])), a[1:]]))
                      for c, a in unviewed]
         tracked = MAX_PERIODS if log.theta is not None or raw.dt == 0 else \
-            tracked_periods(raw.t, white_noise(log.omega), raw.dt)
+            tracked_periods(raw.t, sensor_noise(log.omega), raw.dt)
         angle = {"amplitude": amplitude, **angle_limits(raw.theta, periods, log.theta is not None, tracked)}
     # (the armature and thrust equations keep the motor constant: their measured side does not scale)
     k_col = [a for c, a in cols if c.item == "k"]
