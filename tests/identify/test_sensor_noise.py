@@ -2,7 +2,7 @@
 
 A fast encoder on a slow rotor: the speed differenced over one 10 kHz row reads zero counts on most rows and one
 count now and then. Its second differences are then mostly zero, their MAD is zero, and the speed's noise level
-came out at the floor (1e-6 of its peak): every misfit of the speed counted as tens of thousands of noise units.
+came out at the floor (1e-6 of its peak): every misfit of the speed counted as thousands of noise units.
 On the proving ground's 2,000 logs seven such speeds (5-10 kHz encoders); one, ``make_case(3109, kind="constant")``,
 a `J` error on a 10 kHz encoder log, named a false angle ripple beside `J`.
 """
