@@ -49,11 +49,20 @@ def test_a_noise_free_square_wave_is_clean() -> None:
 
 
 def test_a_noise_free_step_down_is_clean() -> None:
-    """Session 63 named a current offset and a Stribeck band here; the current offset takes no more of the log's
-    held-out error than of the nominal plant's replica (:func:`ocp.identify.replica.artifacts`), and without it
-    nothing is adopted; the answer says so."""
+    """Session 63 named a current offset and a Stribeck band here; session 64 set the current offset aside (it took
+    no more of the log's held-out error than of the nominal plant's replica). Since session 74 nothing is adopted at
+    all: the settled speed repeats, most of its second differences are zero, and its noise level is their RMS
+    (:func:`ocp.identify.noise_level.sensor_noise`), no longer the floor of 1e-6 of its peak."""
     d = diagnose(DCMotorPlant(P), step_log(np.where(np.arange(N) < 1500, 6.0, 2.0), 0.0))
-    assert d.verdict == [] and [e.split(":")[0] for e in d.explanations] == ["current_offset is not named"]
+    assert d.verdict == [] and d.explanations == [] and d.to_dict()["message"] == "nothing missing"
+
+
+def test_an_effect_the_replica_takes_as_much_of_is_set_aside_and_said() -> None:
+    """The 1 Hz sine's Stribeck band takes no more of the log's held-out error than of the nominal plant's replica
+    (:func:`ocp.identify.replica.artifacts`): it is the method's error under this command, not named, and the answer
+    says so."""
+    d = diagnose(DCMotorPlant(P), step_log(6.0 * np.sin(2 * np.pi * 1.0 * T), 0.0))
+    assert d.verdict == [] and [e.split(":")[0] for e in d.explanations] == ["stribeck is not named"]
     assert d.to_dict()["message"] == "nothing missing; " + d.explanations[0]
 
 
