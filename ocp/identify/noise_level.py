@@ -17,8 +17,12 @@ import numpy as np
 def white_noise(y: np.ndarray) -> float:
     """Per-sample white noise [``y``'s unit] of the samples ``y`` (N,) from their second differences' MAD /
     sqrt(6); 0 for fewer than three samples."""
-    d2 = np.diff(y, 2)
-    return float(1.4826 * np.median(np.abs(d2 - np.median(d2))) / math.sqrt(6.0)) if d2.size else 0.0
+    return _mad(np.diff(y, 2)) / math.sqrt(6.0)
+
+
+def _mad(d: np.ndarray) -> float:
+    """A Gaussian's standard deviation from the median absolute deviation of ``d`` (M,); 0 for none."""
+    return float(1.4826 * np.median(np.abs(d - np.median(d)))) if d.size else 0.0
 
 
 #: a MAD of second differences under this share of their RMS is a quantized sensor's whose samples mostly repeat
@@ -32,9 +36,8 @@ def sensor_noise(y: np.ndarray) -> float:
     (a fast encoder's differenced speed on a slow rotor) reads zero by the MAD, and every misfit of that channel would
     then count as beyond its noise. The RMS counts the steps, which are its rounding."""
     d2 = np.diff(y, 2)
-    rms = float(np.sqrt(np.mean(d2 * d2))) if d2.size else 0.0
-    mad = white_noise(y)
-    return mad if mad * math.sqrt(6.0) > DEGENERATE * rms else rms / math.sqrt(6.0)
+    mad, rms = _mad(d2), float(np.sqrt(np.mean(d2 * d2))) if d2.size else 0.0
+    return (mad if mad > DEGENERATE * rms else rms) / math.sqrt(6.0)
 
 
 def floored_noise(y: np.ndarray) -> float:

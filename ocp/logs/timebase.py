@@ -57,9 +57,16 @@ def held_mean(grid: np.ndarray, h: float, t: np.ndarray, v: np.ndarray) -> np.nd
     return v[0] + np.diff(at) / h
 
 
+def _onto(grid: np.ndarray, h: float, t: np.ndarray, v: np.ndarray, held: bool) -> np.ndarray:
+    """``v`` (M,) sampled at ``t`` (M,) [s] on the uniform ``grid`` (N,) of step ``h`` [s]: by its mean over each step
+    where it is ``held`` (:func:`held_mean`), else interpolated."""
+    return held_mean(grid, h, t, v) if held else np.interp(grid, t, v)
+
+
 def _held_note(kept: list[str]) -> str:
     """The resampling note's clause for the held channels ``kept`` (empty: none)."""
     return f", {', '.join(kept)} by its mean over each step (held between rows)" if kept else ""
+
 
 def uniform(t: np.ndarray, channels: Mapping[str, np.ndarray], resample: bool,
             name: str = "t", held: tuple[str, ...] = HELD) -> tuple[np.ndarray, dict[str, np.ndarray], str | None]:
@@ -73,7 +80,7 @@ def uniform(t: np.ndarray, channels: Mapping[str, np.ndarray], resample: bool,
                              f"median {h:.3g} s); allow resampling or resample to a uniform grid first")
     _gap(t, h, name)
     grid = t[0] + h * np.arange(int(np.floor((t[-1] - t[0]) / h + 1e-9)) + 1)
-    out = {k: held_mean(grid, h, t, v) if k in held else np.interp(grid, t, v) for k, v in channels.items()}
+    out = {k: _onto(grid, h, t, v, k in held) for k, v in channels.items()}
     note = (f"{name}: irregular sample times (steps up to {100 * jitter:.0f} % off the median {h:.3g} s): "
             f"{t.size} samples resampled onto a uniform {h:.3g} s grid by linear interpolation ({grid.size} samples)"
             + _held_note([k for k in out if k in held]))
@@ -104,7 +111,7 @@ def merge(topics: Mapping[str, tuple[np.ndarray, Mapping[str, np.ndarray]]], ref
     out: dict[str, np.ndarray] = {}
     for tk, tchans in topics.values():
         for c, v in tchans.items():
-            out[c] = held_mean(grid, h, tk, v) if c in held else np.interp(grid, tk, v)
+            out[c] = _onto(grid, h, tk, v, c in held)
     rates = ", ".join(f"{n} {1 / float(np.median(np.diff(tk))):.3g} Hz" for n, (tk, _) in topics.items())
     return grid, out, [f"topics ({rates}) resampled by linear interpolation onto the {h:.3g} s grid of "
                        f"{reference}, over the {hi - lo:.3g} s they all cover ({grid.size} samples)"
