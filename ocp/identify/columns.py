@@ -50,7 +50,8 @@ class Column:
     key: str
     shape: float = math.nan
     #: a second shape, fixed per column: Stribeck friction's decay exponent (:data:`STRIBECK_DECAYS`), a dead
-    #: band's form (:data:`.drops.DEAD_BAND_FORMS`); grid neighbours (:func:`.select.fit_model`) share it
+    #: band's form (:data:`.drops.DEAD_BAND_FORMS`), a brush contact's soft form (:data:`.drops.SOFT_CONTACT`: ``shape``
+    #: is then its current width [A]); grid neighbours (:func:`.select.fit_model`) share it
     form: float = math.nan
     #: False: zero at the rows where the rotor is at rest (:func:`at_rest`), for a model whose dry friction holds it
     at_rest: bool = True

@@ -16,6 +16,11 @@ from ocp.model.params import MotorParams
 #: default) and a gap (a minimum pulse); with the first alone no gap of the blind rig (``bench/blind_check.py``) was
 #: named, with both 3 of the 5 its command enters (:mod:`.shape_choice` prefers the first)
 DEAD_BAND_FORMS = (0.0, 1.0)
+#: a brush contact's soft form (:attr:`.columns.Column.form`; the quasi-static one has none): the catalogue's own
+#: ``v_b tanh(i / i_eps)`` (:class:`ocp.model.effects.BrushDrop`) with its current width ``i_eps`` on a grid of
+#: :data:`SOFT_WIDTHS` shares of the logged peak current (:func:`drop_columns`)
+SOFT_CONTACT = 1.0
+SOFT_WIDTHS = (0.003, 0.1, 8)
 #: the smallest share of the rows a gap dead band's width is put above, and how many widths so (:func:`gap_widths`): a
 #: gap's width is the blend of two neighbouring columns (:func:`.explain.effect_values`), and a step of 1.45 in the
 #: share between them (12 widths on a ramp) fitted the blind rig's gaps 5-22 % narrow (401, 533; the latter then lost
@@ -37,7 +42,14 @@ def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
     the command, a PRBS edge, passes through the band within a row, not over the low-pass's rise, and leaves a
     residual at every edge). ``held``: the log's command (N,) [V] before the alignment shifted it by that many
     samples: the dead band acts on each held level, before the shift mixes two of them in a row. A width no row
-    falls inside is the drop's sign times its width: a brush width so is not offered. A dead band's on a command of
+    falls inside is the drop's sign times its width: a brush width so is not offered. A contact's drop may also be
+    soft (its film conducts a little below the drop): ``v_b tanh(i / i_eps)``, the catalogue's own form, is offered
+    over current widths ``i_eps`` (:data:`SOFT_CONTACT`); the blind rig's contact, ``V_b tanh(i / i_b)`` with ``i_b``
+    2 % of the stall current, was fitted better by a dead band than by the quasi-static drop (blind 20: armature
+    equation 0.35 against 1.69 noise units; 0.35 with the soft form). Only on a command of several magnitudes
+    (:func:`_levels`): on two levels the current takes a few levels too, a wide soft drop is partly a resistance, and a
+    30 % command gain came out as ``R``, ``k`` and a soft drop (session 75; a gain is said as such there, :mod:`.gain`).
+    A dead band's on a command of
     one magnitude (two levels, a PRBS) is a drive gain no selection may name, and is built as a rival only
     (:attr:`.columns.Column.rival`): the brush drop, offered, differs from it only on the rows where the current
     opposes the command, and where the two fit alike both are said (proving ground 14025: a 1.70 V band fitted as a
@@ -57,6 +69,11 @@ def drop_columns(name: str, p: MotorParams, s: Signals, log: Log,
     cols = [(Column(name, key, b, rival=rival), np.vstack([z, _low(shifted(np.clip(x, -b, b) / b, lag)[:s.v.size],
                                                                   s.dt, fc), z]))
             for b in widths if rival or np.any(np.abs(x) < b) or (name == "voltage_deadband" and _levels(x))]
+    if name == "brush_drop" and s.dt > 0 and _levels(v):  # the soft contact, on the logged current (low-passed)
+        i = log.current[:s.v.size]
+        lo, hi, k = SOFT_WIDTHS
+        cols += [(Column(name, key, w, form=SOFT_CONTACT), np.vstack([z, _low(np.tanh(i / w), s.dt, fc), z]))
+                 for w in np.geomspace(lo, hi, k) * (float(np.max(np.abs(i))) or 1.0)]
     gaps = [(b, np.abs(x) < b) for b in gap_widths(x, widths)] if name == "voltage_deadband" else []  # (inside: lost)
     return cols + [(Column(name, key, b, form=DEAD_BAND_FORMS[1]),
                     np.vstack([z, _low(shifted(np.where(m, x, 0.0) / b, lag)[:s.v.size], s.dt, fc), z]))

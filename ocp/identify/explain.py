@@ -12,6 +12,7 @@ import numpy as np
 from ocp.errors import ParameterError
 from ocp.identify.candidates import PARAM_SIGNATURE, PARAM_UNITS
 from ocp.identify.columns import STRIBECK_DECAYS
+from ocp.identify.drops import SOFT_CONTACT
 from ocp.identify.evidence import Fitted, band_fall, equations_of, ripple_rows
 from ocp.identify.lsq import NAMED_BOUNDS
 from ocp.identify.regression import CONSTANTS, NUISANCE_BOUNDS, Design
@@ -79,6 +80,8 @@ def effect_values(design: Design, f: Fitted, item: str) -> dict[str, float]:
         return {"v_db": max(x, 0.0), "gap": 0.0 if col.plain else col.form}
     if item == "thrust_lag":
         return {"tau": shape}
+    if item == "brush_drop" and col.form == SOFT_CONTACT:
+        return {"v_b": x, "i_eps": shape}
     return {col.key: x}
 
 
@@ -192,7 +195,7 @@ def plant_of(plant: DCMotorPlant, design: Design, f: Fitted, delay: float | None
         if item not in CONSTANTS:
             values = effect_values(design, f, item)
             if item == "brush_drop":  # (the smoothing: BRUSH_SLOPE)
-                values["i_eps"] = max(BrushDrop.i_eps, values["v_b"] / (BRUSH_SLOPE * params.R))
+                values["i_eps"] = max(values.get("i_eps", BrushDrop.i_eps), values["v_b"] / (BRUSH_SLOPE * params.R))
             if item == "coulomb_friction":  # (FRICTION_SLOPE)
                 values["omega_eps"] = max(values["omega_eps"], abs(values["tau_c"]) * params.R
                                           / (FRICTION_SLOPE * params.k_t * params.k_e))

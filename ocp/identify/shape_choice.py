@@ -3,7 +3,7 @@
 A shaped effect (a Stribeck band's speed, a Coulomb friction's edge, a wake lag) has one column per grid value; the
 best by training cost is mixed with the better of its grid neighbours. A second shape fixed per column
 (:attr:`.columns.Column.form`: Stribeck friction decaying exponentially beside the catalogue's Gaussian, a dead
-band's gap beside its shift) splits the
+band's gap beside its shift, a brush contact's soft drop over a current width beside the quasi-static one) splits the
 grid into runs that are not neighbours of each other, and the non-default run is preferred only by a margin.
 """
 
