@@ -263,6 +263,9 @@ def explain(item: str, values: dict[str, float], p: MotorParams, design: Design,
         text += ("; a gap: commands inside the band give nothing, those beyond pass whole (a minimum pulse)"
                  if values.get("gap") else "; every command shifted by the band (a dead time)") + \
             " (both forms tried)."
+    if item == "brush_drop":
+        text += (f"; soft: v_b tanh(i / i_eps), i_eps = {values['i_eps']:.3g} A (the contact conducts below its drop)."
+                 if "i_eps" in values else "; quasi-static: no current flows while |V - k_e w| is under the drop.")
     return text
 
 

@@ -6,9 +6,9 @@ formulas and loggers) draws ``V_b tanh(i / i_b)`` with ``i_b`` 2 % of the stall 
 PRBS, 2.2 kHz steps) a dead band then fitted the armature equation at 0.35 noise units and the quasi-static drop at
 1.69 and 1.02: the dead band was named with no alternative said. The catalogue's own soft contact
 (:class:`ocp.model.effects.BrushDrop`, ``v_b tanh(i / i_eps)``) is now offered over current widths
-(:data:`ocp.identify.drops.SOFT_CONTACT`), on a command of several magnitudes (on two levels a wide soft drop is partly a
-resistance: ``tests/identify/test_gain.py``'s 30 % command gain came out as ``R``, ``k`` and a soft drop). Side by side
-(session 75): the ten proving-ground sets 1,817 -> 1,818/2,000, the blind rig 788 -> 789/998.
+(:data:`ocp.identify.drops.SOFT_CONTACT`), on a command of several magnitudes (on two levels a wide soft drop is
+partly a resistance: ``tests/identify/test_gain.py``'s 30 % command gain came out as ``R``, ``k`` and a soft drop).
+Side by side (session 75): the ten proving-ground sets 1,817 -> 1,818/2,000, the blind rig 788 -> 789/998.
 """
 
 from __future__ import annotations
@@ -20,11 +20,13 @@ import numpy as np
 import pytest
 
 from ocp.identify.drops import SOFT_CONTACT
-from ocp.identify.explain import effect_values
+from ocp.identify.explain import effect_values, explain, plant_of
 from ocp.identify.regression import build
 from ocp.identify.select import fit_model
 from ocp.logs import log_from_arrays
+from ocp.model.effects import BrushDrop
 from ocp.model.params import MotorParams
+from ocp.model.plant import DCMotorPlant
 from tests.identify.diagnosed import blind
 
 
@@ -56,3 +58,6 @@ def test_the_soft_columns_fit_the_width_of_a_contact_simulated_apart() -> None:
     assert any(design.columns[j].form == SOFT_CONTACT for j in f.cols)
     got = effect_values(design, f, "brush_drop")
     assert abs(got["v_b"] / 0.8 - 1.0) < 0.1 and 0.6 / 1.6 < got["i_eps"] < 0.6 * 1.6
+    assert f"soft: v_b tanh(i / i_eps), i_eps = {got['i_eps']:.3g} A" in explain("brush_drop", got, p, design, f)
+    brush = next(e for e in plant_of(DCMotorPlant(p), design, f, None).effects if isinstance(e, BrushDrop))
+    assert brush.i_eps == pytest.approx(got["i_eps"])  # (the calibrated plant keeps the width: above its smoothing)
