@@ -1,10 +1,10 @@
-"""A brush contact whose drop is soft near zero current (issue #11, session 74).
+"""A brush contact whose drop is soft near zero current (issue #11, session 75).
 
 The identifier's brush drop was the quasi-static ``clip(V - k_e w, +-v_b)`` only (no current inside the drop). A
 contact's film conducts a little below its drop: the blind rig (``bench/blindrig``: its own integrator, effect
-formulas and loggers) draws ``V_b tanh(i / i_b)`` with ``i_b`` 2 % of the stall current. On its seeds 20 and 702 (1 kHz
-PRBS, 2.2 kHz steps) a dead band then fitted the armature equation at 0.35 noise units and the quasi-static drop at
-1.69 and 1.02: the dead band was named with no alternative said. The catalogue's own soft contact
+formulas and loggers) draws ``V_b tanh(i / i_b)`` with ``i_b`` 2 % of the stall current. On its seeds 20 and 702
+(PRBS at 1 kHz) a dead band then fitted the armature equation at 0.35 noise units and the quasi-static drop at 1.69
+and 1.02: the dead band was named with no alternative said. The catalogue's own soft contact
 (:class:`ocp.model.effects.BrushDrop`, ``v_b tanh(i / i_eps)``) is now offered over current widths
 (:data:`ocp.identify.drops.SOFT_CONTACT`), on a command of several magnitudes (on two levels a wide soft drop is
 partly a resistance: ``tests/identify/test_gain.py``'s 30 % command gain came out as ``R``, ``k`` and a soft drop).
