@@ -11,8 +11,9 @@ point by point and by direction (:mod:`ocp.identify.steady`), where no time effe
 """
 
 from ocp.identify.check import CheckOptions, CheckResult, check
-from ocp.identify.diagnose import DiagnoseOptions, DiagnoseResult, diagnose
+from ocp.identify.diagnose import diagnose
 from ocp.identify.fit import FitOptions, FitResult, fit
+from ocp.identify.result import DiagnoseOptions, DiagnoseResult
 
 __all__ = ["CheckOptions", "CheckResult", "DiagnoseOptions", "DiagnoseResult", "FitOptions", "FitResult", "check",
            "diagnose", "fit"]

@@ -34,7 +34,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from ocp.identify.align import Alignment
 from ocp.identify.angle import rotor_angle
-from ocp.identify.diagnose import aligned, dynamic, finite
+from ocp.identify.diagnose import aligned, dynamic
 from ocp.identify.predict import (
     CHANNEL_UNITS,
     CHANNELS,
@@ -47,6 +47,7 @@ from ocp.identify.predict import (
     one_step,
     read_current,
 )
+from ocp.identify.result import finite
 from ocp.identify.steady import PointCheck, check_points
 from ocp.logs import Log, LogKind
 from ocp.model.plant import DCMotorPlant

@@ -48,10 +48,11 @@ from ocp.errors import LogError, ParameterError, ThrustshapeError
 from ocp.identify.angle import MAX_PERIODS
 from ocp.identify.candidates import candidate
 from ocp.identify.coverage import COMMON_GAIN, coverage, open_gaps
-from ocp.identify.diagnose import DiagnoseResult, aligned, dynamic
+from ocp.identify.diagnose import aligned, dynamic
 from ocp.identify.excite import Excitation, candidates, mission_for
 from ocp.identify.predict import CHANNELS, MAX_STEPS_PER_SAMPLE, SUBSTEPS, noise_levels, substeps
 from ocp.identify.resolution import ADVISED_SAMPLES, ARMATURE_SAMPLES, advised_rate, slow_armature
+from ocp.identify.result import DiagnoseResult
 from ocp.identify.separation import (
     Rival,
     confusion,

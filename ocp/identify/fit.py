@@ -32,7 +32,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from ocp.identify.align import Alignment
 from ocp.identify.candidates import candidate
 from ocp.identify.clipping import clipped, widened
-from ocp.identify.diagnose import aligned, diagnose, dynamic, finite
+from ocp.identify.diagnose import aligned, diagnose, dynamic
 from ocp.identify.drops import DEAD_BAND_FORMS
 from ocp.identify.estimate import equation_error_fit, equation_scales, free_run_errors, free_run_fit
 from ocp.identify.holdout import CLIP_MARGIN
@@ -46,6 +46,7 @@ from ocp.identify.predict import (
     one_step,
     read_current,
 )
+from ocp.identify.result import finite
 from ocp.logs import Log
 from ocp.model.effects import Cogging, VoltageDeadband, plant_to_mapping
 from ocp.model.plant import DCMotorPlant

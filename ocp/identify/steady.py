@@ -21,7 +21,6 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ocp.identify.candidates import Candidate, candidate
-from ocp.identify.diagnose import Score, finite
 from ocp.identify.equations import (
     TIME_EFFECTS,
     UNITS,
@@ -37,6 +36,7 @@ from ocp.identify.equations import (
     statuses,
 )
 from ocp.identify.estimate import assemble, peak_torque
+from ocp.identify.result import Score, finite
 from ocp.identify.signs import check_point_signs
 from ocp.logs import Log, LogKind
 from ocp.model.plant import DCMotorPlant

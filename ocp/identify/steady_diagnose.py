@@ -25,9 +25,9 @@ import numpy as np
 from ocp.errors import ParameterError
 from ocp.identify.candidates import Candidate, all_candidates, candidate
 from ocp.identify.coverage import blind_spots
-from ocp.identify.diagnose import DiagnoseOptions, DiagnoseResult, RankEntry, Round, Score, finite
 from ocp.identify.equations import EquationStatus, allowed, checked, noise, residuals, statuses
 from ocp.identify.explain import calibration_row, won_at
+from ocp.identify.result import DiagnoseOptions, DiagnoseResult, RankEntry, Round, Score, finite
 from ocp.identify.signs import check_point_signs
 from ocp.identify.steady import ROUTE, UNITS, direction_maps, fit_candidates, score
 from ocp.logs import Log

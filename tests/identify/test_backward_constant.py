@@ -11,7 +11,7 @@ backward pass this test pins down is the same code either way.)
 from __future__ import annotations
 
 from ocp.identify import diagnose
-from ocp.identify.diagnose import DiagnoseOptions
+from ocp.identify.result import DiagnoseOptions
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.params import MotorParams

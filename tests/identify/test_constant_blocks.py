@@ -15,11 +15,12 @@ import pytest
 
 from ocp.identify import diagnose
 from ocp.identify.align import estimate
-from ocp.identify.diagnose import DiagnoseOptions, _pool, split
+from ocp.identify.diagnose import _pool, split
 from ocp.identify.evidence import beyond_scatter, block_t
 from ocp.identify.predict import noise_levels
 from ocp.identify.realign import realign
 from ocp.identify.regression import build
+from ocp.identify.result import DiagnoseOptions
 from ocp.identify.select import fit_model
 from ocp.logs import Log, log_from_arrays
 from ocp.logs.timebase import uniform

@@ -16,7 +16,7 @@ from __future__ import annotations
 import pytest
 
 from ocp.identify import diagnose
-from ocp.identify.diagnose import DiagnoseOptions
+from ocp.identify.result import DiagnoseOptions
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform
 from ocp.model.effects import Stribeck

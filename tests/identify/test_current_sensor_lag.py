@@ -18,8 +18,9 @@ from bench.modelcheck import case_log
 from clients.cli import main
 from ocp.identify import FitOptions, check, diagnose, fit
 from ocp.identify.check import CheckOptions, CheckResult
-from ocp.identify.diagnose import DiagnoseOptions, aligned, score, split
+from ocp.identify.diagnose import aligned, score, split
 from ocp.identify.predict import CURRENT_LAGS, FreeRun, free_run, lagged_current, read_current
+from ocp.identify.result import DiagnoseOptions
 from ocp.logs import log_from_arrays, write_log_csv
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant

@@ -12,9 +12,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from ocp.identify.diagnose import DiagnoseOptions, _pool, split
+from ocp.identify.diagnose import _pool, split
 from ocp.identify.predict import noise_levels
 from ocp.identify.regression import build
+from ocp.identify.result import DiagnoseOptions
 from ocp.identify.select import fit_model
 from ocp.logs import log_from_arrays
 from ocp.logs.timebase import uniform

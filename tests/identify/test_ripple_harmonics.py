@@ -17,7 +17,7 @@ import pytest
 from bench.modelcheck import case_log
 from ocp.identify import diagnose
 from ocp.identify.columns import raw_signals
-from ocp.identify.diagnose import DiagnoseResult
+from ocp.identify.result import DiagnoseResult
 from ocp.identify.ripple import HARMONICS, harmonic_columns
 from ocp.logs import log_from_arrays
 from ocp.model.effects import Cogging

@@ -15,7 +15,7 @@ import pytest
 
 from bench.modelcheck import case_log
 from ocp.identify import diagnose
-from ocp.identify.diagnose import DiagnoseResult
+from ocp.identify.result import DiagnoseResult
 from ocp.identify.ripple import residualizer
 from ocp.model.params import MotorParams
 from ocp.model.plant import DCMotorPlant
