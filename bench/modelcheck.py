@@ -27,7 +27,8 @@ without it. The table is then printed twice: on the labels as drawn, and with th
 
 Prints: verdicts exactly right, false alarms on clean logs, per label (effect or named constant)
 precision and recall with counts, time per log (diagnose only, and generating), and the alignment's error against
-the drawn command lag (logs without a delay, by the armature's L/R in samples and by the current filter).
+the drawn command lag (logs without a delay, by the armature's L/R in samples and by the current filter), and the
+noise levels the diagnosis read against the logger's own (regular clocks and jittered ones apart).
 """
 
 from __future__ import annotations
@@ -126,6 +127,7 @@ def one(seed: int, cache: str | None = None, quiet: bool = False, angle: bool = 
     from ocp.identify.coverage import COMMON_GAIN
     from ocp.model.params import MotorParams
     from ocp.model.plant import DCMotorPlant
+    from tests.proving_ground.logger import noise_levels
 
     t0 = time.perf_counter()
     case = load_case(seed, cache, shapes, kind)
@@ -141,9 +143,13 @@ def one(seed: int, cache: str | None = None, quiet: bool = False, angle: bool = 
         amb = bool(res.ambiguous)
         gain = next((float(a["relative"]) for a in res.ambiguous if a["alternative"] == COMMON_GAIN), None)
         evidence = {k: e["test"] for k, e in res.evidence.items()}
+        pairs = [[str(a["adopted"]), str(a["alternative"])] for a in res.ambiguous]
+        # the noise levels read, over the logger's own (its white noise and ADC steps; a noise-free log has none)
+        noise = None if quiet else {ch: res.noise[ch] / float(level) for ch, level in
+                                    zip(NOISE_CHANNELS, noise_levels(case.logger), strict=True)}
     except Exception as exc:  # a crash is a wrong verdict, recorded with its message
         verdict, err, align, amb, measured, gain = [], f"{type(exc).__name__}: {exc}", 0.0, False, False, None
-        evidence = {}
+        evidence, pairs, noise = {}, [], None
     t2 = time.perf_counter()
     lag = case.logger.skew + case.truth.e("input_delay", "delay") / case.logger.dt
     return {"seed": seed, "kind": case.kind, "expected": sorted(case.expected), "verdict": verdict, "error": err,
@@ -152,7 +158,8 @@ def one(seed: int, cache: str | None = None, quiet: bool = False, angle: bool = 
             "align_measured": measured, "armature": case.nominal["L"] / case.nominal["R"] / case.logger.dt,
             "current_filter": (1.0 - case.logger.alpha) / case.logger.alpha,
             "constant_error": case.constant_error, "t_generate": t1 - t0, "t_diagnose": t2 - t1, "noise_free": quiet,
-            "angle": log.theta is not None, "shapes": shapes, "forced_kind": kind}
+            "angle": log.theta is not None, "shapes": shapes, "forced_kind": kind, "pairs": pairs,
+            "jitter": case.logger.jitter, "noise_ratio": noise}
 
 
 def audit_stamp() -> str:
@@ -226,7 +233,7 @@ def table(rows: list[dict[str, Any]], optional: bool = False) -> str:
               + "".join(f"; {r['seed']} ({'+'.join(r['expected']) or 'clean'}: {100 * r['gain']:+.0f} %)"
                         for r in gains)]
     named = [(test, label in r["expected"]) for r in rows for label, test in r.get("evidence", {}).items()]
-    return "\n".join(lines + evidence_table(named) + alignment_table(rows))
+    return "\n".join(lines + evidence_table(named) + alignment_table(rows) + noise_table(rows))
 
 
 def evidence_table(named: list[tuple[str, bool]]) -> list[str]:
@@ -273,6 +280,29 @@ def alignment_table(rows: list[dict[str, Any]]) -> list[str]:
         a = [abs(x) for x in e]
         lines.append(f"{name:24s} {len(e):5d} {statistics.median(a):10.2f} {sum(e) / len(e):+7.2f} "
                      f"{sum(x > 0.5 for x in a):7d} {sum(x > 1.0 for x in a):6d}")
+    return lines
+
+
+#: the channels of a record's ``noise_ratio`` (:func:`one`), in the order of the proving ground's ``noise_levels``
+NOISE_CHANNELS = ("omega", "current", "thrust")
+
+
+def noise_table(rows: list[dict[str, Any]]) -> list[str]:
+    """The noise levels ``diagnose`` read over the logger's own (records' ``noise_ratio``; records written before it
+    was recorded and noise-free ones are left out; none: no lines), per channel the median ratio and the share within
+    10 %, on the logs with a regular clock and on those whose jittered time stamps the reader resampled."""
+    rec = [r for r in rows if r.get("noise_ratio")]
+    if not rec:
+        return []
+    lines = ["", "noise levels read / the logger's own (median ratio, share within 10 %):",
+             f"{'':24s} {'logs':>5s}" + "".join(f" {ch:>16s}" for ch in NOISE_CHANNELS)]
+    for name, grp in (("regular clock", [r for r in rec if not r["jitter"]]),
+                      ("jittered, resampled", [r for r in rec if r["jitter"]])):
+        if grp:
+            cells = [(statistics.median(r["noise_ratio"][ch] for r in grp),
+                      sum(abs(math.log(r["noise_ratio"][ch])) < math.log(1.1) for r in grp) / len(grp))
+                     for ch in NOISE_CHANNELS]
+            lines.append(f"{name:24s} {len(grp):5d}" + "".join(f" {m:9.2f} {100 * w:4.0f} %" for m, w in cells))
     return lines
 
 

@@ -202,3 +202,44 @@ def test_a_run_takes_the_seeds_asked_for_or_a_range() -> None:
     args = argparse.Namespace(seeds=[9204, 6003, 9204], n=200, first=0)
     assert bench.seeds(args) == [6003, 9204]
     assert bench.seeds(argparse.Namespace(seeds=None, n=3, first=13000)) == [13000, 13001, 13002]
+
+
+def test_the_noise_levels_read_are_tabulated_by_clock() -> None:
+    """The noise block: per channel the median of the levels read over the logger's own and the share within 10 %,
+    regular clocks and jittered ones apart; records without ``noise_ratio`` (older, or noise-free) are left out, and a
+    table of only such records has no noise block."""
+    def rec(seed: int, jitter: float, omega: float, current: float, thrust: float) -> dict[str, Any]:
+        return {**_rec(seed, [], []), "jitter": jitter,
+                "noise_ratio": {"omega": omega, "current": current, "thrust": thrust}}
+
+    rows = [rec(1, 0.0, 1.0, 1.05, 0.5), rec(2, 0.0, 2.0, 1.2, 1.0), rec(3, 0.01, 0.7, 0.95, 1.08),
+            {**_rec(4, [], []), "jitter": 0.0, "noise_ratio": None}, _rec(5, [], [])]
+    lines = _bench().noise_table(rows)
+    assert lines[1].startswith("noise levels read / the logger's own")
+    table = {line[:24].strip(): line[24:].split() for line in lines[3:]}
+    assert table["regular clock"] == ["2", "1.50", "50", "%", "1.12", "50", "%", "0.75", "50", "%"]
+    assert table["jittered, resampled"] == ["1", "0.70", "0", "%", "0.95", "100", "%", "1.08", "100", "%"]
+    assert _bench().noise_table([_rec(6, [], [])]) == []
+    assert "noise levels read" in _bench().table(rows)
+
+
+def test_a_record_holds_the_noise_levels_read_against_the_loggers_own() -> None:
+    """A diagnosed record (``one``) holds its clock's jitter, the ambiguity pairs and the noise levels read over the
+    logger's own; on a regular clock the load cell's level is read within 10 % (oracle: the proving ground's
+    ``noise_levels``, its white noise and ADC step; 13 of 13 regular logs among seeds 0..29)."""
+    r = _bench().one(5)
+    assert r["jitter"] == 0.0 and isinstance(r["pairs"], list)
+    assert set(r["noise_ratio"]) == {"omega", "current", "thrust"}
+    assert r["noise_ratio"]["thrust"] == pytest.approx(1.0, rel=0.1)
+
+
+@pytest.mark.xfail(strict=True, reason="known: a jittered clock is resampled onto a grid of its first stamp and the "
+                   "median step, which drifts off the rows (half a sample over 6,000 rows of 1 % jitter) and averages "
+                   "neighbouring samples; the load cell's level is read 38 % low here (29 % of jittered logs among "
+                   "seeds 0..29 within 10 %; docs/model-check-history.md, session 76)")
+def test_a_jittered_clocks_noise_levels_are_read_as_a_regular_ones() -> None:
+    """Seed 4 (5,998 rows at 1 % time-stamp jitter): the load cell's noise level read within 10 % of the logger's, as
+    on a regular clock (the test above)."""
+    r = _bench().one(4)
+    assert r["jitter"] > 0.0
+    assert r["noise_ratio"]["thrust"] == pytest.approx(1.0, rel=0.1)
